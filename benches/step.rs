@@ -1,1 +1,36 @@
-fn main() {}
+//! Criterion benches of the grid fast path on the peers' benchmark scene
+//! (shared/peers/scene.py): N = 32 ... 512, with and without wind, 1 and 2 threads.
+//! One iteration is one 60 Hz frame of 16 steps (dt = 1/960 s); the reported
+//! throughput in elements/s is steps/s.
+
+use std::time::Duration;
+
+use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+
+const DT: f64 = 1.0 / 960.0;
+const SUBSTEPS: usize = 16;
+
+fn grid_step(c: &mut Criterion) {
+    for wind in [false, true] {
+        let mut group = c.benchmark_group(if wind { "grid_step_wind" } else { "grid_step" });
+        group
+            .warm_up_time(Duration::from_millis(300))
+            .measurement_time(Duration::from_millis(1500))
+            .sample_size(20)
+            .throughput(Throughput::Elements(SUBSTEPS as u64));
+        for n in [32, 64, 128, 256, 512] {
+            for threads in [1, 2] {
+                let mut cloth = GridCloth::new(GridSpec::peer_bench(n, wind));
+                cloth.set_threads(threads);
+                group.bench_function(BenchmarkId::new(format!("{threads}t"), n), |b| {
+                    b.iter(|| cloth.steps(DT, SUBSTEPS))
+                });
+            }
+        }
+        group.finish();
+    }
+}
+
+criterion_group!(benches, grid_step);
+criterion_main!(benches);

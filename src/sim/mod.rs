@@ -1,0 +1,3 @@
+//! Simulation core (headless; no graphics).
+
+pub mod grid_kernel;

@@ -1,0 +1,130 @@
+//! The grid fast path against the peers' float64 reference (shared/peers/scene.py).
+
+use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, SimdLevel};
+use glam::DVec3;
+
+const DT: f64 = 1.0 / 960.0;
+
+/// Mean y of all particles and y of the bottom-middle particle.
+fn metrics(cloth: &GridCloth, n: usize) -> (f64, f64) {
+    let mut p = vec![DVec3::ZERO; cloth.len()];
+    cloth.positions_into(&mut p);
+    let mean = p.iter().map(|q| q.y).sum::<f64>() / p.len() as f64;
+    (mean, p[(n - 1) * n + n / 2].y)
+}
+
+fn run(n: usize, wind: bool, threads: usize, steps: usize) -> GridCloth {
+    let mut cloth = GridCloth::new(GridSpec::peer_bench(n, wind));
+    cloth.set_threads(threads);
+    cloth.steps(DT, steps);
+    cloth
+}
+
+/// NumPy float64 reference after 960 steps at N = 32 (shared/peers/README.md §2).
+fn check_reference(wind: bool, mean_ref: f64, bottom_ref: f64) {
+    let cloth = run(32, wind, 1, 960);
+    let (mean, bottom) = metrics(&cloth, 32);
+    println!(
+        "wind={wind} simd={:?}: mean y {mean:.9} ({:+.2e}), bottom-middle y {bottom:.9} ({:+.2e})",
+        cloth.simd_level(),
+        mean - mean_ref,
+        bottom - bottom_ref
+    );
+    assert!(
+        (mean - mean_ref).abs() < 5e-6,
+        "mean y {mean} vs {mean_ref}"
+    );
+    assert!(
+        (bottom - bottom_ref).abs() < 5e-6,
+        "bottom y {bottom} vs {bottom_ref}"
+    );
+}
+
+#[test]
+fn peer_scene_n32_matches_float64_reference() {
+    check_reference(false, -0.064685755, -0.656037594);
+}
+
+#[test]
+fn peer_scene_n32_wind_matches_float64_reference() {
+    check_reference(true, 0.528073639, 0.193166128);
+}
+
+/// Every compiled SIMD level this CPU has gives the reference values too.
+#[test]
+fn every_simd_level_matches_reference() {
+    for level in [SimdLevel::Baseline, SimdLevel::Avx2, SimdLevel::Avx512] {
+        for (wind, mean_ref, bottom_ref) in [
+            (false, -0.064685755, -0.656037594),
+            (true, 0.528073639, 0.193166128),
+        ] {
+            let mut cloth = GridCloth::new(GridSpec::peer_bench(32, wind));
+            cloth.set_simd_level(level);
+            cloth.steps(DT, 960);
+            let (mean, bottom) = metrics(&cloth, 32);
+            assert!(
+                (mean - mean_ref).abs() < 5e-6 && (bottom - bottom_ref).abs() < 5e-6,
+                "{:?} wind={wind}: {mean} {bottom}",
+                cloth.simd_level()
+            );
+        }
+    }
+}
+
+/// Band splitting changes nothing: the gather order per particle is fixed, so two
+/// and three threads give bit-identical states to one thread (tolerance 0).
+#[test]
+fn threads_give_bit_identical_results() {
+    for wind in [false, true] {
+        let one = run(128, wind, 1, 200);
+        for threads in [2, 3] {
+            let many = run(128, wind, threads, 200);
+            for a in 0..3 {
+                assert_eq!(
+                    one.raw_positions()[a],
+                    many.raw_positions()[a],
+                    "x, {threads} threads"
+                );
+                assert_eq!(
+                    one.raw_velocities()[a],
+                    many.raw_velocities()[a],
+                    "v, {threads} threads"
+                );
+            }
+        }
+    }
+}
+
+/// Non-square grids, thin grids and a single particle stay finite.
+#[test]
+fn odd_shapes_stay_finite() {
+    for (w, h) in [(1, 1), (1, 5), (5, 1), (2, 2), (3, 97), (97, 3), (130, 129)] {
+        let mut spec = GridSpec::peer_bench(w.max(h), true);
+        spec.width = w;
+        spec.height = h;
+        spec.pinned = vec![0];
+        let mut cloth = GridCloth::new(spec);
+        cloth.set_threads(2);
+        for _ in 0..100 {
+            cloth.step(DT);
+            for a in cloth.raw_positions() {
+                assert!(a.iter().all(|q| q.is_finite()), "{w}x{h}");
+            }
+        }
+    }
+}
+
+/// Coincident particles (zero-length springs, zero-area triangles) give no force
+/// and no NaN.
+#[test]
+fn coincident_particles_stay_finite() {
+    let mut cloth = GridCloth::new(GridSpec::peer_bench(16, true));
+    let n = cloth.len();
+    cloth.set_state(&vec![DVec3::new(0.5, 0.5, 0.0); n], &[]);
+    for _ in 0..200 {
+        cloth.step(DT);
+        for a in cloth.raw_positions() {
+            assert!(a.iter().all(|q| q.is_finite()));
+        }
+    }
+}

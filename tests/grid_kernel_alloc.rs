@@ -1,0 +1,64 @@
+//! The grid fast path allocates nothing while it steps (a counting global allocator).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator, only counting calls.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as the caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        // SAFETY: same contract as the caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+/// One test only, so no other test thread allocates while we count.
+#[test]
+fn no_allocation_in_1000_steps() {
+    let dt = 1.0 / 960.0;
+    for (n, threads) in [(32, 1), (128, 1), (128, 2)] {
+        for wind in [false, true] {
+            let mut cloth = GridCloth::new(GridSpec::peer_bench(n, wind));
+            cloth.set_threads(threads);
+            cloth.steps(dt, 200); // let the pool's threads start (their start allocates)
+            let before = ALLOCATIONS.load(Ordering::SeqCst);
+            cloth.steps(dt, 1000);
+            let after = ALLOCATIONS.load(Ordering::SeqCst);
+            assert_eq!(
+                after - before,
+                0,
+                "steps(): N={n} threads={threads} wind={wind}"
+            );
+            let before = ALLOCATIONS.load(Ordering::SeqCst);
+            for _ in 0..1000 {
+                cloth.step(dt);
+            }
+            let after = ALLOCATIONS.load(Ordering::SeqCst);
+            println!(
+                "step() x1000: N={n} threads={threads} wind={wind}: {} allocations",
+                after - before
+            );
+            if threads == 1 {
+                assert_eq!(after - before, 0, "step(): N={n} wind={wind}");
+            }
+        }
+    }
+}
