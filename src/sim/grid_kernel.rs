@@ -247,49 +247,26 @@ struct Params {
     dt: f32,
 }
 
-/// Force arrays of a row slot, 3 components each: the six spring directions and
-/// the two triangles of each cell.
-const RIGHT: usize = 0;
-/// `(s, c)-(s, c+2)`, bend.
-const RIGHT2: usize = 1;
-/// `(s, c)-(s+1, c)`, structural.
-const DOWN: usize = 2;
-/// `(s, c)-(s+1, c+1)`, shear.
-const DOWN_RIGHT: usize = 3;
-/// `(s, c+1)-(s+1, c)`, shear; stored at column `c`, force on `(s, c+1)`.
-const ANTI: usize = 4;
-/// `(s, c)-(s+2, c)`, bend.
-const DOWN2: usize = 5;
-/// Drag per vertex of triangle `(a, b, d)` of cell `(s, c)`.
-const TRI1: usize = 6;
-/// Drag per vertex of triangle `(b, e, d)` of cell `(s, c)`.
-const TRI2: usize = 7;
-const ARRAYS: usize = 8 * 3;
-/// Zero floats before column 0 of every row buffer (column `c - 2` is readable).
-const PAD_L: usize = BLOCK;
-/// Ring of row slots: a particle on row `r` needs rows `r`, `r-1` and `r-2`.
+/// Ring of accumulator rows: row `r` collects forces from rows `r-2` and `r-1`.
 const SLOTS: usize = 3;
 
-/// Scratch of one row band: the ring of per-row force buffers.
+/// Scratch of one row band: a ring of three rows of force accumulators (x, y, z).
 #[derive(Clone, Debug)]
 struct Band {
     /// First row of the band.
     r0: usize,
     /// One past the last row.
     r1: usize,
-    /// `SLOTS * ARRAYS` row buffers of `rs` floats each.
-    buf: Buf,
-    rs: usize,
+    /// `SLOTS` x 3 components x `nv` floats.
+    acc: Buf,
 }
 
 impl Band {
     fn new(r0: usize, r1: usize, grid: &Grid) -> Self {
-        let rs = PAD_L + grid.nv;
         Band {
             r0,
             r1,
-            buf: Buf::zeros(SLOTS * ARRAYS * rs),
-            rs,
+            acc: Buf::zeros(SLOTS * 3 * grid.nv),
         }
     }
 }
@@ -341,6 +318,9 @@ pub struct GridCloth {
     cur: State,
     next: State,
     inv_mass: Buf,
+    /// Two rows: 1 for columns `c < w - 1` (springs to `c + 1` exist), then 1 for
+    /// `c < w - 2`; 0 elsewhere.
+    col_mask: Buf,
     drag_on: bool,
     threads: usize,
     pool: Option<rayon::ThreadPool>,
@@ -395,6 +375,11 @@ impl GridCloth {
                 inv_mass.as_mut_slice()[grid.index(p)] = 0.0;
             }
         }
+        let mut col_mask = Buf::zeros(2 * grid.stride);
+        for c in 0..grid.w {
+            col_mask.as_mut_slice()[c] = if c + 1 < grid.w { 1.0 } else { 0.0 };
+            col_mask.as_mut_slice()[grid.stride + c] = if c + 2 < grid.w { 1.0 } else { 0.0 };
+        }
         let hs = spec.spacing;
         // Index 0: structural (rest h), 1: bend (2h), 2: shear (h√2).
         let kinds = [
@@ -417,6 +402,7 @@ impl GridCloth {
             next: cur.clone(),
             cur,
             inv_mass,
+            col_mask,
             drag_on,
             threads: 1,
             pool: None,
@@ -536,6 +522,7 @@ impl GridCloth {
             x: self.cur.x.each_ref().map(Buf::as_slice),
             v: self.cur.v.each_ref().map(Buf::as_slice),
             inv_mass: self.inv_mass.as_slice(),
+            col_mask: self.col_mask.as_slice(),
             drag: self.drag_on,
             simd: self.simd,
         };
@@ -654,6 +641,7 @@ struct Ctx<'a> {
     x: [&'a [f32]; 3],
     v: [&'a [f32]; 3],
     inv_mass: &'a [f32],
+    col_mask: &'a [f32],
     drag: bool,
     simd: SimdLevel,
 }
@@ -716,6 +704,10 @@ trait Simd: Copy {
     fn rsqrt_or_zero(self, x: Self::V, eps: f32) -> Self::V;
     /// `a` where `m > 0`, else 0.
     fn keep_if_positive(self, m: Self::V, a: Self::V) -> Self::V;
+    /// Lanes moved up by one: `[prev[LANES-1], cur[0], .., cur[LANES-2]]`.
+    fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V;
+    /// Lanes moved up by two: `[prev[LANES-2], prev[LANES-1], cur[0], ..]`.
+    fn shift2(self, prev: Self::V, cur: Self::V) -> Self::V;
 }
 
 /// Portable lanes: plain arrays, vectorised by the compiler for the build target.
@@ -769,6 +761,14 @@ impl Simd for Portable {
     #[inline(always)]
     fn keep_if_positive(self, m: Self::V, a: Self::V) -> Self::V {
         std::array::from_fn(|i| if m[i] > 0.0 { a[i] } else { 0.0 })
+    }
+    #[inline(always)]
+    fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V {
+        std::array::from_fn(|i| if i >= 1 { cur[i - 1] } else { prev[PL - 1] })
+    }
+    #[inline(always)]
+    fn shift2(self, prev: Self::V, cur: Self::V) -> Self::V {
+        std::array::from_fn(|i| if i >= 2 { cur[i - 2] } else { prev[PL - 2 + i] })
     }
 }
 
@@ -867,6 +867,24 @@ mod x86 {
                 _mm512_maskz_mov_ps(ok, a)
             }
         }
+        #[inline(always)]
+        fn shift1(self, prev: __m512, cur: __m512) -> __m512 {
+            unsafe {
+                _mm512_castsi512_ps(_mm512_alignr_epi32::<15>(
+                    _mm512_castps_si512(cur),
+                    _mm512_castps_si512(prev),
+                ))
+            }
+        }
+        #[inline(always)]
+        fn shift2(self, prev: __m512, cur: __m512) -> __m512 {
+            unsafe {
+                _mm512_castsi512_ps(_mm512_alignr_epi32::<14>(
+                    _mm512_castps_si512(cur),
+                    _mm512_castps_si512(prev),
+                ))
+            }
+        }
     }
 
     impl Simd for Avx2 {
@@ -923,42 +941,66 @@ mod x86 {
                 _mm256_and_ps(ok, a)
             }
         }
+        #[inline(always)]
+        fn shift1(self, prev: __m256, cur: __m256) -> __m256 {
+            unsafe {
+                // [prev 4..8, cur 0..4], then per 128-bit half take 3 floats up.
+                let t = _mm256_permute2f128_ps::<0x21>(prev, cur);
+                _mm256_castsi256_ps(_mm256_alignr_epi8::<12>(
+                    _mm256_castps_si256(cur),
+                    _mm256_castps_si256(t),
+                ))
+            }
+        }
+        #[inline(always)]
+        fn shift2(self, prev: __m256, cur: __m256) -> __m256 {
+            unsafe {
+                let t = _mm256_permute2f128_ps::<0x21>(prev, cur);
+                _mm256_castsi256_ps(_mm256_alignr_epi8::<8>(
+                    _mm256_castps_si256(cur),
+                    _mm256_castps_si256(t),
+                ))
+            }
+        }
     }
 }
 
-/// The rows of one band: prime the ring with the two spring rows above the band,
-/// then for every row compute its springs and triangles and integrate it.
+/// The rows of one band: prime the accumulator ring with the two rows above the
+/// band, then compute and integrate the band's rows one by one.
 #[inline(always)]
 fn band_step<S: Simd>(s: S, ctx: &Ctx, band: &mut Band, mut out: Out) {
-    let rs = band.rs;
-    let slot_len = ARRAYS * rs;
-    // Rows -1 and -2 (slots 2 and 1) have no springs: zero them for a band at the
-    // top. Entries no row ever writes (the left padding) stay 0.
+    if ctx.drag {
+        band_rows::<S, true>(s, ctx, band, &mut out);
+    } else {
+        band_rows::<S, false>(s, ctx, band, &mut out);
+    }
+}
+
+#[inline(always)]
+fn band_rows<S: Simd, const DRAG: bool>(s: S, ctx: &Ctx, band: &mut Band, out: &mut Out) {
+    // Rows 0 and 1 get nothing from rows above the cloth.
     if band.r0 < 2 {
-        band.buf.as_mut_slice()[slot_len..].fill(0.0);
+        band.acc.as_mut_slice().fill(0.0);
     }
     for row in band.r0.saturating_sub(2)..band.r0 {
-        row_forces(s, ctx, band, row);
+        row_step::<S, DRAG, false>(s, ctx, band, row, out, 0);
     }
     let st = ctx.grid.stride;
     for r in band.r0..band.r1 {
-        row_forces(s, ctx, band, r);
-        let lo = (r - band.r0) * st;
-        integrate_row(s, ctx, band, r, &mut out, lo);
+        row_step::<S, DRAG, true>(s, ctx, band, r, out, (r - band.r0) * st);
     }
 }
 
-/// Forces on the first ends of springs `i`-`j`, one per lane:
+/// Forces on the first ends of springs `i`-`j`, one per lane, times `mask`:
 /// `f = (k L / l - k - b (d·dv) / l²) d` with `d = x_i - x_j`, `dv = v_i - v_j`.
-/// `nk = -k`, `nb = -b`.
+/// `kind` is `[-k, k L, -b]`.
 #[inline(always)]
 fn spring<S: Simd>(
     s: S,
-    xi: &[S::V; 3],
-    vi: &[S::V; 3],
-    xj: &[S::V; 3],
-    vj: &[S::V; 3],
+    (xi, vi): (&[S::V; 3], &[S::V; 3]),
+    (xj, vj): (&[S::V; 3], &[S::V; 3]),
     [nk, kl, nb]: [S::V; 3],
+    mask: S::V,
 ) -> [S::V; 3] {
     let d = [
         s.sub(xi[0], xj[0]),
@@ -974,20 +1016,20 @@ fn spring<S: Simd>(
     let dd = s.mul_add(d[2], u[2], s.mul_add(d[1], u[1], s.mul(d[0], u[0])));
     let inv = s.rsqrt_or_zero(l2, EPS2);
     let a = s.mul_add(s.mul(nb, dd), s.mul(inv, inv), s.mul_add(kl, inv, nk));
+    let a = s.mul(a, mask);
     [s.mul(a, d[0]), s.mul(a, d[1]), s.mul(a, d[2])]
 }
 
-/// Drag on each vertex of triangle `(p, q, d)` with relative air velocity `vr`:
-/// `-(ρ C_d / 12) |v_rel| (v_rel·m) m / |m|` with `m = (q - p) × (d - p)`, `|m| = 2A`;
-/// `|v_rel| / |m|` is computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`.
+/// Drag on each vertex of triangle `(p, q, d)` with relative air velocity `vr`, times
+/// `mask`: `-(ρ C_d / 12) |v_rel| (v_rel·m) m / |m|` with `m = (q - p) × (d - p)`,
+/// `|m| = 2A`; `|v_rel| / |m|` is computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`.
 #[inline(always)]
 fn triangle<S: Simd>(
     s: S,
-    p: &[S::V; 3],
-    q: &[S::V; 3],
-    d: &[S::V; 3],
+    [p, q, d]: [&[S::V; 3]; 3],
     vr: &[S::V; 3],
     neg_drag: S::V,
+    mask: S::V,
 ) -> [S::V; 3] {
     let e1 = [s.sub(q[0], p[0]), s.sub(q[1], p[1]), s.sub(q[2], p[2])];
     let e2 = [s.sub(d[0], p[0]), s.sub(d[1], p[1]), s.sub(d[2], p[2])];
@@ -1000,41 +1042,65 @@ fn triangle<S: Simd>(
     let vr2 = s.mul_add(vr[2], vr[2], s.mul_add(vr[1], vr[1], s.mul(vr[0], vr[0])));
     let vm = s.mul_add(vr[2], m[2], s.mul_add(vr[1], m[1], s.mul(vr[0], m[0])));
     let ratio = s.mul(vr2, s.rsqrt_or_zero(s.mul(vr2, m2), TINY));
-    let a = s.mul(s.mul(neg_drag, vm), ratio);
+    let a = s.mul(s.mul(s.mul(neg_drag, vm), ratio), mask);
     [s.mul(a, m[0]), s.mul(a, m[1]), s.mul(a, m[2])]
 }
 
-/// Compute into ring slot `row % SLOTS` the forces of the springs that start on
-/// `row` and, with drag, of the triangles of the cells below it. Rows `row + 1` and
-/// `row + 2` may be ghost rows; forces that reach a ghost are then zeroed.
+/// One row `row` of the cloth, in SIMD blocks of columns: evaluate the six springs
+/// that start on each particle of the row, `(row, c)` to `(row, c+1)`, `(row, c+2)`,
+/// `(row+1, c)`, `(row+1, c+1)`, `(row+2, c)`, and `(row, c+1)` to `(row+1, c)`,
+/// and (with `DRAG`) the two triangles of cell `(row, c)`. Forces on the particles
+/// of rows `row+1` and `row+2` are added to their accumulators in the ring; the
+/// force on a particle of `row` is its accumulator (from the two rows above) plus
+/// the forces just computed, and with `OWN` the particle is integrated at once:
+/// `v' = v + dt (f / m + g)` (0 when pinned), `x' = x + dt v'`, written to `out`
+/// at `lo + c`. Forces between columns of the same row reach the neighbouring
+/// lanes through `shift1`/`shift2`, carried from block to block.
 #[inline(always)]
-fn row_forces<S: Simd>(s: S, ctx: &Ctx, band: &mut Band, row: usize) {
+fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
+    s: S,
+    ctx: &Ctx,
+    band: &mut Band,
+    row: usize,
+    out: &mut Out,
+    lo: usize,
+) {
     let g = ctx.grid;
-    let rs = band.rs;
-    let slot = &mut band.buf.as_mut_slice()[(row % SLOTS) * ARRAYS * rs..][..ARRAYS * rs];
+    let nv = g.nv;
+    let acc = band.acc.as_mut_slice();
     let (b0, b1, b2) = (row * g.stride, (row + 1) * g.stride, (row + 2) * g.stride);
-    // Reads reach column nv + 1 of row + 2, inside the padded arrays; writes reach
-    // column nv - 1 of each row buffer.
-    assert!(b2 + g.nv + 2 <= g.len() && S::LANES <= BLOCK && g.nv % S::LANES == 0);
+    // Everything read or written below lies inside these bounds.
+    assert!(S::LANES <= BLOCK && nv % S::LANES == 0 && acc.len() == SLOTS * 3 * nv);
+    assert!(b2 + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
+    assert!(ctx.col_mask.len() >= g.stride + nv);
     for a in ctx.x.iter().chain(ctx.v.iter()) {
         assert_eq!(a.len(), g.len());
     }
+    if OWN {
+        for o in out.0.iter() {
+            assert!(lo + nv <= o.len());
+        }
+    }
+    let ap = acc.as_mut_ptr();
+    let slot = |r: usize| (r % SLOTS) * 3 * nv;
+    let (a0, a1, a2) = (slot(row), slot(row + 1), slot(row + 2));
     let xp = ctx.x.map(<[f32]>::as_ptr);
     let vp = ctx.v.map(<[f32]>::as_ptr);
-    let op = slot.as_mut_ptr();
+    let mp = ctx.col_mask.as_ptr();
+    let wp = ctx.inv_mass.as_ptr();
+    let op = out.0.each_mut().map(|o| o.as_mut_ptr());
     let p = &ctx.p;
-    let kind = |i: usize| {
-        [
-            s.splat(-p.ks[i]),
-            s.splat(p.kls[i]),
-            s.splat(p.bs[i] * -1.0),
-        ]
-    };
+    let kind = |i: usize| [s.splat(-p.ks[i]), s.splat(p.kls[i]), s.splat(-p.bs[i])];
     let (structural, bend, shear) = (kind(0), kind(1), kind(2));
     let neg_wind = p.wind.map(|w| s.splat(-w));
+    let gravity = p.gravity.map(|w| s.splat(w));
     let third = s.splat(1.0 / 3.0);
     let neg_drag = s.splat(-p.drag);
-    // SAFETY: all offsets are within the bounds asserted above.
+    let dt = s.splat(p.dt);
+    let zero = s.splat(0.0);
+    let down = s.splat(if row + 1 < g.h { 1.0 } else { 0.0 });
+    let down2 = s.splat(if row + 2 < g.h { 1.0 } else { 0.0 });
+    // SAFETY: every offset used with these is inside the bounds asserted above.
     let ld = |ptr: [*const f32; 3], i: usize| unsafe {
         [
             s.load(ptr[0].add(i)),
@@ -1042,131 +1108,86 @@ fn row_forces<S: Simd>(s: S, ctx: &Ctx, band: &mut Band, row: usize) {
             s.load(ptr[2].add(i)),
         ]
     };
-    // SAFETY: array < 8, column c < nv: within the slot.
-    let st = |array: usize, c: usize, f: [S::V; 3]| unsafe {
-        for (k, fk) in f.into_iter().enumerate() {
-            s.store(op.add((array * 3 + k) * rs + PAD_L + c), fk);
-        }
-    };
+    let mut carry = [[zero; 3]; 3];
     let mut c = 0;
-    while c < g.nv {
-        let (x00, v00) = (ld(xp, b0 + c), ld(vp, b0 + c));
-        let (x01, v01) = (ld(xp, b0 + c + 1), ld(vp, b0 + c + 1));
-        let (x02, v02) = (ld(xp, b0 + c + 2), ld(vp, b0 + c + 2));
-        let (x10, v10) = (ld(xp, b1 + c), ld(vp, b1 + c));
-        let (x11, v11) = (ld(xp, b1 + c + 1), ld(vp, b1 + c + 1));
-        let (x20, v20) = (ld(xp, b2 + c), ld(vp, b2 + c));
-        st(RIGHT, c, spring(s, &x00, &v00, &x01, &v01, structural));
-        st(RIGHT2, c, spring(s, &x00, &v00, &x02, &v02, bend));
-        st(DOWN, c, spring(s, &x00, &v00, &x10, &v10, structural));
-        st(DOWN_RIGHT, c, spring(s, &x00, &v00, &x11, &v11, shear));
-        st(ANTI, c, spring(s, &x01, &v01, &x10, &v10, shear));
-        st(DOWN2, c, spring(s, &x00, &v00, &x20, &v20, bend));
-        if ctx.drag {
+    while c < nv {
+        let p00 = (&ld(xp, b0 + c), &ld(vp, b0 + c));
+        let p01 = (&ld(xp, b0 + c + 1), &ld(vp, b0 + c + 1));
+        let p02 = (&ld(xp, b0 + c + 2), &ld(vp, b0 + c + 2));
+        let p10 = (&ld(xp, b1 + c), &ld(vp, b1 + c));
+        let p11 = (&ld(xp, b1 + c + 1), &ld(vp, b1 + c + 1));
+        let p20 = (&ld(xp, b2 + c), &ld(vp, b2 + c));
+        // SAFETY: as above.
+        let (m1, m2) = unsafe { (s.load(mp.add(c)), s.load(mp.add(g.stride + c))) };
+        let m1d = s.mul(m1, down);
+        let right = spring(s, p00, p01, structural, m1);
+        let right2 = spring(s, p00, p02, bend, m2);
+        let d = spring(s, p00, p10, structural, down);
+        let dr = spring(s, p00, p11, shear, m1d);
+        let anti = spring(s, p01, p10, shear, m1d);
+        let d2 = spring(s, p00, p20, bend, down2);
+        let (t1, t2) = if DRAG {
             // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
-            let bd: [S::V; 3] = std::array::from_fn(|k| s.add(v01[k], v10[k]));
-            let vr1 = std::array::from_fn(|k| s.mul_add(s.add(bd[k], v00[k]), third, neg_wind[k]));
-            let vr2 = std::array::from_fn(|k| s.mul_add(s.add(bd[k], v11[k]), third, neg_wind[k]));
-            st(TRI1, c, triangle(s, &x00, &x01, &x10, &vr1, neg_drag));
-            st(TRI2, c, triangle(s, &x01, &x11, &x10, &vr2, neg_drag));
-        }
-        c += S::LANES;
-    }
-    // Zero what reached ghost columns or ghost rows.
-    let mut zero = |array: usize, from: usize| {
+            let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
+            let bd: [S::V; 3] = std::array::from_fn(|k| s.add(vb[k], vd[k]));
+            let vr1 = std::array::from_fn(|k| s.mul_add(s.add(bd[k], va[k]), third, neg_wind[k]));
+            let vr2 = std::array::from_fn(|k| s.mul_add(s.add(bd[k], ve[k]), third, neg_wind[k]));
+            (
+                triangle(s, [p00.0, p01.0, p10.0], &vr1, neg_drag, m1d),
+                triangle(s, [p01.0, p11.0, p10.0], &vr2, neg_drag, m1d),
+            )
+        } else {
+            ([zero; 3], [zero; 3])
+        };
+        let w = if OWN {
+            // SAFETY: as above.
+            unsafe { s.load(wp.add(b0 + c)) }
+        } else {
+            zero
+        };
         for k in 0..3 {
-            slot[(array * 3 + k) * rs + PAD_L + from..(array * 3 + k + 1) * rs].fill(0.0);
-        }
-    };
-    let last_row = row + 1 >= g.h;
-    for (array, reach) in [
-        (RIGHT, 1),
-        (RIGHT2, 2),
-        (DOWN_RIGHT, 1),
-        (ANTI, 1),
-        (TRI1, 1),
-        (TRI2, 1),
-    ] {
-        zero(
-            array,
-            if last_row && array != RIGHT && array != RIGHT2 {
-                0
-            } else {
-                g.w.saturating_sub(reach)
-            },
-        );
-    }
-    if last_row {
-        zero(DOWN, 0);
-    }
-    if row + 2 >= g.h {
-        zero(DOWN2, 0);
-    }
-}
-
-/// Gather the total force on every particle of row `r` and integrate it:
-/// `v' = v + dt (f / m + g)` (0 when pinned), `x' = x + dt v'`.
-#[inline(always)]
-fn integrate_row<S: Simd>(s: S, ctx: &Ctx, band: &Band, r: usize, out: &mut Out, lo: usize) {
-    let g = ctx.grid;
-    let rs = band.rs;
-    let buf = band.buf.as_slice();
-    assert!(buf.len() == SLOTS * ARRAYS * rs && g.nv % S::LANES == 0);
-    assert!((r + 1) * g.stride <= g.len() && ctx.inv_mass.len() == g.len());
-    for (a, o) in ctx.x.iter().chain(ctx.v.iter()).zip(out.0.iter()) {
-        assert!(a.len() == g.len() && lo + g.stride <= o.len());
-    }
-    let bp = buf.as_ptr();
-    let slot = |row: usize| (row % SLOTS) * ARRAYS * rs;
-    let (cur, prev, prev2) = (slot(r), slot(r + SLOTS - 1), slot(r + SLOTS - 2));
-    // SAFETY: slot + array offsets are inside `buf`; column c - 2 >= -PAD_L.
-    let at = |base: usize, array: usize, k: usize, c: usize, shift: usize| unsafe {
-        s.load(bp.add(base + (array * 3 + k) * rs + PAD_L + c - shift))
-    };
-    let p = &ctx.p;
-    let dt = s.splat(p.dt);
-    let i0 = r * g.stride;
-    let mut c = 0;
-    while c < g.nv {
-        // SAFETY: row r, columns c .. c + LANES <= nv are inside the arrays.
-        let w = unsafe { s.load(ctx.inv_mass.as_ptr().add(i0 + c)) };
-        for k in 0..3 {
-            let sum = |a: S::V, b: S::V, cc: S::V, d: S::V| s.add(s.sub(a, b), s.sub(cc, d));
-            let f1 = sum(
-                at(cur, RIGHT, k, c, 0),
-                at(cur, RIGHT, k, c, 1),
-                at(cur, RIGHT2, k, c, 0),
-                at(cur, RIGHT2, k, c, 2),
+            // Terms for the lane to the right (column c+1), two to the right (c+2)
+            // and, on the next row, one to the right.
+            let (mut l, q, mut m) = (
+                s.sub(anti[k], right[k]),
+                s.sub(zero, right2[k]),
+                s.sub(zero, dr[k]),
             );
-            let f2 = sum(
-                at(cur, DOWN, k, c, 0),
-                at(prev, DOWN, k, c, 0),
-                at(cur, DOWN_RIGHT, k, c, 0),
-                at(prev, DOWN_RIGHT, k, c, 1),
-            );
-            let f3 = sum(
-                at(cur, ANTI, k, c, 1),
-                at(prev, ANTI, k, c, 0),
-                at(cur, DOWN2, k, c, 0),
-                at(prev2, DOWN2, k, c, 0),
-            );
-            let mut f = s.add(s.add(f1, f2), f3);
-            if ctx.drag {
-                // a of cell (r, c); b of (r, c-1); d of (r-1, c); e of (r-1, c-1).
-                let t1 = s.add(at(cur, TRI1, k, c, 0), at(cur, TRI1, k, c, 1));
-                let t2 = s.add(at(cur, TRI2, k, c, 1), at(prev, TRI1, k, c, 0));
-                let t3 = s.add(at(prev, TRI2, k, c, 0), at(prev, TRI2, k, c, 1));
-                f = s.add(f, s.add(s.add(t1, t2), t3));
+            let mut in1 = s.sub(zero, s.add(d[k], anti[k]));
+            if DRAG {
+                l = s.add(l, s.add(t1[k], t2[k]));
+                m = s.add(m, t2[k]);
+                in1 = s.add(in1, s.add(t1[k], t2[k]));
             }
-            // SAFETY: as for `w`; outputs are checked above.
+            let in1 = s.add(in1, s.shift1(carry[2][k], m));
+            // SAFETY: slots a1, a2 + k * nv + c .. + LANES are inside `acc`.
             unsafe {
-                let x = s.load(ctx.x[k].as_ptr().add(i0 + c));
-                let v = s.load(ctx.v[k].as_ptr().add(i0 + c));
-                let vn = s.mul_add(dt, s.mul_add(f, w, s.splat(p.gravity[k])), v);
-                let vn = s.keep_if_positive(w, vn);
-                s.store(out.0[3 + k].as_mut_ptr().add(lo + c), vn);
-                s.store(out.0[k].as_mut_ptr().add(lo + c), s.mul_add(dt, vn, x));
+                let pa1 = ap.add(a1 + k * nv + c);
+                s.store(pa1, s.add(s.load(pa1), in1));
+                s.store(ap.add(a2 + k * nv + c), s.sub(zero, d2[k]));
             }
+            if OWN {
+                let mut own = s.add(s.add(right[k], right2[k]), s.add(d[k], dr[k]));
+                own = s.add(own, d2[k]);
+                if DRAG {
+                    own = s.add(own, t1[k]);
+                }
+                own = s.add(
+                    own,
+                    s.add(s.shift1(carry[0][k], l), s.shift2(carry[1][k], q)),
+                );
+                // SAFETY: as above; outputs were checked against `lo + nv`.
+                unsafe {
+                    let f = s.add(s.load(ap.add(a0 + k * nv + c)), own);
+                    let vn = s.mul_add(dt, s.mul_add(f, w, gravity[k]), p00.1[k]);
+                    let vn = s.keep_if_positive(w, vn);
+                    s.store(op[3 + k].add(lo + c), vn);
+                    s.store(op[k].add(lo + c), s.mul_add(dt, vn, p00.0[k]));
+                }
+            }
+            carry[0][k] = l;
+            carry[1][k] = q;
+            carry[2][k] = m;
         }
         c += S::LANES;
     }
