@@ -991,16 +991,16 @@ fn band_rows<S: Simd, const DRAG: bool>(s: S, ctx: &Ctx, band: &mut Band, out: &
     }
 }
 
-/// Forces on the first ends of springs `i`-`j`, one per lane, times `mask`:
-/// `f = (k L / l - k - b (d·dv) / l²) d` with `d = x_i - x_j`, `dv = v_i - v_j`.
-/// `kind` is `[-k, k L, -b]`.
+/// Forces on the first ends of springs `i`-`j`, one per lane, times `mask` (if
+/// any): `f = (k L / l - k - b (d·dv) / l²) d = ((-b (d·dv) / l + k L) / l - k) d`
+/// with `d = x_i - x_j`, `dv = v_i - v_j`. `kind` is `[-k, k L, -b]`.
 #[inline(always)]
 fn spring<S: Simd>(
     s: S,
     (xi, vi): (&[S::V; 3], &[S::V; 3]),
     (xj, vj): (&[S::V; 3], &[S::V; 3]),
     [nk, kl, nb]: [S::V; 3],
-    mask: S::V,
+    mask: Option<S::V>,
 ) -> [S::V; 3] {
     let d = [
         s.sub(xi[0], xj[0]),
@@ -1015,8 +1015,11 @@ fn spring<S: Simd>(
     let l2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
     let dd = s.mul_add(d[2], u[2], s.mul_add(d[1], u[1], s.mul(d[0], u[0])));
     let inv = s.rsqrt_or_zero(l2, EPS2);
-    let a = s.mul_add(s.mul(nb, dd), s.mul(inv, inv), s.mul_add(kl, inv, nk));
-    let a = s.mul(a, mask);
+    let a = s.mul_add(s.mul_add(s.mul(nb, dd), inv, kl), inv, nk);
+    let a = match mask {
+        Some(m) => s.mul(a, m),
+        None => a,
+    };
     [s.mul(a, d[0]), s.mul(a, d[1]), s.mul(a, d[2])]
 }
 
@@ -1029,7 +1032,7 @@ fn triangle<S: Simd>(
     [p, q, d]: [&[S::V; 3]; 3],
     vr: &[S::V; 3],
     neg_drag: S::V,
-    mask: S::V,
+    mask: Option<S::V>,
 ) -> [S::V; 3] {
     let e1 = [s.sub(q[0], p[0]), s.sub(q[1], p[1]), s.sub(q[2], p[2])];
     let e2 = [s.sub(d[0], p[0]), s.sub(d[1], p[1]), s.sub(d[2], p[2])];
@@ -1042,8 +1045,39 @@ fn triangle<S: Simd>(
     let vr2 = s.mul_add(vr[2], vr[2], s.mul_add(vr[1], vr[1], s.mul(vr[0], vr[0])));
     let vm = s.mul_add(vr[2], m[2], s.mul_add(vr[1], m[1], s.mul(vr[0], m[0])));
     let ratio = s.mul(vr2, s.rsqrt_or_zero(s.mul(vr2, m2), TINY));
-    let a = s.mul(s.mul(s.mul(neg_drag, vm), ratio), mask);
+    let a = s.mul(s.mul(neg_drag, vm), ratio);
+    let a = match mask {
+        Some(m) => s.mul(a, m),
+        None => a,
+    };
     [s.mul(a, m[0]), s.mul(a, m[1]), s.mul(a, m[2])]
+}
+
+/// Splatted constants and raw pointers of one row, shared by its blocks.
+struct RowKernel<S: Simd> {
+    s: S,
+    kinds: [[S::V; 3]; 3],
+    neg_wind: [S::V; 3],
+    gravity: [S::V; 3],
+    third: S::V,
+    neg_drag: S::V,
+    dt: S::V,
+    zero: S::V,
+    down: S::V,
+    down2: S::V,
+    x: [*const f32; 3],
+    v: [*const f32; 3],
+    inv_mass: *const f32,
+    col_mask: *const f32,
+    acc: *mut f32,
+    out: [*mut f32; 6],
+    /// Array offsets of the rows `row`, `row + 1`, `row + 2`.
+    b: [usize; 3],
+    /// Accumulator offsets of the rows `row`, `row + 1`, `row + 2`.
+    a: [usize; 3],
+    nv: usize,
+    stride: usize,
+    lo: usize,
 }
 
 /// One row `row` of the cloth, in SIMD blocks of columns: evaluate the six springs
@@ -1055,7 +1089,9 @@ fn triangle<S: Simd>(
 /// the forces just computed, and with `OWN` the particle is integrated at once:
 /// `v' = v + dt (f / m + g)` (0 when pinned), `x' = x + dt v'`, written to `out`
 /// at `lo + c`. Forces between columns of the same row reach the neighbouring
-/// lanes through `shift1`/`shift2`, carried from block to block.
+/// lanes through `shift1`/`shift2`, carried from block to block. Blocks that touch
+/// the last two columns, and the last two rows, mask the springs and triangles
+/// that reach ghost particles.
 #[inline(always)]
 fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
     s: S,
@@ -1068,10 +1104,10 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
     let g = ctx.grid;
     let nv = g.nv;
     let acc = band.acc.as_mut_slice();
-    let (b0, b1, b2) = (row * g.stride, (row + 1) * g.stride, (row + 2) * g.stride);
-    // Everything read or written below lies inside these bounds.
+    let b = [row * g.stride, (row + 1) * g.stride, (row + 2) * g.stride];
+    // Everything read or written by `block` lies inside these bounds.
     assert!(S::LANES <= BLOCK && nv % S::LANES == 0 && acc.len() == SLOTS * 3 * nv);
-    assert!(b2 + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
+    assert!(b[2] + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
     assert!(ctx.col_mask.len() >= g.stride + nv);
     for a in ctx.x.iter().chain(ctx.v.iter()) {
         assert_eq!(a.len(), g.len());
@@ -1081,26 +1117,67 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
             assert!(lo + nv <= o.len());
         }
     }
-    let ap = acc.as_mut_ptr();
     let slot = |r: usize| (r % SLOTS) * 3 * nv;
-    let (a0, a1, a2) = (slot(row), slot(row + 1), slot(row + 2));
-    let xp = ctx.x.map(<[f32]>::as_ptr);
-    let vp = ctx.v.map(<[f32]>::as_ptr);
-    let mp = ctx.col_mask.as_ptr();
-    let wp = ctx.inv_mass.as_ptr();
-    let op = out.0.each_mut().map(|o| o.as_mut_ptr());
     let p = &ctx.p;
     let kind = |i: usize| [s.splat(-p.ks[i]), s.splat(p.kls[i]), s.splat(-p.bs[i])];
-    let (structural, bend, shear) = (kind(0), kind(1), kind(2));
-    let neg_wind = p.wind.map(|w| s.splat(-w));
-    let gravity = p.gravity.map(|w| s.splat(w));
-    let third = s.splat(1.0 / 3.0);
-    let neg_drag = s.splat(-p.drag);
-    let dt = s.splat(p.dt);
-    let zero = s.splat(0.0);
-    let down = s.splat(if row + 1 < g.h { 1.0 } else { 0.0 });
-    let down2 = s.splat(if row + 2 < g.h { 1.0 } else { 0.0 });
-    // SAFETY: every offset used with these is inside the bounds asserted above.
+    let k = RowKernel {
+        s,
+        kinds: [kind(0), kind(1), kind(2)],
+        neg_wind: p.wind.map(|w| s.splat(-w)),
+        gravity: p.gravity.map(|w| s.splat(w)),
+        third: s.splat(1.0 / 3.0),
+        neg_drag: s.splat(-p.drag),
+        dt: s.splat(p.dt),
+        zero: s.splat(0.0),
+        down: s.splat(if row + 1 < g.h { 1.0 } else { 0.0 }),
+        down2: s.splat(if row + 2 < g.h { 1.0 } else { 0.0 }),
+        x: ctx.x.map(<[f32]>::as_ptr),
+        v: ctx.v.map(<[f32]>::as_ptr),
+        inv_mass: ctx.inv_mass.as_ptr(),
+        col_mask: ctx.col_mask.as_ptr(),
+        acc: acc.as_mut_ptr(),
+        out: out.0.each_mut().map(|o| o.as_mut_ptr()),
+        b,
+        a: [slot(row), slot(row + 1), slot(row + 2)],
+        nv,
+        stride: g.stride,
+        lo,
+    };
+    // Blocks from `c_mask` on hold a column >= w - 2; near the bottom all blocks
+    // reach ghost rows.
+    let c_mask = if row + 2 < g.h {
+        (g.w.saturating_sub(2) / S::LANES) * S::LANES
+    } else {
+        0
+    };
+    let mut carry = [[k.zero; 3]; 3];
+    let mut c = 0;
+    while c < c_mask {
+        // SAFETY: c < nv, a multiple of LANES; bounds asserted above.
+        unsafe { block::<S, DRAG, OWN, false>(&k, c, &mut carry) };
+        c += S::LANES;
+    }
+    while c < nv {
+        // SAFETY: as above.
+        unsafe { block::<S, DRAG, OWN, true>(&k, c, &mut carry) };
+        c += S::LANES;
+    }
+}
+
+/// Columns `c .. c + LANES` of a row (see [`row_step`]).
+///
+/// # Safety
+/// `c + LANES <= nv`, and the pointers and offsets of `k` are valid as asserted in
+/// [`row_step`].
+#[inline(always)]
+unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
+    k: &RowKernel<S>,
+    c: usize,
+    carry: &mut [[S::V; 3]; 3],
+) {
+    let s = k.s;
+    let zero = k.zero;
+    // SAFETY: offsets are inside the arrays (caller's contract).
     let ld = |ptr: [*const f32; 3], i: usize| unsafe {
         [
             s.load(ptr[0].add(i)),
@@ -1108,87 +1185,94 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
             s.load(ptr[2].add(i)),
         ]
     };
-    let mut carry = [[zero; 3]; 3];
-    let mut c = 0;
-    while c < nv {
-        let p00 = (&ld(xp, b0 + c), &ld(vp, b0 + c));
-        let p01 = (&ld(xp, b0 + c + 1), &ld(vp, b0 + c + 1));
-        let p02 = (&ld(xp, b0 + c + 2), &ld(vp, b0 + c + 2));
-        let p10 = (&ld(xp, b1 + c), &ld(vp, b1 + c));
-        let p11 = (&ld(xp, b1 + c + 1), &ld(vp, b1 + c + 1));
-        let p20 = (&ld(xp, b2 + c), &ld(vp, b2 + c));
+    let [b0, b1, b2] = k.b;
+    let p00 = (&ld(k.x, b0 + c), &ld(k.v, b0 + c));
+    let p01 = (&ld(k.x, b0 + c + 1), &ld(k.v, b0 + c + 1));
+    let p02 = (&ld(k.x, b0 + c + 2), &ld(k.v, b0 + c + 2));
+    let p10 = (&ld(k.x, b1 + c), &ld(k.v, b1 + c));
+    let p11 = (&ld(k.x, b1 + c + 1), &ld(k.v, b1 + c + 1));
+    let p20 = (&ld(k.x, b2 + c), &ld(k.v, b2 + c));
+    let (m1, m2, m1d, down, down2) = if MASK {
         // SAFETY: as above.
-        let (m1, m2) = unsafe { (s.load(mp.add(c)), s.load(mp.add(g.stride + c))) };
-        let m1d = s.mul(m1, down);
-        let right = spring(s, p00, p01, structural, m1);
-        let right2 = spring(s, p00, p02, bend, m2);
-        let d = spring(s, p00, p10, structural, down);
-        let dr = spring(s, p00, p11, shear, m1d);
-        let anti = spring(s, p01, p10, shear, m1d);
-        let d2 = spring(s, p00, p20, bend, down2);
-        let (t1, t2) = if DRAG {
-            // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
-            let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
-            let bd: [S::V; 3] = std::array::from_fn(|k| s.add(vb[k], vd[k]));
-            let vr1 = std::array::from_fn(|k| s.mul_add(s.add(bd[k], va[k]), third, neg_wind[k]));
-            let vr2 = std::array::from_fn(|k| s.mul_add(s.add(bd[k], ve[k]), third, neg_wind[k]));
+        let (m1, m2) = unsafe {
             (
-                triangle(s, [p00.0, p01.0, p10.0], &vr1, neg_drag, m1d),
-                triangle(s, [p01.0, p11.0, p10.0], &vr2, neg_drag, m1d),
+                s.load(k.col_mask.add(c)),
+                s.load(k.col_mask.add(k.stride + c)),
             )
-        } else {
-            ([zero; 3], [zero; 3])
         };
-        let w = if OWN {
-            // SAFETY: as above.
-            unsafe { s.load(wp.add(b0 + c)) }
-        } else {
-            zero
-        };
-        for k in 0..3 {
-            // Terms for the lane to the right (column c+1), two to the right (c+2)
-            // and, on the next row, one to the right.
-            let (mut l, q, mut m) = (
-                s.sub(anti[k], right[k]),
-                s.sub(zero, right2[k]),
-                s.sub(zero, dr[k]),
-            );
-            let mut in1 = s.sub(zero, s.add(d[k], anti[k]));
-            if DRAG {
-                l = s.add(l, s.add(t1[k], t2[k]));
-                m = s.add(m, t2[k]);
-                in1 = s.add(in1, s.add(t1[k], t2[k]));
-            }
-            let in1 = s.add(in1, s.shift1(carry[2][k], m));
-            // SAFETY: slots a1, a2 + k * nv + c .. + LANES are inside `acc`.
-            unsafe {
-                let pa1 = ap.add(a1 + k * nv + c);
-                s.store(pa1, s.add(s.load(pa1), in1));
-                s.store(ap.add(a2 + k * nv + c), s.sub(zero, d2[k]));
-            }
-            if OWN {
-                let mut own = s.add(s.add(right[k], right2[k]), s.add(d[k], dr[k]));
-                own = s.add(own, d2[k]);
-                if DRAG {
-                    own = s.add(own, t1[k]);
-                }
-                own = s.add(
-                    own,
-                    s.add(s.shift1(carry[0][k], l), s.shift2(carry[1][k], q)),
-                );
-                // SAFETY: as above; outputs were checked against `lo + nv`.
-                unsafe {
-                    let f = s.add(s.load(ap.add(a0 + k * nv + c)), own);
-                    let vn = s.mul_add(dt, s.mul_add(f, w, gravity[k]), p00.1[k]);
-                    let vn = s.keep_if_positive(w, vn);
-                    s.store(op[3 + k].add(lo + c), vn);
-                    s.store(op[k].add(lo + c), s.mul_add(dt, vn, p00.0[k]));
-                }
-            }
-            carry[0][k] = l;
-            carry[1][k] = q;
-            carry[2][k] = m;
+        let m1d = s.mul(m1, k.down);
+        (Some(m1), Some(m2), Some(m1d), Some(k.down), Some(k.down2))
+    } else {
+        (None, None, None, None, None)
+    };
+    let [structural, bend, shear] = k.kinds;
+    let right = spring(s, p00, p01, structural, m1);
+    let right2 = spring(s, p00, p02, bend, m2);
+    let d = spring(s, p00, p10, structural, down);
+    let dr = spring(s, p00, p11, shear, m1d);
+    let anti = spring(s, p01, p10, shear, m1d);
+    let d2 = spring(s, p00, p20, bend, down2);
+    let (t1, t2) = if DRAG {
+        // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
+        let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
+        let bd: [S::V; 3] = std::array::from_fn(|i| s.add(vb[i], vd[i]));
+        let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
+        let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
+        (
+            triangle(s, [p00.0, p01.0, p10.0], &vr1, k.neg_drag, m1d),
+            triangle(s, [p01.0, p11.0, p10.0], &vr2, k.neg_drag, m1d),
+        )
+    } else {
+        ([zero; 3], [zero; 3])
+    };
+    let w = if OWN {
+        // SAFETY: as above.
+        unsafe { s.load(k.inv_mass.add(b0 + c)) }
+    } else {
+        zero
+    };
+    let nv = k.nv;
+    for i in 0..3 {
+        // Terms for the lane to the right (column c+1), two to the right (c+2) and,
+        // on the next row, one to the right.
+        let mut l = s.sub(anti[i], right[i]);
+        let q = s.sub(zero, right2[i]);
+        let mut m = s.sub(zero, dr[i]);
+        let mut in1 = s.sub(zero, s.add(d[i], anti[i]));
+        if DRAG {
+            let t = s.add(t1[i], t2[i]);
+            l = s.add(l, t);
+            m = s.add(m, t2[i]);
+            in1 = s.add(in1, t);
         }
-        c += S::LANES;
+        let in1 = s.add(in1, s.shift1(carry[2][i], m));
+        // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
+        unsafe {
+            let pa1 = k.acc.add(k.a[1] + i * nv + c);
+            s.store(pa1, s.add(s.load(pa1), in1));
+            s.store(k.acc.add(k.a[2] + i * nv + c), s.sub(zero, d2[i]));
+        }
+        if OWN {
+            let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
+            own = s.add(own, d2[i]);
+            if DRAG {
+                own = s.add(own, t1[i]);
+            }
+            own = s.add(
+                own,
+                s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
+            );
+            // SAFETY: as above; outputs hold `lo + nv` floats.
+            unsafe {
+                let f = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
+                let vn = s.mul_add(k.dt, s.mul_add(f, w, k.gravity[i]), p00.1[i]);
+                let vn = s.keep_if_positive(w, vn);
+                s.store(k.out[3 + i].add(k.lo + c), vn);
+                s.store(k.out[i].add(k.lo + c), s.mul_add(k.dt, vn, p00.0[i]));
+            }
+        }
+        carry[0][i] = l;
+        carry[1][i] = q;
+        carry[2][i] = m;
     }
 }
