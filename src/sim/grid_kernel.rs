@@ -672,11 +672,62 @@ fn band_dispatch(ctx: &Ctx, band: &mut Band, out: Out) {
     match ctx.simd {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-        SimdLevel::Avx512 => unsafe { x86::band_avx512(ctx, band, out) },
+        SimdLevel::Avx512 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+            x86::row_avx512(ctx, band, row, out, lo, own)
+        }),
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 => unsafe { x86::band_avx2(ctx, band, out) },
-        _ => band_step(Portable, ctx, band, out),
+        SimdLevel::Avx2 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+            x86::row_avx2(ctx, band, row, out, lo, own)
+        }),
+        _ => band_rows(ctx, band, out, row_portable),
+    }
+}
+
+/// One row with the portable lanes.
+#[inline(never)]
+fn row_portable(ctx: &Ctx, band: &mut Band, row: usize, out: &mut Out, lo: usize, own: bool) {
+    row_variant(Portable, ctx, band, row, out, lo, own);
+}
+
+/// [`row_step`] for the scene's drag setting, integrating the row if `own`.
+#[inline(always)]
+fn row_variant<S: Simd>(
+    s: S,
+    ctx: &Ctx,
+    band: &mut Band,
+    row: usize,
+    out: &mut Out,
+    lo: usize,
+    own: bool,
+) {
+    match (ctx.drag, own) {
+        (true, true) => row_step::<S, true, true>(s, ctx, band, row, out, lo),
+        (true, false) => row_step::<S, true, false>(s, ctx, band, row, out, lo),
+        (false, true) => row_step::<S, false, true>(s, ctx, band, row, out, lo),
+        (false, false) => row_step::<S, false, false>(s, ctx, band, row, out, lo),
+    }
+}
+
+/// The rows of one band: prime the accumulator ring with the two rows above the
+/// band, then compute and integrate the band's rows one by one. Each row is one
+/// call of `row`, compiled for the chosen SIMD level.
+fn band_rows(
+    ctx: &Ctx,
+    band: &mut Band,
+    mut out: Out,
+    row: impl Fn(&Ctx, &mut Band, usize, &mut Out, usize, bool),
+) {
+    // Rows 0 and 1 get nothing from rows above the cloth.
+    if band.r0 < 2 {
+        band.acc.as_mut_slice().fill(0.0);
+    }
+    for r in band.r0.saturating_sub(2)..band.r0 {
+        row(ctx, band, r, &mut out, 0, false);
+    }
+    let st = ctx.grid.stride;
+    for r in band.r0..band.r1 {
+        row(ctx, band, r, &mut out, (r - band.r0) * st, true);
     }
 }
 
@@ -787,7 +838,7 @@ mod x86 {
     //! AVX2 and AVX-512 versions of [`Simd`], and the entry points compiled for them.
     use std::arch::x86_64::*;
 
-    use super::{Band, Ctx, Out, Simd, band_step};
+    use super::{Band, Ctx, Out, Simd, row_variant};
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
     #[derive(Clone, Copy)]
@@ -797,18 +848,38 @@ mod x86 {
     #[derive(Clone, Copy)]
     pub(super) struct Avx512(());
 
+    /// One row with AVX-512 (see `row_step`).
+    ///
     /// # Safety
     /// The CPU must have AVX-512F, AVX-512VL, AVX2 and FMA.
     #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-    pub(super) unsafe fn band_avx512(ctx: &Ctx, band: &mut Band, out: Out) {
-        band_step(Avx512(()), ctx, band, out);
+    #[inline(never)]
+    pub(super) unsafe fn row_avx512(
+        ctx: &Ctx,
+        band: &mut Band,
+        row: usize,
+        out: &mut Out,
+        lo: usize,
+        own: bool,
+    ) {
+        row_variant(Avx512(()), ctx, band, row, out, lo, own);
     }
 
+    /// One row with AVX2 (see `row_step`).
+    ///
     /// # Safety
     /// The CPU must have AVX2 and FMA.
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn band_avx2(ctx: &Ctx, band: &mut Band, out: Out) {
-        band_step(Avx2(()), ctx, band, out);
+    #[inline(never)]
+    pub(super) unsafe fn row_avx2(
+        ctx: &Ctx,
+        band: &mut Band,
+        row: usize,
+        out: &mut Out,
+        lo: usize,
+        own: bool,
+    ) {
+        row_variant(Avx2(()), ctx, band, row, out, lo, own);
     }
 
     // SAFETY (all intrinsics below): an `Avx512` / `Avx2` value exists only inside
@@ -962,32 +1033,6 @@ mod x86 {
                 ))
             }
         }
-    }
-}
-
-/// The rows of one band: prime the accumulator ring with the two rows above the
-/// band, then compute and integrate the band's rows one by one.
-#[inline(always)]
-fn band_step<S: Simd>(s: S, ctx: &Ctx, band: &mut Band, mut out: Out) {
-    if ctx.drag {
-        band_rows::<S, true>(s, ctx, band, &mut out);
-    } else {
-        band_rows::<S, false>(s, ctx, band, &mut out);
-    }
-}
-
-#[inline(always)]
-fn band_rows<S: Simd, const DRAG: bool>(s: S, ctx: &Ctx, band: &mut Band, out: &mut Out) {
-    // Rows 0 and 1 get nothing from rows above the cloth.
-    if band.r0 < 2 {
-        band.acc.as_mut_slice().fill(0.0);
-    }
-    for row in band.r0.saturating_sub(2)..band.r0 {
-        row_step::<S, DRAG, false>(s, ctx, band, row, out, 0);
-    }
-    let st = ctx.grid.stride;
-    for r in band.r0..band.r1 {
-        row_step::<S, DRAG, true>(s, ctx, band, r, out, (r - band.r0) * st);
     }
 }
 
