@@ -97,6 +97,13 @@ pub fn critical_step(integrator: Integrator, omega: f64, zeta: f64) -> Option<f6
     if integrator == Integrator::ImplicitEuler || omega <= 0.0 {
         return Some(f64::INFINITY);
     }
+    // Undamped, explicit Euler (|1 + i y| > 1) and RK2 (|R(i y)|² = 1 + y⁴/4) grow at
+    // every step. Their growth at the scan's first step is below the tolerance that
+    // lets the neutrally stable methods through, so the scan would report a tiny
+    // finite limit instead: decide it here.
+    if zeta <= 0.0 && matches!(integrator, Integrator::ExplicitEuler | Integrator::Rk2) {
+        return None;
+    }
     let stable = |h: f64| spectral_radius(integrator, omega * h, zeta) <= 1.0 + 1e-12;
     // Scan up in small factors to the first unstable step, then bisect.
     let mut lo = 0.0;
