@@ -10,6 +10,7 @@ pub mod constraints;
 pub mod forces;
 pub mod implicit;
 pub mod integrators;
+pub mod safe;
 pub mod springs;
 pub mod stability;
 pub mod wind;
@@ -19,6 +20,7 @@ use glam::{DVec2, DVec3};
 pub use clock::Clock;
 pub use forces::ForceTerms;
 pub use integrators::Integrator;
+pub use safe::{SafeStep, safe_step, safe_substeps};
 pub use springs::{Adjacency, Bar, Spring, SpringKind};
 pub use stability::Stability;
 pub use wind::Wind;
@@ -222,6 +224,7 @@ pub struct System {
 impl System {
     /// Builds a system from particle masses, start positions, topology and parameters.
     /// `pinned` lists particles that never move. Velocities start at zero.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         masses: Vec<f64>,
         positions: Vec<DVec3>,
