@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
+use cloth_sandbox::sim::safe::{DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, safe_step};
 use cloth_sandbox::sim::{Divergence, SpringKind, System, bounding_sphere};
 use glam::DVec3;
 use serde_json::json;
@@ -57,6 +58,20 @@ pub enum Command {
     Info(InfoArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Measure error against run time and stability of every integrator; write CSV,
+    /// SVG plots and REPORT.md.
+    Report(ReportArgs),
+}
+
+/// `cloth report`.
+#[derive(clap::Args, Debug)]
+pub struct ReportArgs {
+    /// Output folder.
+    #[arg(long, default_value = "report")]
+    out: std::path::PathBuf,
+    /// Smaller problems: a smoke run for CI (under 2 minutes).
+    #[arg(long)]
+    quick: bool,
 }
 
 /// `cloth run`.
@@ -82,6 +97,10 @@ pub struct RunArgs {
     /// Write the final positions as CSV `index,x,y,z`.
     #[arg(long, value_name = "FILE.csv")]
     dump: Option<std::path::PathBuf>,
+    /// Safe stepping: split each step of dt into the fewest substeps that keep the
+    /// step below half the integrator's critical step (Gershgorin estimate).
+    #[arg(long)]
+    safe: bool,
 }
 
 /// `cloth info`.
@@ -103,11 +122,29 @@ pub fn run_command(command: Command) -> ExitCode {
             scenes();
             Ok(ExitCode::SUCCESS)
         }
+        Command::Report(args) => report(args),
     };
     result.unwrap_or_else(|message| {
         eprintln!("error: {message}");
         ExitCode::from(EXIT_BAD_INPUT)
     })
+}
+
+fn report(args: ReportArgs) -> Result<ExitCode, String> {
+    let options = cloth_sandbox::report::Options {
+        out: args.out,
+        quick: args.quick,
+        ..Default::default()
+    };
+    let start = Instant::now();
+    let mut progress = |line: &str| eprintln!("[{:6.1} s] {line}", start.elapsed().as_secs_f64());
+    cloth_sandbox::report::run(&options, &mut progress)?;
+    eprintln!(
+        "done in {:.1} s: {}",
+        start.elapsed().as_secs_f64(),
+        options.out.join("REPORT.md").display()
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 fn scenes() {
@@ -138,7 +175,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     let scene = load_run_scene(&args)?;
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;
-    let steps = match (args.steps, args.duration) {
+    let mut steps = match (args.steps, args.duration) {
         (Some(n), _) => n,
         (None, Some(d)) if d.is_finite() && d >= 0.0 => (d / dt).round() as u64,
         (None, Some(d)) => {
@@ -148,6 +185,23 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         }
         (None, None) => (1.0 / dt).round() as u64,
     };
+    if args.safe {
+        let choice = safe_step(system.model(), dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
+        let mut params = *system.params();
+        params.dt = choice.dt;
+        system.set_params(params);
+        steps *= choice.substeps as u64;
+        eprintln!(
+            "safe stepping: {} substeps of {:.4e} s per step of {dt:.4e} s{}",
+            choice.substeps,
+            choice.dt,
+            if choice.safe {
+                ""
+            } else {
+                " (not enough: the integrator has no stable step here, or the cap was hit)"
+            }
+        );
+    }
     let start = Instant::now();
     let outcome = system.run(steps);
     let wall = start.elapsed().as_secs_f64();
