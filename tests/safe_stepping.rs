@@ -32,7 +32,7 @@ fn stiff_cloth_stays_finite_for_10_seconds_with_safe_stepping() {
     system.set_params(params);
     let steps = (10.0 / choice.dt).ceil() as u64;
     system.run(steps).expect("finite for 10 s");
-    assert!(system.time() >= 10.0);
+    assert!(system.time() >= 10.0 - 1e-6, "{}", system.time());
     assert!(system.positions().iter().all(|p| p.is_finite()));
 }
 
