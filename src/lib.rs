@@ -1,1 +1,10 @@
-//! stub
+//! cloth-sandbox: a mass-spring cloth simulator. This library is the headless part:
+//! the simulation core ([`sim`]) and scene files ([`scene`]), plus what an
+//! interactive front end needs without any GPU or window: the camera and picking
+//! maths ([`view`]) and a running scene with live edits ([`session`]). The `cloth`
+//! binary adds the command line, the window, the renderer and the panel on top.
+
+pub mod scene;
+pub mod session;
+pub mod sim;
+pub mod view;
