@@ -51,14 +51,15 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
 
     let l = globals.light_dir.xyz;
     let v = normalize(globals.eye.xyz - in.world);
-    // Light the side facing the viewer: a thin sheet is lit from either side.
+    // Light the side facing the viewer: a thin sheet is lit from either side,
+    // by a fixed key light and a fill light at the eye.
     if (dot(n, v) < 0.0) {
         n = -n;
     }
-    let diffuse = max(dot(n, l), 0.0);
+    let key = abs(dot(n, l));
     let fill = max(dot(n, v), 0.0);
-    let h = normalize(l + v);
-    let spec = pow(max(dot(n, h), 0.0), 48.0) * 0.15;
-    let shade = 0.25 + 0.6 * diffuse + 0.2 * fill;
+    let h = normalize(l * sign(dot(n, l) + 1e-6) + v);
+    let spec = pow(max(dot(n, h), 0.0), 48.0) * 0.12;
+    let shade = 0.22 + 0.5 * key + 0.35 * fill;
     return vec4<f32>(base * shade + vec3<f32>(spec), 1.0);
 }

@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use glam::{DVec3, Vec2};
+use glam::Vec2;
 use winit::application::ApplicationHandler;
 use winit::dpi::LogicalSize;
 use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
@@ -152,11 +152,21 @@ impl App {
         self.camera.frame(lo, hi);
     }
 
+    /// Origin and size (px) of the scene's part of the window.
+    fn scene_rect(&self) -> (Vec2, Vec2) {
+        self.gfx
+            .as_ref()
+            .map_or((Vec2::ZERO, Vec2::ONE), |g| g.renderer.viewport())
+    }
+
+    /// Size (px) of the scene's part of the window.
     fn viewport(&self) -> Vec2 {
-        self.gfx.as_ref().map_or(Vec2::new(1.0, 1.0), |g| {
-            let (w, h) = g.size();
-            Vec2::new(w as f32, h as f32)
-        })
+        self.scene_rect().1
+    }
+
+    /// A window position (px) in the scene's coordinates.
+    fn to_scene(&self, window: Vec2) -> Vec2 {
+        window - self.scene_rect().0
     }
 
     fn pixels_per_point(&self) -> f32 {
@@ -171,7 +181,7 @@ impl App {
         pick_particle(
             &self.camera,
             self.viewport(),
-            cursor,
+            self.to_scene(cursor),
             &self.frame_data.positions,
             PICK_RADIUS * self.pixels_per_point(),
         )
@@ -182,7 +192,7 @@ impl App {
             MouseAction::TogglePin(i) => {
                 let pinned = self.session.system().is_pinned(i);
                 self.session.system_mut().set_pinned(i, !pinned);
-                log::info!("particle {i} {}", if pinned { "unpinned" } else { "pinned" });
+                log::info!("{} particle {i}", if pinned { "unpinned" } else { "pinned" });
             }
             MouseAction::Drag { particle, cursor } => {
                 let anchor = match self.session.system().grabbed() {
@@ -190,13 +200,23 @@ impl App {
                     _ => self.session.system().positions().get(particle).copied().unwrap_or_default(),
                 };
                 let anchor = anchor.as_vec3();
-                if let Some(target) = self.camera.drag_point(cursor, self.viewport(), anchor)
+                if let Some(target) = self
+                    .camera
+                    .drag_point(self.to_scene(cursor), self.viewport(), anchor)
                     && target.is_finite()
                 {
-                    self.session.system_mut().grab(particle, DVec3::from(target.as_dvec3()));
+                    if self.session.system().grabbed().is_none() {
+                        log::info!("dragging particle {particle}");
+                    }
+                    self.session.system_mut().grab(particle, target.as_dvec3());
                 }
             }
-            MouseAction::Release => self.session.system_mut().release(),
+            MouseAction::Release => {
+                if let Some((i, _)) = self.session.system().grabbed() {
+                    log::info!("released particle {i}");
+                }
+                self.session.system_mut().release();
+            }
             MouseAction::Orbit(d) => self.camera.orbit(d),
             MouseAction::Pan(d) => self.camera.pan(d, self.viewport()),
         }
@@ -204,7 +224,10 @@ impl App {
 
     fn apply(&mut self, action: Action, event_loop: &ActiveEventLoop) {
         match action {
-            Action::Quit => event_loop.exit(),
+            Action::Quit => {
+                log::info!("quit");
+                event_loop.exit();
+            }
             Action::ResetView => self.frame_camera(),
             Action::LoadScene(name) => match self.session.load_scene(&name) {
                 Ok(()) => {
@@ -214,6 +237,7 @@ impl App {
                 Err(e) => self.panel.error = Some(e.to_string()),
             },
             Action::Reset => {
+                log::info!("scene reset");
                 self.mouse.cancel();
                 if let Err(e) = self.session.reset() {
                     self.panel.error = Some(e.to_string());
@@ -280,10 +304,18 @@ impl App {
         };
         let raw = egui_state.take_egui_input(&gfx.window);
         let mut actions = Vec::new();
+        let mut free = egui::Rect::NOTHING;
         let adapter = gfx.adapter_name.clone();
         let ui_output = self.egui_ctx.run_ui(raw, |ui| {
-            actions = panel::show(ui, &mut self.panel, &self.session, &mut self.view, &adapter);
+            (actions, free) = panel::show(ui, &mut self.panel, &self.session, &mut self.view, &adapter);
         });
+        let ppp = ui_output.pixels_per_point;
+        if free.is_positive() {
+            gfx.renderer.set_viewport(
+                Vec2::new(free.min.x, free.min.y) * ppp,
+                Vec2::new(free.width(), free.height()) * ppp,
+            );
+        }
         egui_state.handle_platform_output(&gfx.window, ui_output.platform_output.clone());
 
         self.frame_data.build(self.session.system(), &self.view, self.panel.strain_colors);

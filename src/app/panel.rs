@@ -94,14 +94,15 @@ fn vec3(v: glam::DVec3) -> String {
     format!("{},{},{}", v.x, v.y, v.z)
 }
 
-/// Draws the panel; returns what the user asked for.
+/// Draws the panel; returns what the user asked for and the rectangle (points)
+/// left for the scene.
 pub fn show(
     ui: &mut Ui,
     state: &mut PanelState,
     session: &Session,
     view: &mut ViewOptions,
     adapter: &str,
-) -> Vec<Action> {
+) -> (Vec<Action>, egui::Rect) {
     let mut actions = Vec::new();
     egui::Panel::left("controls")
         .resizable(true)
@@ -111,7 +112,7 @@ pub fn show(
                 contents(ui, state, session, view, adapter, &mut actions);
             });
         });
-    actions
+    (actions, ui.available_rect_before_wrap())
 }
 
 fn contents(
@@ -156,7 +157,7 @@ fn contents(
 
     // Run controls.
     ui.horizontal(|ui| {
-        let label = if session.paused() { "▶ Play" } else { "⏸ Pause" };
+        let label = if session.paused() { "Play" } else { "Pause" };
         if ui.button(label).clicked() {
             actions.push(Action::TogglePause);
         }

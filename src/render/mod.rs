@@ -145,6 +145,8 @@ pub struct Renderer {
     format: wgpu::TextureFormat,
     sample_count: u32,
     size: (u32, u32),
+    /// Sub-rectangle of the output the scene is drawn in: x, y, width, height (px).
+    viewport: [f32; 4],
     targets: Targets,
     globals: wgpu::Buffer,
     globals_bind: wgpu::BindGroup,
@@ -411,6 +413,7 @@ impl Renderer {
             format,
             sample_count,
             size,
+            viewport: [0.0, 0.0, size.0 as f32, size.1 as f32],
             targets: make_targets(device, format, sample_count, size),
             globals,
             globals_bind,
@@ -442,14 +445,28 @@ impl Renderer {
         }
     }
 
-    /// MSAA samples in use (1 = none).
-    pub fn sample_count(&self) -> u32 {
-        self.sample_count
-    }
-
     /// Output size in pixels.
     pub fn size(&self) -> (u32, u32) {
         self.size
+    }
+
+    /// Draws the scene only in the rectangle at `origin` (px) of `size` (px),
+    /// clamped to the output (the rest is still cleared to the background).
+    pub fn set_viewport(&mut self, origin: Vec2, size: Vec2) {
+        let out = Vec2::new(self.size.0 as f32, self.size.1 as f32);
+        let lo = origin.clamp(Vec2::ZERO, out - 1.0);
+        let hi = (origin + size).clamp(lo + 1.0, out);
+        self.viewport = if lo.is_finite() && hi.is_finite() {
+            [lo.x, lo.y, hi.x - lo.x, hi.y - lo.y]
+        } else {
+            [0.0, 0.0, out.x, out.y]
+        };
+    }
+
+    /// The scene rectangle: origin and size (px).
+    pub fn viewport(&self) -> (Vec2, Vec2) {
+        let [x, y, w, h] = self.viewport;
+        (Vec2::new(x, y), Vec2::new(w, h))
     }
 
     /// Recreates the size-dependent targets. Zero sizes (a minimised window) are
@@ -459,6 +476,8 @@ impl Renderer {
             return;
         }
         self.size = size;
+        let (origin, extent) = self.viewport();
+        self.set_viewport(origin, extent);
         self.targets = make_targets(device, self.format, self.sample_count, size);
     }
 
@@ -471,7 +490,7 @@ impl Renderer {
         camera: &OrbitCamera,
         options: &ViewOptions,
     ) {
-        let viewport = Vec2::new(self.size.0 as f32, self.size.1 as f32);
+        let viewport = Vec2::new(self.viewport[2], self.viewport[3]);
         let mut globals = Globals {
             view_proj: camera.view_proj(viewport).to_cols_array_2d(),
             eye: camera.eye().extend(1.0).to_array(),
@@ -600,7 +619,9 @@ impl Renderer {
             }
             let pinned = frame.pinned.get(i).copied().unwrap_or(false);
             let highlighted = frame.highlight == Some(i);
-            let (color, size) = if highlighted {
+            let (color, size) = if highlighted && pinned && options.pins {
+                (geometry::PIN_COLOR, size * 1.6 + 2.0)
+            } else if highlighted {
                 (geometry::HIGHLIGHT_COLOR, size * 1.6 + 2.0)
             } else if pinned && options.pins {
                 (geometry::PIN_COLOR, size * 1.4 + 1.0)
@@ -659,6 +680,8 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
+        let [x, y, w, h] = self.viewport;
+        pass.set_viewport(x, y, w, h, 0.0, 1.0);
         pass.set_bind_group(0, &self.globals_bind, &[]);
         pass.set_bind_group(1, &self.texture_bind, &[]);
         pass.set_pipeline(&self.mesh_pipeline);
