@@ -68,13 +68,13 @@ pub struct RunArgs {
     #[arg(long)]
     integrator: Option<String>,
     /// Time step in seconds.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     dt: Option<String>,
     /// Simulated seconds to run (default 1).
-    #[arg(long, conflicts_with = "steps")]
+    #[arg(long, conflicts_with = "steps", allow_hyphen_values = true)]
     duration: Option<f64>,
     /// Number of steps to run (0: just the initial state).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     steps: Option<u64>,
     /// Print one JSON object instead of text.
     #[arg(long)]
