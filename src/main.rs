@@ -1,22 +1,22 @@
-//! `cloth`: the desktop app and command-line tools of cloth-sandbox.
+//! The `cloth` binary: the desktop app when run without a subcommand, and the
+//! command line (`run`, `info`, `scenes`, `screenshot`) otherwise.
 
 mod app;
+mod cli;
 mod render;
 
 use std::process::ExitCode;
 
+use clap::Parser;
+
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let args: Vec<String> = std::env::args().skip(1).collect();
-    let result = match args.first().map(String::as_str) {
-        Some("screenshot") => app::screenshot::main(&args[1..]),
-        _ => app::run(app::AppOptions::default()),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(err) => {
-            eprintln!("error: {err:#}");
-            ExitCode::FAILURE
-        }
+    let args = cli::Args::parse();
+    match args.command {
+        Some(command) => cli::run_command(command),
+        None => app::main(app::AppOptions {
+            scene: args.scene,
+            set: args.set,
+        }),
     }
 }

@@ -145,8 +145,17 @@ impl OrbitCamera {
 
     /// View-to-clip matrix for a viewport of `viewport` pixels (wgpu depth 0..1).
     pub fn projection(&self, viewport: Vec2) -> Mat4 {
-        let aspect = if viewport.y > 0.0 { viewport.x / viewport.y } else { 1.0 };
-        glam::camera::rh::proj::directx::perspective(self.fov_y, aspect.max(1e-3), self.near(), self.far())
+        let aspect = if viewport.y > 0.0 {
+            viewport.x / viewport.y
+        } else {
+            1.0
+        };
+        glam::camera::rh::proj::directx::perspective(
+            self.fov_y,
+            aspect.max(1e-3),
+            self.near(),
+            self.far(),
+        )
     }
 
     /// World-to-clip matrix.

@@ -59,8 +59,13 @@ fn shot(name: &str, args: &[&str]) -> Option<Image> {
         .expect("the cloth binary runs");
     let stderr = String::from_utf8_lossy(&result.stderr);
     if !result.status.success() {
-        if stderr.contains("no graphics adapter") && std::env::var_os("CLOTH_REQUIRE_ADAPTER").is_none() {
-            eprintln!("note: skipping the off-screen render test: {}", stderr.trim());
+        if stderr.contains("no graphics adapter")
+            && std::env::var_os("CLOTH_REQUIRE_ADAPTER").is_none()
+        {
+            eprintln!(
+                "note: skipping the off-screen render test: {}",
+                stderr.trim()
+            );
             return None;
         }
         panic!("cloth screenshot {args:?} failed: {stderr}");
@@ -81,15 +86,27 @@ fn shot(name: &str, args: &[&str]) -> Option<Image> {
 
 #[test]
 fn default_cloth_fills_the_middle_and_leaves_the_corners_to_the_background() {
-    let Some(img) = shot("cloth", &["--scene", "cloth"]) else { return };
+    let Some(img) = shot("cloth", &["--scene", "cloth"]) else {
+        return;
+    };
     for (x, y) in [(0, 0), (319, 0), (0, 239), (319, 239)] {
-        assert!(is_background(img.px(x, y)), "corner ({x}, {y}) = {:?}", img.px(x, y));
+        assert!(
+            is_background(img.px(x, y)),
+            "corner ({x}, {y}) = {:?}",
+            img.px(x, y)
+        );
     }
     let centre = img.region(0.4, 0.4, 0.6, 0.6);
-    assert!(fraction(&centre, |p| !is_background(p)) > 0.99, "the cloth covers the centre");
+    assert!(
+        fraction(&centre, |p| !is_background(p)) > 0.99,
+        "the cloth covers the centre"
+    );
     let all = img.region(0.0, 0.0, 1.0, 1.0);
     let coverage = fraction(&all, |p| !is_background(p));
-    assert!((0.15..0.8).contains(&coverage), "framed cloth covers {coverage} of the image");
+    assert!(
+        (0.15..0.8).contains(&coverage),
+        "framed cloth covers {coverage} of the image"
+    );
     // The front is bluish, and the checker gives both light and dark cells.
     assert!(fraction(&centre, |p| p[2] > p[0] + 20) > 0.9);
     // Light and dark checker cells: the brighter fifth of the cloth's pixels is
@@ -107,18 +124,31 @@ fn default_cloth_fills_the_middle_and_leaves_the_corners_to_the_background() {
 
 #[test]
 fn back_of_the_cloth_has_its_own_colour() {
-    let Some(img) = shot("cloth-back", &["--scene", "cloth", "--yaw", "180", "--pitch", "0"]) else { return };
+    let Some(img) = shot(
+        "cloth-back",
+        &["--scene", "cloth", "--yaw", "180", "--pitch", "0"],
+    ) else {
+        return;
+    };
     let centre = img.region(0.4, 0.4, 0.6, 0.6);
-    assert!(fraction(&centre, |p| p[0] > p[2] + 20) > 0.9, "the back is orange");
+    assert!(
+        fraction(&centre, |p| p[0] > p[2] + 20) > 0.9,
+        "the back is orange"
+    );
 }
 
 #[test]
 fn pinned_corners_are_marked_in_red_at_the_top() {
-    let Some(img) = shot("cloth-pins", &["--scene", "cloth"]) else { return };
+    let Some(img) = shot("cloth-pins", &["--scene", "cloth"]) else {
+        return;
+    };
     let red = |p: [u8; 3]| p[0] > 170 && p[1] < 80 && p[2] < 80;
     let top = img.region(0.0, 0.0, 1.0, 0.35);
     let bottom = img.region(0.0, 0.5, 1.0, 1.0);
-    assert!(top.iter().filter(|&&p| red(p)).count() >= 20, "red pin discs near the top");
+    assert!(
+        top.iter().filter(|&&p| red(p)).count() >= 20,
+        "red pin discs near the top"
+    );
     assert_eq!(bottom.iter().filter(|&&p| red(p)).count(), 0);
     // Left and right halves each hold one pinned corner.
     assert!(img.region(0.0, 0.0, 0.5, 0.35).iter().any(|&p| red(p)));
@@ -127,8 +157,15 @@ fn pinned_corners_are_marked_in_red_at_the_top() {
 
 #[test]
 fn wireframe_darkens_the_cloth_with_edges() {
-    let Some(plain) = shot("cloth-plain", &["--scene", "cloth", "--no-texture"]) else { return };
-    let Some(wire) = shot("cloth-wire", &["--scene", "cloth", "--no-texture", "--wireframe"]) else { return };
+    let Some(plain) = shot("cloth-plain", &["--scene", "cloth", "--no-texture"]) else {
+        return;
+    };
+    let Some(wire) = shot(
+        "cloth-wire",
+        &["--scene", "cloth", "--no-texture", "--wireframe"],
+    ) else {
+        return;
+    };
     let dark = |p: [u8; 3]| p.iter().all(|&c| c < 60) && !is_background(p);
     let a = fraction(&plain.region(0.35, 0.35, 0.65, 0.65), dark);
     let b = fraction(&wire.region(0.35, 0.35, 0.65, 0.65), dark);
@@ -137,21 +174,30 @@ fn wireframe_darkens_the_cloth_with_edges() {
 
 #[test]
 fn after_steps_the_cloth_has_moved() {
-    let Some(start) = shot("cloth-0", &["--scene", "cloth"]) else { return };
-    let Some(later) = shot("cloth-2000", &["--scene", "cloth", "--steps", "2000"]) else { return };
+    let Some(start) = shot("cloth-0", &["--scene", "cloth"]) else {
+        return;
+    };
+    let Some(later) = shot("cloth-2000", &["--scene", "cloth", "--steps", "2000"]) else {
+        return;
+    };
     let differ = start
         .rgba
         .chunks_exact(4)
         .zip(later.rgba.chunks_exact(4))
         .filter(|(a, b)| a != b)
         .count();
-    assert!(differ > 1000, "only {differ} pixels changed after 2000 steps");
+    assert!(
+        differ > 1000,
+        "only {differ} pixels changed after 2000 steps"
+    );
     assert!(fraction(&later.region(0.45, 0.45, 0.55, 0.55), |p| !is_background(p)) > 0.9);
 }
 
 #[test]
 fn surfaceless_scenes_draw_springs_and_particles() {
-    let Some(img) = shot("chain", &["--scene", "chain"]) else { return };
+    let Some(img) = shot("chain", &["--scene", "chain"]) else {
+        return;
+    };
     let all = img.region(0.0, 0.0, 1.0, 1.0);
     let white = fraction(&all, |p| p.iter().all(|&c| c > 220));
     let covered = fraction(&all, |p| !is_background(p));
@@ -161,7 +207,9 @@ fn surfaceless_scenes_draw_springs_and_particles() {
 
 #[test]
 fn jelly_cube_stands_over_its_ground_plane() {
-    let Some(img) = shot("jelly", &["--scene", "jelly"]) else { return };
+    let Some(img) = shot("jelly", &["--scene", "jelly"]) else {
+        return;
+    };
     // The ground (grey-green, lit from above) fills the bottom rows.
     let bottom = img.region(0.0, 0.9, 1.0, 1.0);
     assert!(fraction(&bottom, |p| !is_background(p) && p[1] >= p[2]) > 0.8);
@@ -173,7 +221,13 @@ fn jelly_cube_stands_over_its_ground_plane() {
 #[test]
 fn unknown_scene_is_one_clear_error() {
     let out = Command::new(env!("CARGO_BIN_EXE_cloth"))
-        .args(["screenshot", "--scene", "no-such-scene", "--out", "/dev/null"])
+        .args([
+            "screenshot",
+            "--scene",
+            "no-such-scene",
+            "--out",
+            "/dev/null",
+        ])
         .output()
         .unwrap();
     assert!(!out.status.success());

@@ -18,7 +18,11 @@ fn stiffness_applies_live_without_resetting_the_state() {
     let before = s.system().positions().to_vec();
     let steps = s.system().steps_taken();
     s.set("stiffness", "250").unwrap();
-    assert_eq!(s.system().steps_taken(), steps, "a live edit must not rebuild");
+    assert_eq!(
+        s.system().steps_taken(),
+        steps,
+        "a live edit must not rebuild"
+    );
     assert_eq!(s.system().positions(), &before[..]);
     let structural = s
         .system()
@@ -36,7 +40,12 @@ fn rest_length_changes_the_springs_rest_lengths_live() {
     let r0 = s.scene().resolve().unwrap().rest_length;
     s.set("rest_length", &(r0 * 1.5).to_string()).unwrap();
     for (sp, o) in s.system().springs().iter().zip(&old) {
-        assert!((sp.rest - o * 1.5).abs() < 1e-12, "{} vs {}", sp.rest, o * 1.5);
+        assert!(
+            (sp.rest - o * 1.5).abs() < 1e-12,
+            "{} vs {}",
+            sp.rest,
+            o * 1.5
+        );
     }
     assert_eq!(s.system().steps_taken(), 0);
 }
@@ -52,7 +61,11 @@ fn width_and_height_rebuild_the_cloth_keeping_other_settings() {
     let sys = s.system();
     assert_eq!(sys.particle_count(), 12 * 9);
     assert_eq!(sys.triangles().len(), 2 * 11 * 8);
-    let structural = sys.springs().iter().find(|sp| sp.kind == SpringKind::Structural).unwrap();
+    let structural = sys
+        .springs()
+        .iter()
+        .find(|sp| sp.kind == SpringKind::Structural)
+        .unwrap();
     assert_eq!(structural.stiffness, 321.0);
     assert_eq!(sys.params().wind, glam::DVec3::new(1.0, 0.0, 3.0));
     assert!(sys.masses().iter().all(|&m| m == 0.002));
@@ -95,7 +108,9 @@ fn divergence_pauses_and_reports_the_margin() {
             break;
         }
     }
-    let d = s.divergence().expect("explicit Euler with a huge step diverges");
+    let d = s
+        .divergence()
+        .expect("explicit Euler with a huge step diverges");
     assert!(s.paused());
     assert!(!d.message.is_empty());
     assert!(d.margin.is_some_and(|m| m > 1.0), "{:?}", d.margin);

@@ -42,7 +42,10 @@ fn projected_particle_is_picked_from_its_screen_position() {
     for (i, &p) in points.iter().enumerate() {
         let (s, _) = cam.project(p, VIEWPORT).expect("in front of the camera");
         // A few pixels off still picks it.
-        assert_eq!(pick_particle(&cam, VIEWPORT, s + Vec2::new(2.0, -2.0), &points, 6.0), Some(i));
+        assert_eq!(
+            pick_particle(&cam, VIEWPORT, s + Vec2::new(2.0, -2.0), &points, 6.0),
+            Some(i)
+        );
     }
 }
 
@@ -55,27 +58,48 @@ fn right_of_centre_on_screen_is_plus_x_and_up_is_plus_y() {
     assert!(s.y < 300.0 && (s.x - 400.0).abs() < 1e-3);
     // 1 m at 10 m with a 60° fov spans 300 / (10 tan 30°) pixels.
     let expected = 300.0 / (10.0 * 30f32.to_radians().tan());
-    assert!((300.0 - s.y - expected).abs() < 0.1, "{} vs {expected}", 300.0 - s.y);
+    assert!(
+        (300.0 - s.y - expected).abs() < 0.1,
+        "{} vs {expected}",
+        300.0 - s.y
+    );
 }
 
 #[test]
 fn nothing_is_picked_far_from_every_particle() {
     let cam = front_camera();
-    assert_eq!(pick_particle(&cam, VIEWPORT, Vec2::new(5.0, 5.0), &grid(), 8.0), None);
+    assert_eq!(
+        pick_particle(&cam, VIEWPORT, Vec2::new(5.0, 5.0), &grid(), 8.0),
+        None
+    );
 }
 
 #[test]
 fn nearer_particle_wins_when_two_overlap_on_screen() {
     let cam = front_camera();
-    let points = vec![Vec3::new(0.0, 0.0, -3.0), Vec3::new(0.0, 0.0, 2.0), Vec3::new(0.0, 0.0, 0.0)];
-    assert_eq!(pick_particle(&cam, VIEWPORT, VIEWPORT * 0.5, &points, 8.0), Some(1));
+    let points = vec![
+        Vec3::new(0.0, 0.0, -3.0),
+        Vec3::new(0.0, 0.0, 2.0),
+        Vec3::new(0.0, 0.0, 0.0),
+    ];
+    assert_eq!(
+        pick_particle(&cam, VIEWPORT, VIEWPORT * 0.5, &points, 8.0),
+        Some(1)
+    );
 }
 
 #[test]
 fn particles_behind_the_camera_or_not_finite_are_ignored() {
     let cam = front_camera();
-    let points = vec![Vec3::new(0.0, 0.0, 20.0), Vec3::splat(f32::NAN), Vec3::new(0.0, 0.0, f32::INFINITY)];
-    assert_eq!(pick_particle(&cam, VIEWPORT, VIEWPORT * 0.5, &points, 50.0), None);
+    let points = vec![
+        Vec3::new(0.0, 0.0, 20.0),
+        Vec3::splat(f32::NAN),
+        Vec3::new(0.0, 0.0, f32::INFINITY),
+    ];
+    assert_eq!(
+        pick_particle(&cam, VIEWPORT, VIEWPORT * 0.5, &points, 50.0),
+        None
+    );
 }
 
 #[test]
@@ -90,7 +114,11 @@ fn ray_through_a_projected_point_passes_through_it() {
     let p = Vec3::new(1.5, 2.5, -0.5);
     let (s, _) = cam.project(p, VIEWPORT).unwrap();
     let ray = cam.ray(s, VIEWPORT);
-    assert!(ray.distance_to_point(p) < 1e-3, "{}", ray.distance_to_point(p));
+    assert!(
+        ray.distance_to_point(p) < 1e-3,
+        "{}",
+        ray.distance_to_point(p)
+    );
     assert!((ray.dir.length() - 1.0).abs() < 1e-5);
 }
 
@@ -102,13 +130,20 @@ fn drag_point_stays_on_the_camera_facing_plane_through_the_particle() {
         ..front_camera()
     };
     let anchor = Vec3::new(0.5, -0.5, 0.3);
-    let target = cam.drag_point(Vec2::new(100.0, 450.0), VIEWPORT, anchor).unwrap();
+    let target = cam
+        .drag_point(Vec2::new(100.0, 450.0), VIEWPORT, anchor)
+        .unwrap();
     assert!((target - anchor).dot(cam.forward()).abs() < 1e-3);
     let (s, _) = cam.project(target, VIEWPORT).unwrap();
     assert!(s.distance(Vec2::new(100.0, 450.0)) < 0.05);
     // At the particle's own screen position the target is the particle itself.
     let (here, _) = cam.project(anchor, VIEWPORT).unwrap();
-    assert!(cam.drag_point(here, VIEWPORT, anchor).unwrap().distance(anchor) < 1e-3);
+    assert!(
+        cam.drag_point(here, VIEWPORT, anchor)
+            .unwrap()
+            .distance(anchor)
+            < 1e-3
+    );
 }
 
 #[test]
@@ -124,7 +159,10 @@ fn framing_fits_the_box_in_view() {
             if corner & 4 == 0 { lo.z } else { hi.z },
         );
         let (s, _) = cam.project(p, VIEWPORT).unwrap();
-        assert!(s.x >= 0.0 && s.x <= VIEWPORT.x && s.y >= 0.0 && s.y <= VIEWPORT.y, "{p} -> {s}");
+        assert!(
+            s.x >= 0.0 && s.x <= VIEWPORT.x && s.y >= 0.0 && s.y <= VIEWPORT.y,
+            "{p} -> {s}"
+        );
     }
 }
 
@@ -157,17 +195,32 @@ fn pan_moves_the_target_with_the_cursor() {
     let (before, _) = cam.project(p, VIEWPORT).unwrap();
     cam.pan(Vec2::new(50.0, 20.0), VIEWPORT);
     let (after, _) = cam.project(p, VIEWPORT).unwrap();
-    assert!((after - before - Vec2::new(50.0, 20.0)).length() < 0.5, "{before} -> {after}");
+    assert!(
+        (after - before - Vec2::new(50.0, 20.0)).length() < 0.5,
+        "{before} -> {after}"
+    );
 }
 
 #[test]
 fn fly_keys_move_forward_and_up() {
     let mut cam = front_camera();
     let eye = cam.eye();
-    cam.fly(FlyKeys { forward: true, ..FlyKeys::default() }, 0.5);
+    cam.fly(
+        FlyKeys {
+            forward: true,
+            ..FlyKeys::default()
+        },
+        0.5,
+    );
     assert!((cam.eye() - eye).dot(cam.forward()) > 0.0);
     let y = cam.target.y;
-    cam.fly(FlyKeys { up: true, ..FlyKeys::default() }, 0.5);
+    cam.fly(
+        FlyKeys {
+            up: true,
+            ..FlyKeys::default()
+        },
+        0.5,
+    );
     assert!(cam.target.y > y);
 }
 

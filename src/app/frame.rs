@@ -80,7 +80,11 @@ impl FrameData {
     }
 
     /// The renderer's view of this frame.
-    pub fn scene_frame<'a>(&'a self, system: &'a System, highlight: Option<usize>) -> SceneFrame<'a> {
+    pub fn scene_frame<'a>(
+        &'a self,
+        system: &'a System,
+        highlight: Option<usize>,
+    ) -> SceneFrame<'a> {
         let params = system.params();
         SceneFrame {
             positions: &self.positions,
@@ -91,9 +95,7 @@ impl FrameData {
             pinned: &self.pinned,
             highlight,
             ground: params.ground.map(|g| g.height as f32),
-            sphere: params
-                .sphere
-                .map(|s| (s.center.as_vec3(), s.radius as f32)),
+            sphere: params.sphere.map(|s| (s.center.as_vec3(), s.radius as f32)),
         }
     }
 }
@@ -102,7 +104,8 @@ impl FrameData {
 pub fn scene_bounds(session: &Session) -> (Vec3, Vec3) {
     let system = session.system();
     let points: Vec<Vec3> = system.positions().iter().map(|p| p.as_vec3()).collect();
-    let (mut lo, mut hi) = cloth_sandbox::view::bounds(&points).unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+    let (mut lo, mut hi) =
+        cloth_sandbox::view::bounds(&points).unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
     if let Some(s) = system.params().sphere {
         let c = s.center.as_vec3();
         let r = s.radius as f32;

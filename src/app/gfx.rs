@@ -33,16 +33,19 @@ pub enum FrameOutcome {
 impl Gfx {
     /// Opens the GPU for `window`. Errors are one sentence saying what is missing.
     pub fn new(event_loop: &ActiveEventLoop, window: Arc<Window>) -> anyhow::Result<Self> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-            Box::new(event_loop.owned_display_handle()),
-        ));
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                Box::new(event_loop.owned_display_handle()),
+            ));
         let surface = match instance.create_surface(window.clone()) {
             Ok(surface) => surface,
             Err(err) => {
                 log::debug!("create_surface failed: {err}");
                 // The surface error says nothing useful; an adapter request says what is missing.
                 pollster::block_on(gpu::adapter(&instance, None))?;
-                anyhow::bail!("cannot draw into the window: the graphics driver refused to create a surface ({err})");
+                anyhow::bail!(
+                    "cannot draw into the window: the graphics driver refused to create a surface ({err})"
+                );
             }
         };
         let adapter = pollster::block_on(gpu::adapter(&instance, Some(&surface)))?;
@@ -56,7 +59,12 @@ impl Gfx {
             .formats
             .iter()
             .copied()
-            .find(|f| matches!(f, wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm))
+            .find(|f| {
+                matches!(
+                    f,
+                    wgpu::TextureFormat::Bgra8Unorm | wgpu::TextureFormat::Rgba8Unorm
+                )
+            })
             .or_else(|| caps.formats.iter().copied().find(|f| !f.is_srgb()))
             .or_else(|| caps.formats.first().copied())
             .context("the graphics adapter cannot present to this window")?;
@@ -69,7 +77,11 @@ impl Gfx {
             height: size.height.max(1),
             present_mode: wgpu::PresentMode::AutoVsync,
             desired_maximum_frame_latency: 2,
-            alpha_mode: caps.alpha_modes.first().copied().unwrap_or(wgpu::CompositeAlphaMode::Auto),
+            alpha_mode: caps
+                .alpha_modes
+                .first()
+                .copied()
+                .unwrap_or(wgpu::CompositeAlphaMode::Auto),
             view_formats: vec![],
         };
         if size.width > 0 && size.height > 0 {
@@ -77,8 +89,15 @@ impl Gfx {
         }
         let samples = render::pick_sample_count(&adapter, format);
         log::info!("surface format {format:?}, MSAA x{samples}");
-        let renderer = Renderer::new(&device, &queue, format, samples, (config.width, config.height));
-        let egui_renderer = egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
+        let renderer = Renderer::new(
+            &device,
+            &queue,
+            format,
+            samples,
+            (config.width, config.height),
+        );
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&device, format, egui_wgpu::RendererOptions::default());
         Ok(Self {
             window,
             surface,
@@ -120,7 +139,8 @@ impl Gfx {
         let mut delta = ui.textures_delta;
         for (id, images) in delta.set.drain() {
             for image in &images {
-                self.egui_renderer.update_texture(&self.device, &self.queue, id, image);
+                self.egui_renderer
+                    .update_texture(&self.device, &self.queue, id, image);
             }
         }
         let size = self.window.inner_size();
@@ -132,7 +152,8 @@ impl Gfx {
             self.resize(size.width, size.height);
         }
         let texture = match self.surface.get_current_texture() {
-            wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
+            wgpu::CurrentSurfaceTexture::Success(t)
+            | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
                 self.surface.configure(&self.device, &self.config);
                 free_textures(&mut self.egui_renderer, delta);
@@ -145,11 +166,14 @@ impl Gfx {
             }
         };
         let view = texture.texture.create_view(&Default::default());
-        self.renderer.update(&self.device, &self.queue, frame, camera, options);
+        self.renderer
+            .update(&self.device, &self.queue, frame, camera, options);
 
-        let mut encoder = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("frame encoder"),
-        });
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("frame encoder"),
+            });
         self.renderer.render(&mut encoder, &view);
 
         let screen = egui_wgpu::ScreenDescriptor {
@@ -157,9 +181,13 @@ impl Gfx {
             pixels_per_point: ui.pixels_per_point,
         };
         let primitives = egui_ctx.tessellate(ui.shapes, ui.pixels_per_point);
-        let extra = self
-            .egui_renderer
-            .update_buffers(&self.device, &self.queue, &mut encoder, &primitives, &screen);
+        let extra = self.egui_renderer.update_buffers(
+            &self.device,
+            &self.queue,
+            &mut encoder,
+            &primitives,
+            &screen,
+        );
         {
             let mut pass = encoder
                 .begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -184,7 +212,8 @@ impl Gfx {
         for id in delta.free.drain() {
             self.egui_renderer.free_texture(&id);
         }
-        self.queue.submit(extra.into_iter().chain([encoder.finish()]));
+        self.queue
+            .submit(extra.into_iter().chain([encoder.finish()]));
         self.window.pre_present_notify();
         self.queue.present(texture);
         FrameOutcome::Presented

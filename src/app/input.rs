@@ -68,7 +68,12 @@ impl Default for Mouse {
 
 impl Mouse {
     /// A button went down over the scene; `picked` is the particle under the cursor.
-    pub fn press(&mut self, button: Button, shift: bool, picked: Option<usize>) -> Option<MouseAction> {
+    pub fn press(
+        &mut self,
+        button: Button,
+        shift: bool,
+        picked: Option<usize>,
+    ) -> Option<MouseAction> {
         if self.gesture != Gesture::Idle {
             return None;
         }
@@ -113,9 +118,12 @@ impl Mouse {
     /// that ends over the panel still ends).
     pub fn release(&mut self, button: Button) -> Option<MouseAction> {
         let action = match (self.gesture, button) {
-            (Gesture::Pressed { particle, .. }, Button::Left) => Some(MouseAction::TogglePin(particle)),
+            (Gesture::Pressed { particle, .. }, Button::Left) => {
+                Some(MouseAction::TogglePin(particle))
+            }
             (Gesture::Dragging { .. }, Button::Left) => Some(MouseAction::Release),
-            (Gesture::Orbit, Button::Left | Button::Right) | (Gesture::Pan, Button::Right | Button::Middle) => None,
+            (Gesture::Orbit, Button::Left | Button::Right)
+            | (Gesture::Pan, Button::Right | Button::Middle) => None,
             _ => return None,
         };
         self.gesture = Gesture::Idle;
@@ -156,7 +164,10 @@ mod tests {
         let mut m = Mouse::default();
         m.moved(Vec2::new(10.0, 10.0));
         m.press(Button::Left, false, Some(3));
-        assert!(matches!(m.moved(Vec2::new(30.0, 10.0)), Some(MouseAction::Drag { particle: 3, .. })));
+        assert!(matches!(
+            m.moved(Vec2::new(30.0, 10.0)),
+            Some(MouseAction::Drag { particle: 3, .. })
+        ));
         assert_eq!(m.release(Button::Left), Some(MouseAction::Release));
         assert_eq!(m.gesture, Gesture::Idle);
     }

@@ -44,6 +44,17 @@ pub struct AppOptions {
     pub set: Vec<String>,
 }
 
+/// Runs the desktop app; on failure prints one `error:` line and returns 1.
+pub fn main(options: AppOptions) -> std::process::ExitCode {
+    match run(options) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
 /// Opens the window and runs until the user quits. Returns an error (one
 /// sentence) when there is no display or no graphics adapter.
 pub fn run(options: AppOptions) -> anyhow::Result<()> {
@@ -192,17 +203,26 @@ impl App {
             MouseAction::TogglePin(i) => {
                 let pinned = self.session.system().is_pinned(i);
                 self.session.system_mut().set_pinned(i, !pinned);
-                log::info!("{} particle {i}", if pinned { "unpinned" } else { "pinned" });
+                log::info!(
+                    "{} particle {i}",
+                    if pinned { "unpinned" } else { "pinned" }
+                );
             }
             MouseAction::Drag { particle, cursor } => {
                 let anchor = match self.session.system().grabbed() {
                     Some((j, target)) if j == particle => target,
-                    _ => self.session.system().positions().get(particle).copied().unwrap_or_default(),
+                    _ => self
+                        .session
+                        .system()
+                        .positions()
+                        .get(particle)
+                        .copied()
+                        .unwrap_or_default(),
                 };
                 let anchor = anchor.as_vec3();
-                if let Some(target) = self
-                    .camera
-                    .drag_point(self.to_scene(cursor), self.viewport(), anchor)
+                if let Some(target) =
+                    self.camera
+                        .drag_point(self.to_scene(cursor), self.viewport(), anchor)
                     && target.is_finite()
                 {
                     if self.session.system().grabbed().is_none() {
@@ -307,7 +327,8 @@ impl App {
         let mut free = egui::Rect::NOTHING;
         let adapter = gfx.adapter_name.clone();
         let ui_output = self.egui_ctx.run_ui(raw, |ui| {
-            (actions, free) = panel::show(ui, &mut self.panel, &self.session, &mut self.view, &adapter);
+            (actions, free) =
+                panel::show(ui, &mut self.panel, &self.session, &mut self.view, &adapter);
         });
         let ppp = ui_output.pixels_per_point;
         if free.is_positive() {
@@ -318,9 +339,12 @@ impl App {
         }
         egui_state.handle_platform_output(&gfx.window, ui_output.platform_output.clone());
 
-        self.frame_data.build(self.session.system(), &self.view, self.panel.strain_colors);
+        self.frame_data
+            .build(self.session.system(), &self.view, self.panel.strain_colors);
         let highlight = self.mouse.dragged().or(self.hovered);
-        let frame = self.frame_data.scene_frame(self.session.system(), highlight);
+        let frame = self
+            .frame_data
+            .scene_frame(self.session.system(), highlight);
         gfx.draw(&frame, &self.camera, &self.view, &self.egui_ctx, ui_output);
 
         for action in actions {
@@ -423,7 +447,9 @@ impl ApplicationHandler for App {
                             (Button::Left, Some(c)) => self.pick(c),
                             _ => None,
                         };
-                        if let Some(a) = self.mouse.press(button, self.modifiers.shift_key(), picked) {
+                        if let Some(a) =
+                            self.mouse.press(button, self.modifiers.shift_key(), picked)
+                        {
                             self.apply_mouse(a);
                         }
                     }

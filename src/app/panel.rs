@@ -75,7 +75,13 @@ impl PanelState {
 }
 
 /// A slider over `range` that reports a finished change (on release for drags).
-fn slider(ui: &mut Ui, value: &mut f64, range: std::ops::RangeInclusive<f64>, label: &str, log: bool) -> bool {
+fn slider(
+    ui: &mut Ui,
+    value: &mut f64,
+    range: std::ops::RangeInclusive<f64>,
+    label: &str,
+    log: bool,
+) -> bool {
     let r = ui.add(
         egui::Slider::new(value, range)
             .logarithmic(log)
@@ -86,8 +92,14 @@ fn slider(ui: &mut Ui, value: &mut f64, range: std::ops::RangeInclusive<f64>, la
 }
 
 /// Integer slider.
-fn int_slider(ui: &mut Ui, value: &mut u32, range: std::ops::RangeInclusive<u32>, label: &str) -> bool {
-    ui.add(egui::Slider::new(value, range).text(label)).changed()
+fn int_slider(
+    ui: &mut Ui,
+    value: &mut u32,
+    range: std::ops::RangeInclusive<u32>,
+    label: &str,
+) -> bool {
+    ui.add(egui::Slider::new(value, range).text(label))
+        .changed()
 }
 
 fn vec3(v: glam::DVec3) -> String {
@@ -161,7 +173,10 @@ fn contents(
         if ui.button(label).clicked() {
             actions.push(Action::TogglePause);
         }
-        if ui.add_enabled(session.paused(), egui::Button::new("Step")).clicked() {
+        if ui
+            .add_enabled(session.paused(), egui::Button::new("Step"))
+            .clicked()
+        {
             actions.push(Action::Step);
         }
         if ui.button("Reset").clicked() {
@@ -170,7 +185,11 @@ fn contents(
     });
     let mut substeps = session.substeps();
     if ui
-        .add(egui::Slider::new(&mut substeps, 1..=2000).logarithmic(true).text("speed (steps/frame)"))
+        .add(
+            egui::Slider::new(&mut substeps, 1..=2000)
+                .logarithmic(true)
+                .text("speed (steps/frame)"),
+        )
         .changed()
     {
         actions.push(Action::Set("substeps".into(), substeps.to_string()));
@@ -178,7 +197,10 @@ fn contents(
 
     if let Some(d) = session.divergence() {
         ui.separator();
-        ui.colored_label(Color32::from_rgb(255, 110, 90), "Simulation diverged and was paused:");
+        ui.colored_label(
+            Color32::from_rgb(255, 110, 90),
+            "Simulation diverged and was paused:",
+        );
         ui.label(&d.message);
         match d.margin {
             Some(m) => ui.label(format!("dt / dt_crit = {m:.2} at t = {:.3} s", d.time)),
@@ -197,7 +219,8 @@ fn contents(
     let system = session.system();
     let has_springs = !system.springs().is_empty();
     let has_surface = !system.triangles().is_empty();
-    let set = |actions: &mut Vec<Action>, k: &str, v: String| actions.push(Action::Set(k.into(), v));
+    let set =
+        |actions: &mut Vec<Action>, k: &str, v: String| actions.push(Action::Set(k.into(), v));
     ui.separator();
     egui::CollapsingHeader::new("Parameters")
         .default_open(true)
@@ -325,7 +348,11 @@ fn contents(
                 state.steps_per_second,
                 state.frame_time * 1e3
             ));
-            ui.label(format!("t = {:.3} s · step {}", system.time(), system.steps_taken()));
+            ui.label(format!(
+                "t = {:.3} s · step {}",
+                system.time(),
+                system.steps_taken()
+            ));
             let e = system.energy();
             ui.label(format!(
                 "energy {:.4} J (kinetic {:.4}, gravity {:.4}, elastic {:.4})",

@@ -4,12 +4,11 @@
 use std::path::PathBuf;
 
 use anyhow::Context as _;
-use clap::Parser;
 
 use super::frame::{self, FrameData};
 use crate::render::ViewOptions;
-use cloth_sandbox::session::Session;
 use crate::render::offscreen::{Offscreen, write_png};
+use cloth_sandbox::session::Session;
 use cloth_sandbox::view::OrbitCamera;
 
 /// Arguments of `cloth screenshot`.
@@ -61,42 +60,33 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
-    let w: u32 = w.trim().parse().map_err(|_| format!("bad width in {s:?}"))?;
-    let h: u32 = h.trim().parse().map_err(|_| format!("bad height in {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
     if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
         return Err(format!("size {s:?} out of range (1..=8192 each side)"));
     }
     Ok((w, h))
 }
 
-#[derive(Parser)]
-struct Standalone {
-    #[command(flatten)]
-    args: ScreenshotArgs,
-}
-
-/// Entry point from a bare argument list (until the main CLI dispatches here).
-pub fn main(args: &[String]) -> anyhow::Result<()> {
-    let parsed = Standalone::try_parse_from(
-        std::iter::once("cloth screenshot".to_string()).chain(args.iter().cloned()),
-    );
-    match parsed {
-        Ok(p) => run(&p.args),
-        Err(e) => {
-            let _ = e.print();
-            std::process::exit(if e.use_stderr() { 2 } else { 0 });
-        }
-    }
-}
-
 /// Runs the scene and writes the picture.
 pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let (width, height) = args.size;
-    let mut session = Session::load_with(&args.scene, &args.set).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut session =
+        Session::load_with(&args.scene, &args.set).map_err(|e| anyhow::anyhow!("{e}"))?;
     for _ in 0..args.steps {
         session.single_step();
         if let Some(d) = session.divergence() {
-            anyhow::bail!("the simulation diverged before step {}: {}", args.steps, d.message);
+            anyhow::bail!(
+                "the simulation diverged before step {}: {}",
+                args.steps,
+                d.message
+            );
         }
     }
     // Scenes without a surface (spring, chain, rope) draw as springs and particles.

@@ -202,7 +202,11 @@ pub fn sphere_mesh(c: Vec3, r: f32, out: &mut Vec<MeshVertex>, idx: &mut Vec<u32
         let theta = std::f32::consts::PI * i as f32 / RINGS as f32;
         for j in 0..=SEGMENTS {
             let phi = std::f32::consts::TAU * j as f32 / SEGMENTS as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
             out.push(MeshVertex {
                 position: (c + n * r).to_array(),
                 normal: n.to_array(),
@@ -258,7 +262,12 @@ mod tests {
 
     #[test]
     fn degenerate_triangle_normals_stay_finite() {
-        let p = vec![Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0)];
+        let p = vec![
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::ZERO,
+            Vec3::new(f32::NAN, 0.0, 0.0),
+        ];
         let valid = vec![true, true, true, false];
         let n = vertex_normals(&p, &[[0, 1, 2], [0, 1, 3], [0, 1, 9]], &valid);
         assert!(n.iter().all(|n| n.is_finite()));

@@ -37,7 +37,12 @@ pub async fn device(adapter: &wgpu::Adapter) -> anyhow::Result<(wgpu::Device, wg
             ..Default::default()
         })
         .await
-        .with_context(|| format!("the graphics adapter {:?} refused to open a device", adapter.get_info().name))
+        .with_context(|| {
+            format!(
+                "the graphics adapter {:?} refused to open a device",
+                adapter.get_info().name
+            )
+        })
 }
 
 /// One line describing the adapter, for the log and the panel.

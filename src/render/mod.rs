@@ -347,7 +347,11 @@ impl Renderer {
             cache: None,
         });
 
-        let line_shader = shader(device, "lines.wgsl", include_str!("../../shaders/lines.wgsl"));
+        let line_shader = shader(
+            device,
+            "lines.wgsl",
+            include_str!("../../shaders/lines.wgsl"),
+        );
         let line_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
         let line_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("line pipeline"),
@@ -378,7 +382,11 @@ impl Renderer {
             cache: None,
         });
 
-        let point_shader = shader(device, "points.wgsl", include_str!("../../shaders/points.wgsl"));
+        let point_shader = shader(
+            device,
+            "points.wgsl",
+            include_str!("../../shaders/points.wgsl"),
+        );
         let point_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4];
         let point_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("point pipeline"),
@@ -494,7 +502,10 @@ impl Renderer {
         let mut globals = Globals {
             view_proj: camera.view_proj(viewport).to_cols_array_2d(),
             eye: camera.eye().extend(1.0).to_array(),
-            light_dir: Vec3::new(0.35, 0.85, 0.45).normalize().extend(0.0).to_array(),
+            light_dir: Vec3::new(0.35, 0.85, 0.45)
+                .normalize()
+                .extend(0.0)
+                .to_array(),
             back_tint: Vec3::from(geometry::BACK_TINT).extend(1.0).to_array(),
             viewport: [viewport.x, viewport.y, (camera.fov_y * 0.5).tan(), 0.0],
         };
@@ -603,9 +614,16 @@ impl Renderer {
             );
         }
         if options.wireframe {
-            geometry::push_lines(&positions, &valid, &self.edges, |_| geometry::WIRE_COLOR, &mut lines);
+            geometry::push_lines(
+                &positions,
+                &valid,
+                &self.edges,
+                |_| geometry::WIRE_COLOR,
+                &mut lines,
+            );
         }
-        self.lines.write(device, queue, bytemuck::cast_slice(&lines));
+        self.lines
+            .write(device, queue, bytemuck::cast_slice(&lines));
         self.line_vertex_count = lines.len() as u32;
         self.scratch_lines = lines;
 
@@ -638,7 +656,8 @@ impl Renderer {
         }
         // Draw order = depth ties: later instances win, so put highlights last.
         points.sort_by(|a, b| a.size.total_cmp(&b.size));
-        self.points.write(device, queue, bytemuck::cast_slice(&points));
+        self.points
+            .write(device, queue, bytemuck::cast_slice(&points));
         self.point_count = points.len() as u32;
         self.scratch_points = points;
 
@@ -687,12 +706,18 @@ impl Renderer {
         pass.set_pipeline(&self.mesh_pipeline);
         if self.mesh_visible && self.cloth_index_count > 0 {
             pass.set_vertex_buffer(0, self.cloth_vertices.buffer.slice(..));
-            pass.set_index_buffer(self.cloth_indices.buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.set_index_buffer(
+                self.cloth_indices.buffer.slice(..),
+                wgpu::IndexFormat::Uint32,
+            );
             pass.draw_indexed(0..self.cloth_index_count, 0, 0..1);
         }
         if self.extra_index_count > 0 {
             pass.set_vertex_buffer(0, self.extra_vertices.buffer.slice(..));
-            pass.set_index_buffer(self.extra_indices.buffer.slice(..), wgpu::IndexFormat::Uint32);
+            pass.set_index_buffer(
+                self.extra_indices.buffer.slice(..),
+                wgpu::IndexFormat::Uint32,
+            );
             pass.draw_indexed(0..self.extra_index_count, 0, 0..1);
         }
         if self.line_vertex_count > 0 {
@@ -706,7 +731,6 @@ impl Renderer {
             pass.draw(0..6, 0..self.point_count);
         }
     }
-
 }
 
 fn make_targets(
@@ -757,7 +781,11 @@ fn checker_texture(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::TextureV
         let n = 64u32;
         let rgba = (0..n * n)
             .flat_map(|i| {
-                let v = if ((i % n) / 8 + (i / n) / 8) % 2 == 0 { 235 } else { 150 };
+                let v = if ((i % n) / 8 + (i / n) / 8) % 2 == 0 {
+                    235
+                } else {
+                    150
+                };
                 [v, v, v, 255]
             })
             .collect();

@@ -25,7 +25,8 @@ impl Offscreen {
         if width == 0 || height == 0 || width > 8192 || height > 8192 {
             bail!("image size {width}x{height} is out of range (1..=8192 on each side)");
         }
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+        let instance =
+            wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(gpu::adapter(&instance, None))?;
         let adapter_name = gpu::describe(&adapter);
         log::info!("off-screen adapter: {adapter_name}");
@@ -72,7 +73,8 @@ impl Offscreen {
             .update(&self.device, &self.queue, frame, camera, options);
         let view = self.texture.create_view(&Default::default());
         let row = width * 4;
-        let padded = row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let padded =
+            row.div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = self.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("off-screen readback"),
             size: u64::from(padded) * u64::from(height),
@@ -118,7 +120,9 @@ impl Offscreen {
         rx.recv()
             .context("the GPU dropped the readback")?
             .context("mapping the readback buffer")?;
-        let mapped = slice.get_mapped_range().context("reading the readback buffer")?;
+        let mapped = slice
+            .get_mapped_range()
+            .context("reading the readback buffer")?;
         let mut pixels = Vec::with_capacity((row * height) as usize);
         for y in 0..height as usize {
             let start = y * padded as usize;
@@ -131,8 +135,14 @@ impl Offscreen {
 }
 
 /// Writes RGBA8 pixels as a PNG file.
-pub fn write_png(path: &std::path::Path, width: u32, height: u32, rgba: &[u8]) -> anyhow::Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
+pub fn write_png(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+    rgba: &[u8],
+) -> anyhow::Result<()> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
     encoder.set_color(png::ColorType::Rgba);
     encoder.set_depth(png::BitDepth::Eight);
