@@ -217,7 +217,7 @@ impl Session {
         } else {
             self.substeps
         };
-        let max_steps = budget.min(self.substeps.saturating_mul(4)).max(1);
+        let max_steps = budget.min(self.substeps.saturating_mul(16)).max(1);
         let due = self.clock.advance(elapsed, speed, dt, max_steps);
         let report = self.run_steps(due.steps);
         FrameReport {

@@ -167,7 +167,7 @@ impl OrbitCamera {
     /// when it is behind the near plane.
     pub fn project(&self, p: Vec3, viewport: Vec2) -> Option<(Vec2, f32)> {
         let depth = (p - self.eye()).dot(self.forward());
-        if !(depth >= self.near()) {
+        if depth.is_nan() || depth < self.near() {
             return None;
         }
         let clip = self.view_proj(viewport) * p.extend(1.0);

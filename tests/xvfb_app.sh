@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
-# another, press R, press Esc; passes when the app logged each action, exited 0
+# another, resize the window, press R, press Esc; passes when the app logged each action, exited 0
 # and its log holds no error or panic.
 #
 # Needs: Xvfb, xdotool (and ImageMagick's `import` when SHOT_DIR is set, to save
@@ -73,12 +73,19 @@ sleep 0.5
 grep -q "dragging particle" "$LOG" || fail "press-and-drag on the cloth grabbed no particle"
 grep -q "released particle" "$LOG" || fail "releasing the mouse did not release the particle"
 
+# Resize small and back (the scene keeps drawing beside the panel).
+xdotool windowsize --sync "$WID" 420 260 || xdotool windowsize "$WID" 420 260
+sleep 1
+shot 4-small
+xdotool windowsize --sync "$WID" 1200 760 || xdotool windowsize "$WID" 1200 760
+sleep 1
+
 # R resets, Esc quits (keys need focus first).
 xdotool windowfocus --sync "$WID"
 xdotool key r
 sleep 1
 grep -q "scene reset" "$LOG" || fail "R did not reset the scene"
-shot 4-reset
+shot 5-reset
 xdotool windowfocus --sync "$WID"
 xdotool key Escape
 set +e
@@ -94,4 +101,4 @@ APP_PID=""
 if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
     fail "the log has errors"
 fi
-echo "xvfb_app: ok (pin, drag, reset, quit; exit 0, clean log)"
+echo "xvfb_app: ok (pin, drag, resize, reset, quit; exit 0, clean log)"

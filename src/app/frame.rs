@@ -106,6 +106,29 @@ pub fn scene_bounds(session: &Session) -> (Vec3, Vec3) {
     let points: Vec<Vec3> = system.positions().iter().map(|p| p.as_vec3()).collect();
     let (mut lo, mut hi) =
         cloth_sandbox::view::bounds(&points).unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+    // A line hanging from pins (chain, rope, spring) swings below them: frame
+    // the half-disc it can sweep, not just where it starts.
+    if system.triangles().is_empty() {
+        for (i, p) in points.iter().enumerate() {
+            if !system.is_pinned(i) || !p.is_finite() {
+                continue;
+            }
+            let reach = points
+                .iter()
+                .filter(|q| q.is_finite())
+                .map(|q| q.distance(*p))
+                .fold(0.0f32, f32::max);
+            lo = lo.min(*p - Vec3::new(reach, reach, 0.0));
+            hi = hi.max(*p + Vec3::new(reach, 0.0, 0.0));
+        }
+    }
+    // Scenes with a ground show it: things fall onto it.
+    if let Some(g) = system.params().ground {
+        let y = g.height as f32;
+        if y.is_finite() {
+            lo.y = lo.y.min(y);
+        }
+    }
     if let Some(s) = system.params().sphere {
         let c = s.center.as_vec3();
         let r = s.radius as f32;

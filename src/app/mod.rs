@@ -85,7 +85,7 @@ fn new_event_loop() -> anyhow::Result<EventLoop<()>> {
             let text = err.to_string();
             if text.contains("DISPLAY") || text.contains("WAYLAND") {
                 anyhow::bail!(
-                    "no display to open a window on ({text}); run under X11 or Wayland, or use `cloth screenshot` for off-screen images"
+                    "no display to open a window on: neither DISPLAY nor WAYLAND_DISPLAY is set; run it in an X11 or Wayland session (or under Xvfb), or use `cloth screenshot` for off-screen images"
                 )
             }
             anyhow::bail!("cannot connect to the window system: {text}")
@@ -184,6 +184,29 @@ impl App {
         self.gfx
             .as_ref()
             .map_or(1.0, |g| g.window.scale_factor() as f32)
+    }
+
+    /// Whether the cursor is over the panel or an egui popup, or egui is using
+    /// the pointer (dragging a slider). Decided from the cursor's position, not
+    /// from egui's last frame, so a quick move from the panel followed by a click
+    /// on the scene still reaches the scene.
+    fn over_ui(&self) -> bool {
+        if self.egui_ctx.egui_is_using_pointer() {
+            return true;
+        }
+        let Some(cursor) = self.mouse.cursor else {
+            return false;
+        };
+        let (origin, size) = self.scene_rect();
+        let local = cursor - origin;
+        if local.x < 0.0 || local.y < 0.0 || local.x >= size.x || local.y >= size.y {
+            return true;
+        }
+        let ppp = self.pixels_per_point();
+        let pos = egui::pos2(cursor.x / ppp, cursor.y / ppp);
+        self.egui_ctx
+            .layer_id_at(pos)
+            .is_some_and(|layer| layer.order != egui::Order::Background)
     }
 
     /// The particle under `cursor`, if any.
@@ -398,7 +421,7 @@ impl ApplicationHandler for App {
             (Some(state), Some(gfx)) => state.on_window_event(&gfx.window, &event).consumed,
             _ => false,
         };
-        let over_ui = self.egui_ctx.is_pointer_over_egui() || self.egui_ctx.egui_is_using_pointer();
+        let over_ui = self.over_ui();
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(size) => {
@@ -425,7 +448,7 @@ impl ApplicationHandler for App {
                 if let Some(a) = self.mouse.moved(p) {
                     self.apply_mouse(a);
                 }
-                self.hovered = if self.mouse.gesture == input::Gesture::Idle && !over_ui {
+                self.hovered = if self.mouse.gesture == input::Gesture::Idle && !self.over_ui() {
                     self.pick(p)
                 } else {
                     None
@@ -442,7 +465,7 @@ impl ApplicationHandler for App {
                     _ => return,
                 };
                 match state {
-                    ElementState::Pressed if !consumed && !over_ui => {
+                    ElementState::Pressed if !over_ui => {
                         let picked = match (button, self.mouse.cursor) {
                             (Button::Left, Some(c)) => self.pick(c),
                             _ => None,
@@ -461,7 +484,7 @@ impl ApplicationHandler for App {
                     }
                 }
             }
-            WindowEvent::MouseWheel { delta, .. } if !consumed && !over_ui => {
+            WindowEvent::MouseWheel { delta, .. } if !over_ui => {
                 let steps = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y,
                     MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,

@@ -195,6 +195,19 @@ fn contents(
         actions.push(Action::Set("substeps".into(), substeps.to_string()));
     }
 
+    if session.divergence().is_none() {
+        // Always one line, so the controls below never jump.
+        if session.paused() {
+            ui.label("Paused (Space or Play resumes).");
+        } else if state.behind {
+            ui.colored_label(
+                Color32::from_rgb(255, 200, 60),
+                "Slower than real time (step budget used up).",
+            );
+        } else {
+            ui.label("Running in real time.");
+        }
+    }
     if let Some(d) = session.divergence() {
         ui.separator();
         ui.colored_label(
@@ -371,15 +384,6 @@ fn contents(
                 Color32::from_rgb(120, 220, 120)
             };
             ui.colored_label(color, format!("stability dt / dt_crit = {margin:.3}"));
-            if state.behind && !session.paused() {
-                ui.colored_label(
-                    Color32::from_rgb(255, 200, 60),
-                    "running slower than real time (the step budget per frame is used up)",
-                );
-            }
-            if session.paused() {
-                ui.label("paused");
-            }
             ui.label(RichText::new(format!("adapter: {adapter}")).small());
         });
 }

@@ -781,7 +781,7 @@ fn checker_texture(device: &wgpu::Device, queue: &wgpu::Queue) -> wgpu::TextureV
         let n = 64u32;
         let rgba = (0..n * n)
             .flat_map(|i| {
-                let v = if ((i % n) / 8 + (i / n) / 8) % 2 == 0 {
+                let v = if ((i % n) / 8 + (i / n) / 8).is_multiple_of(2) {
                     235
                 } else {
                     150
