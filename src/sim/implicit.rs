@@ -182,7 +182,7 @@ fn solve(model: &Model, w: &mut ImplicitWorkspace) {
     for iteration in 1..=CG_MAX_ITERATIONS {
         apply(model, &w.blocks, &w.diagonal, &w.direction, &mut w.product);
         let pap = dot(&w.direction, &w.product);
-        if !(pap > 0.0) {
+        if pap.is_nan() || pap <= 0.0 {
             break;
         }
         let alpha = rz / pap;
