@@ -51,7 +51,7 @@ pub fn spring_system(overrides: &[&str]) -> System {
 /// The analytic oscillator matching the spring scene's file values (m 0.5, k 15,
 /// rest 5, 10% of critical damping, released 1 m below rest, g 9.81).
 pub fn spring_oscillator(zeta: f64, g: f64) -> Oscillator {
-    let (m, k) = (0.5, 15.0);
+    let (m, k): (f64, f64) = (0.5, 15.0);
     let b = zeta * 2.0 * (k * m).sqrt();
     Oscillator::new(m, k, b, 5.0, g, 6.0)
 }
