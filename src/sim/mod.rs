@@ -351,6 +351,10 @@ impl System {
     pub fn steps_taken(&self) -> u64 {
         self.state.steps
     }
+    /// Conjugate-gradient iterations of the last implicit-Euler step (0 for other integrators).
+    pub fn solver_iterations(&self) -> usize {
+        self.work.implicit.last_iterations
+    }
     /// The particle the user holds, if any, and where it is held.
     pub fn grabbed(&self) -> Option<(usize, DVec3)> {
         self.grabbed
