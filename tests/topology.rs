@@ -164,3 +164,20 @@ fn wind_changes_nothing_where_there_is_no_aero() {
     windy.run(1000).unwrap();
     assert_eq!(calm.positions(), windy.positions());
 }
+
+#[test]
+fn a_grabbed_particle_stays_held_while_parameters_change() {
+    let mut system = scene("cloth", &["width=8", "height=8"]).build().unwrap();
+    let target = glam::DVec3::new(0.3, 0.1, 0.2);
+    system.grab(36, target);
+    let mut params = *system.params();
+    params.wind = glam::DVec3::new(3.0, 0.0, 0.0);
+    system.set_params(params);
+    system.run(50).unwrap();
+    assert_eq!(system.positions()[36], target);
+    assert_eq!(system.inv_masses()[36], 0.0);
+    system.release();
+    assert!(system.inv_masses()[36] > 0.0);
+    system.run(10).unwrap();
+    assert_ne!(system.positions()[36], target, "released, it falls again");
+}

@@ -413,6 +413,7 @@ impl System {
         self.model.params = params;
         self.model.wind = Wind::new(params.wind, params.gust, params.seed);
         self.model.refresh();
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
         if integrator_changed {
             self.prepare_integrator();
         } else if dt_changed && params.integrator == Integrator::Verlet {
