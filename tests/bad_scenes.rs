@@ -22,14 +22,21 @@ fn parse_err(text: &str) -> String {
 fn with(line: &str) -> String {
     // Replace a key if present, else append it.
     let key = line.split('=').next().unwrap().trim();
-    let mut lines: Vec<String> = GOOD.lines().filter(|l| !l.starts_with(&format!("{key} "))).map(String::from).collect();
+    let mut lines: Vec<String> = GOOD
+        .lines()
+        .filter(|l| !l.starts_with(&format!("{key} ")))
+        .map(String::from)
+        .collect();
     lines.push(line.to_string());
     lines.join("\n")
 }
 
 fn assert_names(message: &str, parts: &[&str]) {
     for part in parts {
-        assert!(message.contains(part), "error {message:?} should mention {part:?}");
+        assert!(
+            message.contains(part),
+            "error {message:?} should mention {part:?}"
+        );
     }
 }
 
@@ -46,9 +53,18 @@ fn unknown_key() {
 
 #[test]
 fn wrong_type() {
-    assert_names(&parse_err(&with("width = \"eight\"")), &["test.toml", "width"]);
-    assert_names(&parse_err(&with("stiffness = true")), &["test.toml", "stiffness"]);
-    assert_names(&parse_err(&with("wind = \"north\"")), &["test.toml", "wind"]);
+    assert_names(
+        &parse_err(&with("width = \"eight\"")),
+        &["test.toml", "width"],
+    );
+    assert_names(
+        &parse_err(&with("stiffness = true")),
+        &["test.toml", "stiffness"],
+    );
+    assert_names(
+        &parse_err(&with("wind = \"north\"")),
+        &["test.toml", "wind"],
+    );
 }
 
 #[test]
@@ -62,7 +78,13 @@ fn zero_or_negative_mass() {
 
 #[test]
 fn non_finite_numbers() {
-    for line in ["stiffness = nan", "damping = inf", "dt = -inf", "rest_length = nan", "gravity = [0.0, nan, 0.0]"] {
+    for line in [
+        "stiffness = nan",
+        "damping = inf",
+        "dt = -inf",
+        "rest_length = nan",
+        "gravity = [0.0, nan, 0.0]",
+    ] {
         let field = line.split(' ').next().unwrap();
         assert_names(&parse_err(&with(line)), &["test.toml", field]);
     }
@@ -81,13 +103,22 @@ fn width_and_height_out_of_range() {
 fn unknown_integrator_and_pins() {
     let e = parse_err(&with("integrator = \"leapfrog\""));
     assert_names(&e, &["integrator", "leapfrog", "symplectic-euler"]);
-    assert_names(&parse_err(&with("pins = \"everywhere\"")), &["pins", "everywhere"]);
-    assert_names(&parse_err(&with("pins = [0, 64]")), &["pins", "64", "64 particles"]);
+    assert_names(
+        &parse_err(&with("pins = \"everywhere\"")),
+        &["pins", "everywhere"],
+    );
+    assert_names(
+        &parse_err(&with("pins = [0, 64]")),
+        &["pins", "64", "64 particles"],
+    );
 }
 
 #[test]
 fn conflicting_alternatives() {
-    assert_names(&parse_err(&with("size = 2.0")), &["rest_length", "size", "only one"]);
+    assert_names(
+        &parse_err(&with("size = 2.0")),
+        &["rest_length", "size", "only one"],
+    );
 }
 
 #[test]
@@ -99,7 +130,9 @@ fn bad_dt_and_syntax() {
 #[test]
 fn unknown_scene_lists_the_builtins() {
     match Scene::load("clothh") {
-        Err(SceneError::UnknownScene { builtins, .. }) => assert!(builtins.contains("cloth") && builtins.contains("jelly")),
+        Err(SceneError::UnknownScene { builtins, .. }) => {
+            assert!(builtins.contains("cloth") && builtins.contains("jelly"))
+        }
         other => panic!("expected UnknownScene, got {other:?}"),
     }
 }
@@ -120,7 +153,13 @@ fn bad_overrides_name_the_key_and_leave_the_scene_unchanged() {
         assert!(e.contains(key) && e.contains("--set"), "{assignment}: {e}");
         assert_eq!(scene, before, "{assignment} changed the scene");
     }
-    assert!(scene.set_all(["novalue"]).unwrap_err().to_string().contains("key=value"));
+    assert!(
+        scene
+            .set_all(["novalue"])
+            .unwrap_err()
+            .to_string()
+            .contains("key=value")
+    );
 }
 
 #[test]
@@ -128,7 +167,11 @@ fn every_shipped_scene_file_is_valid() {
     for entry in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes")).unwrap() {
         let path = entry.unwrap().path();
         let scene = Scene::load(path.to_str().unwrap()).unwrap_or_else(|e| panic!("{e}"));
-        assert!(scene.spec.description.is_some(), "{} has no description", path.display());
+        assert!(
+            scene.spec.description.is_some(),
+            "{} has no description",
+            path.display()
+        );
         scene.build().unwrap();
     }
 }

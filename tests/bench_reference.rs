@@ -15,12 +15,18 @@ fn after_one_second(name: &str) -> (f64, f64) {
 fn bench_matches_the_float64_reference() {
     let (mean, bottom) = after_one_second("bench");
     assert!((mean - -0.064685755).abs() < 1e-8, "mean y {mean}");
-    assert!((bottom - -0.656037594).abs() < 1e-8, "bottom-middle y {bottom}");
+    assert!(
+        (bottom - -0.656037594).abs() < 1e-8,
+        "bottom-middle y {bottom}"
+    );
 }
 
 #[test]
 fn bench_wind_matches_the_float64_reference() {
     let (mean, bottom) = after_one_second("bench-wind");
     assert!((mean - 0.528073639).abs() < 1e-8, "mean y {mean}");
-    assert!((bottom - 0.193166128).abs() < 1e-8, "bottom-middle y {bottom}");
+    assert!(
+        (bottom - 0.193166128).abs() < 1e-8,
+        "bottom-middle y {bottom}"
+    );
 }

@@ -57,6 +57,10 @@ fn the_frame_rate_does_not_change_the_physics() {
     assert!(slow.steps_taken().abs_diff(fast.steps_taken()) <= 1);
     let mut a = Scene::load("chain").unwrap().build().unwrap();
     a.run(common).unwrap();
-    let reference = if slow.steps_taken() == common { &slow } else { &fast };
+    let reference = if slow.steps_taken() == common {
+        &slow
+    } else {
+        &fast
+    };
     assert_eq!(a.positions(), reference.positions());
 }

@@ -8,7 +8,10 @@ use common::{spring_oscillator, spring_system};
 
 /// |simulated - analytic| distance of the free mass at t = 2 s.
 fn end_error(integrator: Integrator, dt: f64) -> f64 {
-    let mut system = spring_system(&[&format!("integrator=\"{}\"", integrator.name()), &format!("dt={dt}")]);
+    let mut system = spring_system(&[
+        &format!("integrator=\"{}\"", integrator.name()),
+        &format!("dt={dt}"),
+    ]);
     let steps = (2.0 / dt).round() as u64;
     system.run(steps).expect("stable");
     let exact = spring_oscillator(0.1, 9.81);
@@ -30,7 +33,12 @@ fn observed_orders_match_theory() {
         let observed = ((coarse / fine).log2() + (fine / finer).log2()) / 2.0;
         let expected = integrator.order() as f64;
         assert!(
-            { eprintln!("{integrator}: order {observed:.3} ({coarse:.3e} {fine:.3e} {finer:.3e})"); (observed - expected).abs() < 0.3 },
+            {
+                eprintln!(
+                    "{integrator}: order {observed:.3} ({coarse:.3e} {fine:.3e} {finer:.3e})"
+                );
+                (observed - expected).abs() < 0.3
+            },
             "{integrator}: observed order {observed:.3}, expected {expected} (errors {coarse:.3e}, {fine:.3e}, {finer:.3e})"
         );
     }

@@ -11,8 +11,12 @@ fn assert_finite_for(steps: u64, overrides: &[&str]) {
     for integrator in Integrator::ALL {
         let mut scene = Scene::load("cloth").unwrap();
         scene.set_all(overrides.iter().copied()).unwrap();
-        scene.set("integrator", &format!("\"{}\"", integrator.name())).unwrap();
-        if matches!(integrator, Integrator::ExplicitEuler | Integrator::Rk2) && !overrides.iter().any(|o| o.starts_with("dt=")) {
+        scene
+            .set("integrator", &format!("\"{}\"", integrator.name()))
+            .unwrap();
+        if matches!(integrator, Integrator::ExplicitEuler | Integrator::Rk2)
+            && !overrides.iter().any(|o| o.starts_with("dt="))
+        {
             scene.set("dt", "5e-5").unwrap();
         }
         let mut system = scene.build().unwrap();
@@ -21,7 +25,11 @@ fn assert_finite_for(steps: u64, overrides: &[&str]) {
                 panic!("{integrator} with {overrides:?}: {e} at step {step}");
             }
             assert!(
-                system.positions().iter().chain(system.velocities()).all(|v| v.is_finite()),
+                system
+                    .positions()
+                    .iter()
+                    .chain(system.velocities())
+                    .all(|v| v.is_finite()),
                 "{integrator} with {overrides:?}: non-finite at step {step}"
             );
         }
@@ -32,8 +40,20 @@ fn assert_finite_for(steps: u64, overrides: &[&str]) {
 fn coincident_particles_with_zero_rest_length_and_zero_area_triangles() {
     // rest_length = 0 puts every particle at one point: zero-length springs and
     // zero-area triangles everywhere, in a wind.
-    assert_finite_for(2_000, &["width=6", "height=6", "rest_length=0", "pins=none"]);
-    assert_finite_for(2_000, &["width=6", "height=6", "rest_length=0", "pins=corners", "wind=10,0,5"]);
+    assert_finite_for(
+        2_000,
+        &["width=6", "height=6", "rest_length=0", "pins=none"],
+    );
+    assert_finite_for(
+        2_000,
+        &[
+            "width=6",
+            "height=6",
+            "rest_length=0",
+            "pins=corners",
+            "wind=10,0,5",
+        ],
+    );
 }
 
 #[test]
@@ -50,7 +70,15 @@ fn zero_and_huge_wind() {
     // 100 m/s is a dynamic pressure of 6 kPa: a cloth must be stiff enough to carry
     // it (the default k = 100 N/m stretches metres and whips until it runs away,
     // which `check` reports; see the report's extreme cases).
-    let huge = ["width=10", "height=10", "wind=0,0,100", "gust=20", "stiffness=1000", "damping=0.2", "dt=1e-4"];
+    let huge = [
+        "width=10",
+        "height=10",
+        "wind=0,0,100",
+        "gust=20",
+        "stiffness=1000",
+        "damping=0.2",
+        "dt=1e-4",
+    ];
     assert_finite_for(2_000, &huge);
 }
 
@@ -58,12 +86,26 @@ fn zero_and_huge_wind() {
 fn a_flat_cloth_edge_on_to_the_wind_gets_no_force() {
     // Wind in the cloth's plane: v_rel · n = 0 for every triangle at the start.
     let mut scene = Scene::load("cloth").unwrap();
-    scene.set_all(["gravity=0,0,0", "wind=30,0,0", "gust=0", "pins=none", "width=5", "height=5"]).unwrap();
+    scene
+        .set_all([
+            "gravity=0,0,0",
+            "wind=30,0,0",
+            "gust=0",
+            "pins=none",
+            "width=5",
+            "height=5",
+        ])
+        .unwrap();
     let mut system = scene.build().unwrap();
     let start = system.positions().to_vec();
     system.run(100).unwrap();
     // Only round-off moves it (rest lengths and positions differ in the last bits);
     // a drag that pushed along the wind would move it by centimetres.
-    let moved = system.positions().iter().zip(&start).map(|(a, b)| a.distance(*b)).fold(0.0, f64::max);
+    let moved = system
+        .positions()
+        .iter()
+        .zip(&start)
+        .map(|(a, b)| a.distance(*b))
+        .fold(0.0, f64::max);
     assert!(moved < 1e-12, "moved {moved:e} m");
 }

@@ -7,7 +7,11 @@ fn run(seed: u64, steps: u64) -> Vec<[u64; 3]> {
     scene.set("seed", &seed.to_string()).unwrap();
     let mut system = scene.build().unwrap();
     system.run(steps).unwrap();
-    system.positions().iter().map(|p| p.to_array().map(f64::to_bits)).collect()
+    system
+        .positions()
+        .iter()
+        .map(|p| p.to_array().map(f64::to_bits))
+        .collect()
 }
 
 #[test]

@@ -24,7 +24,10 @@ fn every_integrator_follows_the_analytic_damped_oscillator() {
             "{integrator}: max error {error:.3e} m exceeds {tolerance:.3e} m at dt = {dt}"
         );
         // And it is not trivially small: a real discretisation error of that order.
-        assert!(error > 1e-3 * tolerance, "{integrator}: error {error:.3e} suspiciously small");
+        assert!(
+            error > 1e-3 * tolerance,
+            "{integrator}: error {error:.3e} suspiciously small"
+        );
     }
 }
 

@@ -22,7 +22,12 @@ impl Oscillator {
     pub fn new(m: f64, k: f64, b: f64, rest: f64, g: f64, s0: f64) -> Self {
         let w = (k / m).sqrt();
         let s_eq = rest + m * g / k;
-        Self { w, zeta: b / (2.0 * (k * m).sqrt()), s_eq, u0: s0 - s_eq }
+        Self {
+            w,
+            zeta: b / (2.0 * (k * m).sqrt()),
+            s_eq,
+            u0: s0 - s_eq,
+        }
     }
 
     /// Distance below the fixed point at time t (underdamped, starting at rest).
@@ -37,15 +42,17 @@ impl Oscillator {
 /// The built-in spring scene with overrides, built.
 pub fn spring_system(overrides: &[&str]) -> System {
     let mut scene = Scene::load("spring").expect("spring scene");
-    scene.set_all(overrides.iter().copied()).expect("valid overrides");
+    scene
+        .set_all(overrides.iter().copied())
+        .expect("valid overrides");
     scene.build().expect("builds")
 }
 
 /// The analytic oscillator matching the spring scene's file values (m 0.5, k 15,
 /// rest 5, 10% of critical damping, released 1 m below rest, g 9.81).
 pub fn spring_oscillator(zeta: f64, g: f64) -> Oscillator {
-    let (m, k) = (0.5, 15.0);
-    let b = zeta * 2.0 * (k * m as f64).sqrt();
+    let (m, k): (f64, f64) = (0.5, 15.0);
+    let b = zeta * 2.0 * (k * m).sqrt();
     Oscillator::new(m, k, b, 5.0, g, 6.0)
 }
 
