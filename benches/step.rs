@@ -1,1 +1,2 @@
+//! Placeholder until the step benchmarks land.
 fn main() {}

@@ -27,6 +27,12 @@ pub struct Args {
     /// What to do (default: open the desktop app).
     #[command(subcommand)]
     pub command: Option<Command>,
+    /// Scene the desktop app opens: a built-in name or a scene TOML file.
+    #[arg(long, value_name = "NAME")]
+    pub scene: Option<String>,
+    /// Override a scene parameter in the desktop app, e.g. `--set width=48`.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
 }
 
 /// Scene selection and overrides shared by the subcommands.
@@ -58,6 +64,8 @@ pub enum Command {
     Info(InfoArgs),
     /// List the built-in scenes.
     Scenes,
+    /// Render a scene after N steps to a PNG, off-screen (no window or display).
+    Screenshot(crate::app::screenshot::ScreenshotArgs),
     /// Measure error against run time and stability of every integrator; write CSV,
     /// SVG plots and REPORT.md.
     Report(ReportArgs),
@@ -83,13 +91,13 @@ pub struct RunArgs {
     #[arg(long)]
     integrator: Option<String>,
     /// Time step in seconds.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     dt: Option<String>,
     /// Simulated seconds to run (default 1).
-    #[arg(long, conflicts_with = "steps")]
+    #[arg(long, conflicts_with = "steps", allow_hyphen_values = true)]
     duration: Option<f64>,
     /// Number of steps to run (0: just the initial state).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     steps: Option<u64>,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -122,6 +130,9 @@ pub fn run_command(command: Command) -> ExitCode {
             scenes();
             Ok(ExitCode::SUCCESS)
         }
+        Command::Screenshot(args) => crate::app::screenshot::run(&args)
+            .map(|()| ExitCode::SUCCESS)
+            .map_err(|e| format!("{e:#}")),
         Command::Report(args) => report(args),
     };
     result.unwrap_or_else(|message| {

@@ -6,7 +6,7 @@ use glam::{DMat3, DVec2, DVec3};
 
 use super::values::{PinPreset, Pins};
 use super::{Layout, Orientation, SceneError, SceneSpec};
-use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System};
+use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 
 /// Largest grid side (particles), so a typo cannot ask for billions of particles.
 pub const GRID_MAX_SIDE: u32 = 1024;
@@ -603,15 +603,12 @@ impl Resolved {
         } else {
             uvs
         };
-        System::new(
-            masses,
-            positions,
-            &self.pins,
+        let topology = Topology {
             springs,
             bars,
             triangles,
             uvs,
-            self.params,
-        )
+        };
+        System::new(masses, positions, &self.pins, topology, self.params)
     }
 }

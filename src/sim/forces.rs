@@ -19,6 +19,11 @@ pub const EPSILON_LENGTH: f64 = 1e-12;
 /// Spring count above which spring forces are computed on several threads.
 const PARALLEL_SPRINGS: usize = 20_000;
 
+/// Whether the model's spring forces are computed on several threads.
+pub fn uses_threads(model: &Model) -> bool {
+    model.springs.len() >= PARALLEL_SPRINGS
+}
+
 /// Which force terms a model evaluates. Derived from the scene: a term that cannot
 /// contribute is not run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -118,7 +123,7 @@ impl Model {
             let (a, b) = (s.a as usize, s.b as usize);
             spring_force(x[a] - x[b], v[a] - v[b], s.rest, s.stiffness, s.damping)
         };
-        let parallel = self.springs.len() >= PARALLEL_SPRINGS;
+        let parallel = uses_threads(self);
         if parallel {
             (spring_forces.par_iter_mut().zip(self.springs.par_iter()))
                 .for_each(|(f, s)| *f = force_on_a(s));

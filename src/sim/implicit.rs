@@ -7,7 +7,8 @@
 //! dropped so the matrix stays positive definite, as Baraff & Witkin and Choi & Ko
 //! do) and `df_a/dv_a = -b u uᵀ`; air damping and ground contact add to the
 //! diagonal. It is solved by conjugate gradients with a Jacobi preconditioner;
-//! pinned particles are filtered out (their `dv` is zero). Aerodynamic drag is
+//! pinned particles are filtered out (their `dv` is zero); each solve starts from the
+//! previous step's `dv`. Aerodynamic drag is
 //! treated explicitly. Unconditionally stable; first order.
 
 use glam::{DMat3, DVec3};
@@ -15,7 +16,7 @@ use glam::{DMat3, DVec3};
 use super::{Model, State};
 
 /// Relative residual at which conjugate gradients stop.
-pub const CG_TOLERANCE: f64 = 1e-10;
+pub const CG_TOLERANCE: f64 = 1e-6;
 /// Iteration cap of conjugate gradients.
 pub const CG_MAX_ITERATIONS: usize = 1000;
 
@@ -165,10 +166,18 @@ fn dot(a: &[DVec3], b: &[DVec3]) -> f64 {
     a.iter().zip(b).map(|(a, b)| a.dot(*b)).sum()
 }
 
-/// Preconditioned conjugate gradients for `A dv = rhs`, starting from `dv = 0`.
+/// Preconditioned conjugate gradients for `A dv = rhs`, warm-started from the
+/// previous step's `dv` (consecutive steps change velocity alike).
 fn solve(model: &Model, w: &mut ImplicitWorkspace) {
-    w.dv.fill(DVec3::ZERO);
-    w.residual.copy_from_slice(&w.rhs);
+    for (dv, &inv_mass) in w.dv.iter_mut().zip(&model.inv_mass) {
+        if inv_mass == 0.0 || !dv.is_finite() {
+            *dv = DVec3::ZERO;
+        }
+    }
+    apply(model, &w.blocks, &w.diagonal, &w.dv, &mut w.product);
+    for i in 0..w.dv.len() {
+        w.residual[i] = w.rhs[i] - w.product[i];
+    }
     for i in 0..w.dv.len() {
         w.preconditioned[i] = w.preconditioner[i] * w.residual[i];
     }
@@ -177,6 +186,10 @@ fn solve(model: &Model, w: &mut ImplicitWorkspace) {
     let mut rz = dot(&w.residual, &w.preconditioned);
     w.last_iterations = 0;
     if rhs_norm2 == 0.0 {
+        w.dv.fill(DVec3::ZERO);
+        return;
+    }
+    if dot(&w.residual, &w.residual) <= CG_TOLERANCE * CG_TOLERANCE * rhs_norm2 {
         return;
     }
     for iteration in 1..=CG_MAX_ITERATIONS {

@@ -97,6 +97,19 @@ impl Default for Params {
     }
 }
 
+/// What connects the particles: springs, bars and the surface.
+#[derive(Clone, Debug, Default)]
+pub struct Topology {
+    /// Damped springs (any order; [`System::new`] makes them canonical).
+    pub springs: Vec<Spring>,
+    /// Rigid bars.
+    pub bars: Vec<Bar>,
+    /// Surface triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates per particle (empty without a surface).
+    pub uvs: Vec<DVec2>,
+}
+
 /// Topology and parameters: what stays fixed while the state advances.
 #[derive(Clone, Debug)]
 pub struct Model {
@@ -222,19 +235,21 @@ pub struct System {
 }
 
 impl System {
-    /// Builds a system from particle masses, start positions, topology and parameters.
-    /// `pinned` lists particles that never move. Velocities start at zero.
-    #[allow(clippy::too_many_arguments)]
+    /// Builds a system from particle masses, start positions, pinned particles,
+    /// topology and parameters. Velocities start at zero.
     pub fn new(
         masses: Vec<f64>,
         positions: Vec<DVec3>,
         pinned: &[usize],
-        mut springs: Vec<Spring>,
-        bars: Vec<Bar>,
-        triangles: Vec<[u32; 3]>,
-        uvs: Vec<DVec2>,
+        topology: Topology,
         params: Params,
     ) -> Self {
+        let Topology {
+            mut springs,
+            bars,
+            triangles,
+            uvs,
+        } = topology;
         let n = positions.len();
         assert_eq!(masses.len(), n, "one mass per particle");
         springs::canonicalize(&mut springs);
@@ -338,6 +353,10 @@ impl System {
     pub fn steps_taken(&self) -> u64 {
         self.state.steps
     }
+    /// Conjugate-gradient iterations of the last implicit-Euler step (0 for other integrators).
+    pub fn solver_iterations(&self) -> usize {
+        self.work.implicit.last_iterations
+    }
     /// The particle the user holds, if any, and where it is held.
     pub fn grabbed(&self) -> Option<(usize, DVec3)> {
         self.grabbed
@@ -396,6 +415,7 @@ impl System {
         self.model.params = params;
         self.model.wind = Wind::new(params.wind, params.gust, params.seed);
         self.model.refresh();
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
         if integrator_changed {
             self.prepare_integrator();
         } else if dt_changed && params.integrator == Integrator::Verlet {
@@ -470,12 +490,18 @@ impl System {
         self.check()
     }
 
-    /// Runs `n` steps, stopping at the first divergence.
+    /// Runs `n` steps, stopping at the first divergence. A model big enough for the
+    /// threaded force path runs its whole loop on a pool thread, so the parallel loops
+    /// inside go through worker-local queues and allocate nothing per step.
     pub fn run(&mut self, n: u64) -> Result<(), Divergence> {
-        for _ in 0..n {
-            self.step()?;
+        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());
+        if forces::uses_threads(&self.model) {
+            let mut result = Ok(());
+            rayon::scope(|_| result = steps(self));
+            result
+        } else {
+            steps(self)
         }
-        Ok(())
     }
 
     /// Whether anything is enforced after integration.
