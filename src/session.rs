@@ -1,12 +1,26 @@
 //! A running scene as an interactive front end drives it, headless: the scene
 //! spec with the user's edits, the system built from it, fixed-step pacing
 //! (`substeps` steps of `dt` per 1/60 s of wall time, whatever the frame rate),
-//! pause / single step / reset, divergence, and live parameter edits.
+//! pause / single step / reset, divergence, live parameter edits, and safe stepping
+//! (on by default): the step is kept below half the integrator's critical step, with
+//! more substeps so that each frame still covers the same simulated time.
 
 use std::time::Instant;
 
 use crate::scene::{Scene, SceneError};
+use crate::sim::safe::{self, DEFAULT_SAFETY};
 use crate::sim::{Clock, SpringKind, System};
+
+/// Most substeps per frame safe stepping may choose; past it the simulation runs
+/// slower than real time rather than with an unsafe step.
+pub const MAX_SAFE_SUBSTEPS: u32 = 100_000;
+
+/// Stretch limit (Provot's tau) that safe stepping adds to a cloth with aero drag
+/// and no limit of its own. Drag grows with the stretched area (as L²) and a spring
+/// only as k L, so a soft enough cloth in a strong wind has no equilibrium and
+/// stretches without bound; the limit stops that. At the default settings the cloth
+/// stretches about 6%, so the limit does not act.
+pub const SAFE_STRETCH_LIMIT: f64 = 0.5;
 
 /// Wall-clock seconds that `substeps` steps stand for (one frame at 60 Hz).
 pub const FRAME_PERIOD: f64 = 1.0 / 60.0;
@@ -70,6 +84,24 @@ pub struct Session {
     substeps: u32,
     /// Smoothed cost of one step (ms).
     ms_per_step: f64,
+    /// Whether safe stepping chooses dt and substeps.
+    safe_stepping: bool,
+    /// What safe stepping chose, when it is on.
+    step_choice: Option<StepChoice>,
+}
+
+/// What safe stepping chose for the running system.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepChoice {
+    /// Steps per frame.
+    pub substeps: u32,
+    /// Step in s.
+    pub dt: f64,
+    /// Whether the step is below the safety fraction of a finite critical step
+    /// (false when the integrator has no stable step, e.g. explicit Euler undamped).
+    pub safe: bool,
+    /// The stretch limit safe stepping added, if any.
+    pub stretch_limit: Option<f64>,
 }
 
 impl Session {
@@ -94,15 +126,83 @@ impl Session {
             rest_length: resolved.rest_length,
             substeps: resolved.substeps,
             ms_per_step: 0.0,
-        })
+            safe_stepping: true,
+            step_choice: None,
+        }
+        .with_step_choice())
+    }
+
+    fn with_step_choice(mut self) -> Self {
+        self.choose_step();
+        self
+    }
+
+    /// Applies the scene's dt and substeps, or, with safe stepping on, a step no
+    /// larger than `DEFAULT_SAFETY * dt_crit` and as many substeps as keep the
+    /// simulated time per frame (`substeps * dt` of the scene) the same, up to
+    /// [`MAX_SAFE_SUBSTEPS`] (beyond that the simulation runs slower, never unsafe).
+    fn choose_step(&mut self) {
+        let Ok(resolved) = self.scene.resolve() else {
+            return;
+        };
+        let (user_dt, user_substeps) = (resolved.params.dt, resolved.substeps);
+        let mut params = *self.system.params();
+        params.dt = user_dt;
+        params.stretch_limit = resolved.params.stretch_limit;
+        let mut substeps = user_substeps;
+        self.step_choice = None;
+        if self.safe_stepping {
+            let frame_time = user_dt * f64::from(user_substeps);
+            let choice = safe::safe_step(
+                self.system.model(),
+                frame_time,
+                DEFAULT_SAFETY,
+                MAX_SAFE_SUBSTEPS,
+            );
+            let safe_dt = choice.dt_critical.map(|c| DEFAULT_SAFETY * c);
+            if let Some(limit) = safe_dt.filter(|l| *l < user_dt) {
+                params.dt = limit.min(choice.dt);
+                substeps = ((frame_time / params.dt).ceil() as u32).clamp(1, MAX_SAFE_SUBSTEPS);
+            }
+            let added_limit = (self.system.force_terms().aero && params.stretch_limit.is_none())
+                .then_some(SAFE_STRETCH_LIMIT);
+            params.stretch_limit = params.stretch_limit.or(added_limit);
+            self.step_choice = Some(StepChoice {
+                substeps,
+                dt: params.dt,
+                safe: safe_dt.is_some(),
+                stretch_limit: added_limit,
+            });
+        }
+        if *self.system.params() != params {
+            self.system.set_params(params);
+        }
+        self.substeps = substeps;
+    }
+
+    /// Whether safe stepping is on.
+    pub fn safe_stepping(&self) -> bool {
+        self.safe_stepping
+    }
+
+    /// Turns safe stepping on or off.
+    pub fn set_safe_stepping(&mut self, on: bool) {
+        self.safe_stepping = on;
+        self.choose_step();
+    }
+
+    /// What safe stepping chose (None when it is off).
+    pub fn step_choice(&self) -> Option<StepChoice> {
+        self.step_choice
     }
 
     /// Replaces the running scene with another one, dropping the user's edits.
     /// On error nothing changes.
     pub fn load_scene(&mut self, name: &str) -> Result<(), SceneError> {
-        let paused = self.paused;
+        let (paused, safe_stepping) = (self.paused, self.safe_stepping);
         *self = Self::load_with(name, &[])?;
         self.paused = paused;
+        self.set_safe_stepping(safe_stepping);
         Ok(())
     }
 
@@ -163,6 +263,7 @@ impl Session {
         self.substeps = resolved.substeps;
         self.clock.reset();
         self.divergence = None;
+        self.choose_step();
         Ok(())
     }
 
@@ -193,14 +294,17 @@ impl Session {
                 self.system.set_spring_damping(kind, s.damping);
             }
         }
+        // The cloth grows or shrinks with its rest length (positions too, about the
+        // pins), so strains are kept: changing the rest length of springs pinned in
+        // place would store the energy of a huge compression and release it at once.
         if resolved.rest_length != self.rest_length && self.rest_length > 0.0 {
-            self.system
-                .scale_rest_lengths(resolved.rest_length / self.rest_length);
+            self.system.rescale(resolved.rest_length / self.rest_length);
             self.rest_length = resolved.rest_length;
         }
         self.system.set_particle_mass(resolved.particle_mass);
         self.system.set_params(resolved.params);
         self.substeps = resolved.substeps;
+        self.choose_step();
         Ok(())
     }
 

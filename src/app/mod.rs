@@ -302,6 +302,7 @@ impl App {
                 self.panel.scene_changed(&self.session);
             }
             Action::TogglePause => self.session.set_paused(!self.session.paused()),
+            Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::Step => {
                 self.session.single_step();
             }

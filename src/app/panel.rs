@@ -29,6 +29,8 @@ pub enum Action {
     TogglePause,
     /// Run one step.
     Step,
+    /// Turn safe stepping on or off.
+    SafeStepping(bool),
 }
 
 /// Panel state that lives between frames.
@@ -183,7 +185,9 @@ fn contents(
             actions.push(Action::Reset);
         }
     });
-    let mut substeps = session.substeps();
+    // The scene's own steps per frame (its speed); safe stepping may run more,
+    // smaller steps over the same simulated time.
+    let mut substeps = r.substeps;
     if ui
         .add(
             egui::Slider::new(&mut substeps, 1..=2000)
@@ -193,6 +197,43 @@ fn contents(
         .changed()
     {
         actions.push(Action::Set("substeps".into(), substeps.to_string()));
+    }
+    let mut safe = session.safe_stepping();
+    if ui
+        .checkbox(&mut safe, "safe stepping")
+        .on_hover_text(
+            "Keep dt below half the integrator's critical step, with more substeps per frame",
+        )
+        .changed()
+    {
+        actions.push(Action::SafeStepping(safe));
+    }
+    match session.step_choice() {
+        Some(c) if c.safe => {
+            let limit = (c.stretch_limit)
+                .map(|t| format!(", stretch <= {:.0}%", t * 100.0))
+                .unwrap_or_default();
+            ui.label(format!(
+                "{} substeps/frame of dt = {:.3e} s{limit}",
+                c.substeps, c.dt
+            ));
+        }
+        Some(_) => {
+            ui.colored_label(
+                Color32::from_rgb(255, 170, 60),
+                format!(
+                    "{} has no stable step here without more damping",
+                    p.integrator
+                ),
+            );
+        }
+        None => {
+            ui.label(format!(
+                "{} substeps/frame of dt = {:.3e} s (unchecked)",
+                session.substeps(),
+                p.dt
+            ));
+        }
     }
 
     if session.divergence().is_none() {

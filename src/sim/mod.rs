@@ -450,6 +450,35 @@ impl System {
         }
     }
 
+    /// Scales the whole system by `factor`: rest lengths, bar lengths and positions
+    /// about the centroid of the pinned particles (of all particles if none is
+    /// pinned). Strains and velocities are unchanged, so no energy is injected: this
+    /// is how a rest-length edit applies to a running cloth.
+    pub fn rescale(&mut self, factor: f64) {
+        if !(factor.is_finite() && factor > 0.0) {
+            return;
+        }
+        let anchors: Vec<DVec3> = (0..self.particle_count())
+            .filter(|&i| self.model.pinned[i])
+            .map(|i| self.state.positions[i])
+            .collect();
+        let points = if anchors.is_empty() {
+            &self.state.positions[..]
+        } else {
+            &anchors[..]
+        };
+        let center = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+        let scale = |p: &mut DVec3| *p = center + (*p - center) * factor;
+        self.state.positions.iter_mut().for_each(scale);
+        self.state.prev_positions.iter_mut().for_each(scale);
+        if let Some((_, target)) = &mut self.grabbed {
+            scale(target);
+        }
+        self.scale_rest_lengths(factor);
+        let (start_center, start_extent) = bounding_sphere(&self.state.positions);
+        (self.start_center, self.start_extent) = (start_center, start_extent);
+    }
+
     /// Sets every particle's mass (kg), keeping pins.
     pub fn set_particle_mass(&mut self, mass: f64) {
         if !(mass.is_finite() && mass > 0.0) {

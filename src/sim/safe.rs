@@ -3,11 +3,16 @@
 //! step on the Gershgorin bound of the highest angular frequency (see
 //! [`super::stability`]): `omega_max <= sqrt(max_i (2 sum_j k_j + k_c) / m_i)`.
 //!
-//! The bound holds in every configuration of the springs, stretched or not (each
-//! spring's linearised stiffness block has eigenvalues at most `k`), so a step below
-//! it is stable for the linear part of the model whatever k, b, mass or rest length
-//! the user picks. It costs one pass over the springs and a bisection on a 2x2
-//! amplification matrix: cheap enough to call whenever a slider moves.
+//! The bound holds for springs at or beyond their rest length (each spring's
+//! linearised stiffness block then has eigenvalues between 0 and `k`), so a step
+//! below it is stable for the linear part of the model whatever k, b or mass the
+//! user picks. A strongly compressed spring adds a transverse term
+//! `k (1 - L/l) < 0` (buckling) that the bound does not cover: that is why the app
+//! scales the whole cloth when the user changes its rest length (see
+//! [`super::System::rescale`]).
+//!
+//! It costs one pass over the springs and a bisection on a 2x2 amplification
+//! matrix: cheap enough to call whenever a slider moves.
 
 use super::{Integrator, Model, stability};
 
