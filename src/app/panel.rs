@@ -358,33 +358,6 @@ fn contents(
             }
         });
 
-    // Display.
-    egui::CollapsingHeader::new("Display")
-        .default_open(true)
-        .show(ui, |ui| {
-            ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.mesh, "mesh");
-                ui.checkbox(&mut view.wireframe, "wireframe");
-                ui.checkbox(&mut view.textured, "texture");
-            });
-            ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.springs, "springs");
-                ui.checkbox(&mut state.strain_colors, "by strain");
-            });
-            ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.particles, "particles");
-                ui.checkbox(&mut view.pins, "pins");
-            });
-            ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"));
-            ui.horizontal(|ui| {
-                ui.label("background");
-                ui.color_edit_button_srgb(&mut view.background);
-                if ui.button("Reset view").clicked() {
-                    actions.push(Action::ResetView);
-                }
-            });
-        });
-
     // Stats.
     egui::CollapsingHeader::new("Stats")
         .default_open(true)
@@ -426,5 +399,31 @@ fn contents(
             };
             ui.colored_label(color, format!("stability dt / dt_crit = {margin:.3}"));
             ui.label(RichText::new(format!("adapter: {adapter}")).small());
+        });
+    // Display.
+    egui::CollapsingHeader::new("Display")
+        .default_open(true)
+        .show(ui, |ui| {
+            ui.horizontal_wrapped(|ui| {
+                ui.checkbox(&mut view.mesh, "mesh");
+                ui.checkbox(&mut view.wireframe, "wireframe");
+                ui.checkbox(&mut view.textured, "texture");
+            });
+            ui.horizontal_wrapped(|ui| {
+                ui.checkbox(&mut view.springs, "springs");
+                ui.checkbox(&mut state.strain_colors, "by strain");
+            });
+            ui.horizontal_wrapped(|ui| {
+                ui.checkbox(&mut view.particles, "particles");
+                ui.checkbox(&mut view.pins, "pins");
+            });
+            ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"));
+            ui.horizontal(|ui| {
+                ui.label("background");
+                ui.color_edit_button_srgb(&mut view.background);
+                if ui.button("Reset view").clicked() {
+                    actions.push(Action::ResetView);
+                }
+            });
         });
 }
