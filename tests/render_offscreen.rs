@@ -252,3 +252,23 @@ fn missing_adapter_is_one_clear_error_without_a_panic() {
     assert!(stderr.contains("mesa-vulkan-drivers"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn the_sphere_does_not_show_through_the_cloth_draped_on_it() {
+    let Some(img) = shot("drape", &["--scene", "drape", "--steps", "1500"]) else {
+        return;
+    };
+    // The top of the drape, where the cloth lies on the (red) sphere.
+    let top = img.region(0.40, 0.32, 0.60, 0.48);
+    let reddish = |p: [u8; 3]| p[0] > p[1].saturating_add(40) && p[0] > p[2].saturating_add(40);
+    assert!(
+        fraction(&top, |p| !is_background(p)) > 0.99,
+        "the cloth covers the top"
+    );
+    let through = fraction(&top, reddish);
+    assert!(
+        through < 0.002,
+        "{:.1}% of the drape's top shows the sphere",
+        through * 100.0
+    );
+}

@@ -20,7 +20,11 @@ const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const CHECKER_PNG: &[u8] = include_bytes!("../../assets/textures/checker.png");
 
 /// What to draw this frame: plain slices, indices into `positions`.
+/// Radius at which the sphere collider is drawn, as a fraction of its collision radius.
+const SPHERE_SKIN: f32 = 0.97;
+
 #[derive(Clone, Copy, Debug, Default)]
+
 pub struct SceneFrame<'a> {
     /// Particle positions (m).
     pub positions: &'a [Vec3],
@@ -592,7 +596,10 @@ impl Renderer {
             && r.is_finite()
             && r > 0.0
         {
-            geometry::sphere_mesh(c, r.min(1e4), &mut extra, &mut extra_idx);
+            // Drawn a little inside its collision radius: cloth resting on the sphere
+            // has its particles on the surface and its flat triangles as chords
+            // inside it, through which the full-size sphere would show.
+            geometry::sphere_mesh(c, SPHERE_SKIN * r.min(1e4), &mut extra, &mut extra_idx);
         }
         self.extra_vertices
             .write(device, queue, bytemuck::cast_slice(&extra));
