@@ -56,7 +56,7 @@ pub const PARALLEL_MIN_PARTICLES: usize = 96 * 96;
 
 /// Stiffness and damping of one kind of spring.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct SpringKind {
+pub struct SpringCoefficients {
     /// Stiffness `k` in N/m.
     pub k: f64,
     /// Damping `b` along the spring in N·s/m.
@@ -81,11 +81,11 @@ pub struct GridSpec {
     /// Position of particle `(0, 0)` in m.
     pub origin: [f64; 3],
     /// Structural springs `(r, c)-(r, c+1)` and `(r, c)-(r+1, c)`.
-    pub structural: SpringKind,
+    pub structural: SpringCoefficients,
     /// Shear springs `(r, c)-(r+1, c±1)`.
-    pub shear: SpringKind,
+    pub shear: SpringCoefficients,
     /// Bend springs `(r, c)-(r, c+2)` and `(r, c)-(r+2, c)`.
-    pub bend: SpringKind,
+    pub bend: SpringCoefficients,
     /// Gravity in m/s² (default `(0, -9.81, 0)`).
     pub gravity: [f64; 3],
     /// Air velocity in m/s for the drag.
@@ -106,7 +106,7 @@ impl GridSpec {
     pub fn peer_bench(n: usize, wind: bool) -> Self {
         let n = n.max(2);
         let m = 1.0 / (n * n) as f64;
-        let kind = SpringKind {
+        let kind = SpringCoefficients {
             k: 5000.0 * m,
             b: 0.5 * m,
         };

@@ -1,3 +1,696 @@
-//! Simulation core (headless; no graphics).
+//! The headless mass-spring core: particles, springs, force terms, integrators,
+//! constraints and a stability estimate. It knows nothing of windows or GPUs.
+//!
+//! State is structure-of-arrays ([`State`]); topology and parameters live in
+//! [`Model`]; [`System`] ties them together with the scratch space a step needs, so
+//! that stepping allocates nothing.
 
+pub mod clock;
+pub mod constraints;
+pub mod forces;
 pub mod grid_kernel;
+pub mod implicit;
+pub mod integrators;
+pub mod safe;
+pub mod springs;
+pub mod stability;
+pub mod wind;
+
+use glam::{DVec2, DVec3};
+
+pub use clock::Clock;
+pub use forces::ForceTerms;
+pub use integrators::Integrator;
+pub use safe::{SafeStep, safe_step, safe_substeps};
+pub use springs::{Adjacency, Bar, Spring, SpringKind};
+pub use stability::Stability;
+pub use wind::Wind;
+
+/// A horizontal ground plane `y = height` with penalty contact (seed 002's jelly cube).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ground {
+    /// Height of the plane in m.
+    pub height: f64,
+    /// Penalty stiffness `k_c` in N/m.
+    pub stiffness: f64,
+    /// Damping of the normal velocity while in contact, N·s/m.
+    pub damping: f64,
+}
+
+/// A solid sphere that particles cannot enter (seed 003's collider), enforced by
+/// projection onto its surface after each step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre in m.
+    pub center: DVec3,
+    /// Radius in m.
+    pub radius: f64,
+}
+
+/// Everything about the simulation that is not topology or state. Units are SI.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// Gravitational acceleration in m/s² (default: (0, -9.81, 0)).
+    pub gravity: DVec3,
+    /// Mean wind velocity in m/s.
+    pub wind: DVec3,
+    /// Gust amplitude in m/s (0: steady).
+    pub gust: f64,
+    /// Air density `rho` in kg/m³ (default: 1.2).
+    pub air_density: f64,
+    /// Aerodynamic drag coefficient `C_d` (dimensionless, default: 1).
+    pub drag_coefficient: f64,
+    /// Viscous air damping `c` in `-c v`, N·s/m (default: 0).
+    pub air_damping: f64,
+    /// Ground plane, if any.
+    pub ground: Option<Ground>,
+    /// Sphere collider, if any.
+    pub sphere: Option<Sphere>,
+    /// Integration method.
+    pub integrator: Integrator,
+    /// Time step in s.
+    pub dt: f64,
+    /// Rigid-bar relaxation passes per step (seed 001).
+    pub bar_iterations: u32,
+    /// Maximum stretch `tau` (Provot 1995): no spring longer than `(1 + tau) L`.
+    pub stretch_limit: Option<f64>,
+    /// Seed of the gusts.
+    pub seed: u64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            gravity: DVec3::new(0.0, -9.81, 0.0),
+            wind: DVec3::ZERO,
+            gust: 0.0,
+            air_density: 1.2,
+            drag_coefficient: 1.0,
+            air_damping: 0.0,
+            ground: None,
+            sphere: None,
+            integrator: Integrator::default(),
+            dt: 1.0 / 960.0,
+            bar_iterations: 0,
+            stretch_limit: None,
+            seed: 0,
+        }
+    }
+}
+
+/// What connects the particles: springs, bars and the surface.
+#[derive(Clone, Debug, Default)]
+pub struct Topology {
+    /// Damped springs (any order; [`System::new`] makes them canonical).
+    pub springs: Vec<Spring>,
+    /// Rigid bars.
+    pub bars: Vec<Bar>,
+    /// Surface triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates per particle (empty without a surface).
+    pub uvs: Vec<DVec2>,
+}
+
+/// Topology and parameters: what stays fixed while the state advances.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Particle masses in kg (kept for pinned particles too, so they can be unpinned).
+    pub mass: Vec<f64>,
+    /// Inverse masses; 0 for pinned or grabbed particles.
+    pub inv_mass: Vec<f64>,
+    /// Which particles the scene or the user pinned.
+    pub pinned: Vec<bool>,
+    /// Damped springs, canonical (see [`springs::canonicalize`]).
+    pub springs: Vec<Spring>,
+    /// For each particle, the springs touching it.
+    pub adjacency: Adjacency,
+    /// Rigid bars, relaxed after each step.
+    pub bars: Vec<Bar>,
+    /// Surface triangles (empty for scenes without a surface).
+    pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates per particle (empty without a surface).
+    pub uvs: Vec<DVec2>,
+    /// Parameters.
+    pub params: Params,
+    /// Force terms that run.
+    pub terms: ForceTerms,
+    /// The wind as a function of time.
+    pub wind: Wind,
+}
+
+/// The state that advances: positions, velocities and, for Verlet, the previous
+/// positions and accelerations.
+#[derive(Clone, Debug, Default)]
+pub struct State {
+    /// Positions in m.
+    pub positions: Vec<DVec3>,
+    /// Velocities in m/s.
+    pub velocities: Vec<DVec3>,
+    /// Positions one step ago (Verlet only; empty otherwise).
+    pub prev_positions: Vec<DVec3>,
+    /// Accelerations of the previous step (Verlet only; empty otherwise).
+    pub prev_accelerations: Vec<DVec3>,
+    /// Simulated time in s.
+    pub time: f64,
+    /// Steps taken.
+    pub steps: u64,
+}
+
+/// Energy in J, relative to the start positions for gravity.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Energy {
+    /// Kinetic energy `sum 1/2 m v²`.
+    pub kinetic: f64,
+    /// Gravitational potential `-sum m g·x`.
+    pub gravity: f64,
+    /// Elastic energy of springs `sum 1/2 k (l - L)²` and of ground contact.
+    pub elastic: f64,
+}
+
+impl Energy {
+    /// Kinetic plus potential.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.gravity + self.elastic
+    }
+}
+
+/// Why a simulation was stopped.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum Divergence {
+    /// A position or velocity became NaN or infinite.
+    #[error("a position or velocity became non-finite at t = {time:.4} s (step {step})")]
+    NonFinite {
+        /// Simulated time in s.
+        time: f64,
+        /// Step count.
+        step: u64,
+    },
+    /// Something flew off: a speed or distance beyond any plausible motion.
+    #[error("the motion ran away at t = {time:.4} s (step {step}): {what}")]
+    Runaway {
+        /// Simulated time in s.
+        time: f64,
+        /// Step count.
+        step: u64,
+        /// Which limit was passed.
+        what: &'static str,
+    },
+}
+
+impl Divergence {
+    /// Simulated time at which it happened, in s.
+    pub fn time(&self) -> f64 {
+        match *self {
+            Self::NonFinite { time, .. } | Self::Runaway { time, .. } => time,
+        }
+    }
+}
+
+/// Speeds above this (m/s) count as a runaway: nothing in a cloth moves at 100 km/s.
+pub const RUNAWAY_SPEED: f64 = 1e5;
+/// Distances from the start above this many start extents (plus 1 km) count as a runaway.
+pub const RUNAWAY_EXTENT: f64 = 1e4;
+
+/// Scratch space for a step, sized once per model and integrator.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    pub(crate) spring_forces: Vec<DVec3>,
+    pub(crate) accelerations: Vec<DVec3>,
+    pub(crate) x_tmp: Vec<DVec3>,
+    pub(crate) v_tmp: Vec<DVec3>,
+    pub(crate) dx_sum: Vec<DVec3>,
+    pub(crate) dv_sum: Vec<DVec3>,
+    pub(crate) before_constraints: Vec<DVec3>,
+    pub(crate) implicit: implicit::ImplicitWorkspace,
+}
+
+/// A simulated system: model, state and scratch space.
+#[derive(Clone, Debug)]
+pub struct System {
+    model: Model,
+    state: State,
+    work: Workspace,
+    start_center: DVec3,
+    start_extent: f64,
+    grabbed: Option<(usize, DVec3)>,
+}
+
+impl System {
+    /// Builds a system from particle masses, start positions, pinned particles,
+    /// topology and parameters. Velocities start at zero.
+    pub fn new(
+        masses: Vec<f64>,
+        positions: Vec<DVec3>,
+        pinned: &[usize],
+        topology: Topology,
+        params: Params,
+    ) -> Self {
+        let Topology {
+            mut springs,
+            bars,
+            triangles,
+            uvs,
+        } = topology;
+        let n = positions.len();
+        assert_eq!(masses.len(), n, "one mass per particle");
+        springs::canonicalize(&mut springs);
+        let mut pinned_flags = vec![false; n];
+        for &i in pinned {
+            if i < n {
+                pinned_flags[i] = true;
+            }
+        }
+        let adjacency = Adjacency::new(n, &springs);
+        let wind = Wind::new(params.wind, params.gust, params.seed);
+        let mut model = Model {
+            inv_mass: vec![0.0; n],
+            mass: masses,
+            pinned: pinned_flags,
+            springs,
+            adjacency,
+            bars,
+            triangles,
+            uvs,
+            params,
+            terms: ForceTerms::default(),
+            wind,
+        };
+        model.refresh();
+        let (start_center, start_extent) = bounding_sphere(&positions);
+        let state = State {
+            velocities: vec![DVec3::ZERO; n],
+            positions,
+            ..State::default()
+        };
+        let mut system = Self {
+            model,
+            state,
+            work: Workspace::default(),
+            start_center,
+            start_extent,
+            grabbed: None,
+        };
+        system.prepare_integrator();
+        system
+    }
+
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.state.positions.len()
+    }
+    /// Positions in m.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.state.positions
+    }
+    /// Velocities in m/s.
+    pub fn velocities(&self) -> &[DVec3] {
+        &self.state.velocities
+    }
+    /// Particle masses in kg.
+    pub fn masses(&self) -> &[f64] {
+        &self.model.mass
+    }
+    /// Inverse masses (0 for pinned or grabbed particles).
+    pub fn inv_masses(&self) -> &[f64] {
+        &self.model.inv_mass
+    }
+    /// Springs.
+    pub fn springs(&self) -> &[Spring] {
+        &self.model.springs
+    }
+    /// Rigid bars.
+    pub fn bars(&self) -> &[Bar] {
+        &self.model.bars
+    }
+    /// Surface triangles (empty without a surface).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.model.triangles
+    }
+    /// Texture coordinates, one per particle (empty without a surface).
+    pub fn uvs(&self) -> &[DVec2] {
+        &self.model.uvs
+    }
+    /// Parameters in effect.
+    pub fn params(&self) -> &Params {
+        &self.model.params
+    }
+    /// Force terms that run.
+    pub fn force_terms(&self) -> ForceTerms {
+        self.model.terms
+    }
+    /// The model (topology and parameters).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+    /// The state.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+    /// Simulated time in s.
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+    /// Steps taken.
+    pub fn steps_taken(&self) -> u64 {
+        self.state.steps
+    }
+    /// Conjugate-gradient iterations of the last implicit-Euler step (0 for other integrators).
+    pub fn solver_iterations(&self) -> usize {
+        self.work.implicit.last_iterations
+    }
+    /// The particle the user holds, if any, and where it is held.
+    pub fn grabbed(&self) -> Option<(usize, DVec3)> {
+        self.grabbed
+    }
+
+    /// Whether particle `i` is pinned (by the scene or the user).
+    pub fn is_pinned(&self, i: usize) -> bool {
+        self.model.pinned.get(i).copied().unwrap_or(false)
+    }
+
+    /// Pins or unpins particle `i` (ignored if out of range). A pinned particle stops.
+    pub fn set_pinned(&mut self, i: usize, pinned: bool) {
+        if i >= self.particle_count() {
+            return;
+        }
+        self.model.pinned[i] = pinned;
+        if pinned {
+            self.state.velocities[i] = DVec3::ZERO;
+        }
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+        self.sync_verlet_history(i);
+    }
+
+    /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
+    /// hand and pulls its neighbours through their springs. Non-finite targets are ignored.
+    pub fn grab(&mut self, i: usize, target: DVec3) {
+        if i >= self.particle_count() || !target.is_finite() {
+            return;
+        }
+        if let Some((j, _)) = self.grabbed
+            && j != i
+        {
+            self.release();
+        }
+        self.grabbed = Some((i, target));
+        self.state.positions[i] = target;
+        self.state.velocities[i] = DVec3::ZERO;
+        self.model.refresh_inv_mass(Some(i));
+        self.sync_verlet_history(i);
+    }
+
+    /// Lets go of the held particle: it is free again unless pinned.
+    pub fn release(&mut self) {
+        if let Some((i, _)) = self.grabbed.take() {
+            self.state.velocities[i] = DVec3::ZERO;
+            self.model.refresh_inv_mass(None);
+            self.sync_verlet_history(i);
+        }
+    }
+
+    /// Changes parameters that need no rebuild (k and b go through
+    /// [`Self::set_spring_stiffness`]); recomputes which force terms run.
+    pub fn set_params(&mut self, params: Params) {
+        let integrator_changed = params.integrator != self.model.params.integrator;
+        let dt_changed = params.dt != self.model.params.dt;
+        self.model.params = params;
+        self.model.wind = Wind::new(params.wind, params.gust, params.seed);
+        self.model.refresh();
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+        if integrator_changed {
+            self.prepare_integrator();
+        } else if dt_changed && params.integrator == Integrator::Verlet {
+            self.restart_verlet_history();
+        }
+    }
+
+    /// Sets the stiffness (N/m) of every spring of `kind`.
+    pub fn set_spring_stiffness(&mut self, kind: SpringKind, stiffness: f64) {
+        for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
+            s.stiffness = stiffness;
+        }
+    }
+
+    /// Sets the damping (N·s/m) of every spring of `kind`.
+    pub fn set_spring_damping(&mut self, kind: SpringKind, damping: f64) {
+        for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
+            s.damping = damping;
+        }
+    }
+
+    /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
+    pub fn scale_rest_lengths(&mut self, factor: f64) {
+        if !(factor.is_finite() && factor >= 0.0) {
+            return;
+        }
+        for s in &mut self.model.springs {
+            s.rest *= factor;
+        }
+        for b in &mut self.model.bars {
+            b.length *= factor;
+        }
+    }
+
+    /// Scales the whole system by `factor`: rest lengths, bar lengths and positions
+    /// about the centroid of the pinned particles (of all particles if none is
+    /// pinned). Strains and velocities are unchanged, so no energy is injected: this
+    /// is how a rest-length edit applies to a running cloth.
+    pub fn rescale(&mut self, factor: f64) {
+        if !(factor.is_finite() && factor > 0.0) {
+            return;
+        }
+        let anchors: Vec<DVec3> = (0..self.particle_count())
+            .filter(|&i| self.model.pinned[i])
+            .map(|i| self.state.positions[i])
+            .collect();
+        let points = if anchors.is_empty() {
+            &self.state.positions[..]
+        } else {
+            &anchors[..]
+        };
+        let center = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+        let scale = |p: &mut DVec3| *p = center + (*p - center) * factor;
+        self.state.positions.iter_mut().for_each(scale);
+        self.state.prev_positions.iter_mut().for_each(scale);
+        if let Some((_, target)) = &mut self.grabbed {
+            scale(target);
+        }
+        self.scale_rest_lengths(factor);
+        let (start_center, start_extent) = bounding_sphere(&self.state.positions);
+        (self.start_center, self.start_extent) = (start_center, start_extent);
+    }
+
+    /// Sets every particle's mass (kg), keeping pins.
+    pub fn set_particle_mass(&mut self, mass: f64) {
+        if !(mass.is_finite() && mass > 0.0) {
+            return;
+        }
+        self.model.mass.fill(mass);
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+    }
+
+    /// Energy now.
+    pub fn energy(&self) -> Energy {
+        self.model
+            .energy(&self.state.positions, &self.state.velocities)
+    }
+
+    /// Stability estimate for the current parameters.
+    pub fn stability(&self) -> Stability {
+        stability::estimate(&self.model)
+    }
+
+    /// Advances one step of `dt`, then checks the state. On divergence the state is
+    /// left as it is (the caller decides to reset).
+    pub fn step(&mut self) -> Result<(), Divergence> {
+        if let Some((i, target)) = self.grabbed {
+            self.state.positions[i] = target;
+            self.state.velocities[i] = DVec3::ZERO;
+            self.sync_verlet_history(i);
+        }
+        integrators::step(&self.model, &mut self.state, &mut self.work);
+        if self.has_constraints() {
+            self.work
+                .before_constraints
+                .clone_from(&self.state.positions);
+            constraints::apply(&self.model, &mut self.state, &mut self.work);
+        }
+        self.state.time += self.model.params.dt;
+        self.state.steps += 1;
+        self.check()
+    }
+
+    /// Runs `n` steps, stopping at the first divergence. A model big enough for the
+    /// threaded force path runs its whole loop on a pool thread, so the parallel loops
+    /// inside go through worker-local queues and allocate nothing per step.
+    pub fn run(&mut self, n: u64) -> Result<(), Divergence> {
+        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());
+        if forces::uses_threads(&self.model) {
+            let mut result = Ok(());
+            rayon::scope(|_| result = steps(self));
+            result
+        } else {
+            steps(self)
+        }
+    }
+
+    /// Whether anything is enforced after integration.
+    pub fn has_constraints(&self) -> bool {
+        let p = &self.model.params;
+        (!self.model.bars.is_empty() && p.bar_iterations > 0)
+            || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
+            || p.sphere.is_some()
+    }
+
+    /// Checks for non-finite values and runaways.
+    pub fn check(&self) -> Result<(), Divergence> {
+        let (time, step) = (self.state.time, self.state.steps);
+        let far = RUNAWAY_EXTENT * (self.start_extent + 0.1) + 1000.0;
+        let mut max_speed2: f64 = 0.0;
+        let mut max_dist2: f64 = 0.0;
+        for (x, v) in self.state.positions.iter().zip(&self.state.velocities) {
+            if !(x.is_finite() && v.is_finite()) {
+                return Err(Divergence::NonFinite { time, step });
+            }
+            max_speed2 = max_speed2.max(v.length_squared());
+            max_dist2 = max_dist2.max((*x - self.start_center).length_squared());
+        }
+        if max_speed2 > RUNAWAY_SPEED * RUNAWAY_SPEED {
+            return Err(Divergence::Runaway {
+                time,
+                step,
+                what: "a particle passed 100 km/s",
+            });
+        }
+        if max_dist2 > far * far {
+            let what = "a particle flew 10,000 scene sizes from the start";
+            return Err(Divergence::Runaway { time, step, what });
+        }
+        Ok(())
+    }
+
+    fn prepare_integrator(&mut self) {
+        let n = self.particle_count();
+        let m = self.model.springs.len();
+        let w = &mut self.work;
+        w.spring_forces.resize(m, DVec3::ZERO);
+        w.accelerations.resize(n, DVec3::ZERO);
+        let multistage = matches!(
+            self.model.params.integrator,
+            Integrator::Rk2 | Integrator::Rk4
+        );
+        let len = if multistage { n } else { 0 };
+        w.x_tmp.resize(len, DVec3::ZERO);
+        w.v_tmp.resize(len, DVec3::ZERO);
+        let len = if self.model.params.integrator == Integrator::Rk4 {
+            n
+        } else {
+            0
+        };
+        w.dx_sum.resize(len, DVec3::ZERO);
+        w.dv_sum.resize(len, DVec3::ZERO);
+        if self.model.params.integrator == Integrator::ImplicitEuler {
+            w.implicit.resize(n, m);
+        } else {
+            w.implicit = Default::default();
+        }
+        if self.model.params.integrator == Integrator::Verlet {
+            self.restart_verlet_history();
+        } else {
+            self.state.prev_positions = Vec::new();
+            self.state.prev_accelerations = Vec::new();
+        }
+    }
+
+    /// Verlet needs the previous positions: make them consistent with the current
+    /// velocities, `x_prev = x - h v + h²/2 a`, so that its velocity estimate
+    /// `(x - x_prev)/h + h/2 a_prev` starts equal to `v`.
+    fn restart_verlet_history(&mut self) {
+        let h = self.model.params.dt;
+        let (x, v, t) = (
+            &self.state.positions,
+            &self.state.velocities,
+            self.state.time,
+        );
+        let mut a = std::mem::take(&mut self.work.accelerations);
+        a.resize(x.len(), DVec3::ZERO);
+        self.model
+            .accelerations(x, v, t, &mut self.work.spring_forces, &mut a);
+        self.state.prev_positions = (x.iter().zip(v).zip(&a))
+            .map(|((&x, &v), &a)| x - h * v + 0.5 * h * h * a)
+            .collect();
+        self.state.prev_accelerations = a.clone();
+        self.work.accelerations = a;
+    }
+
+    /// After the user moves, pins or releases particle `i`, its Verlet history must
+    /// not remember the old motion.
+    fn sync_verlet_history(&mut self, i: usize) {
+        if let Some(prev) = self.state.prev_positions.get_mut(i) {
+            *prev = self.state.positions[i] - self.model.params.dt * self.state.velocities[i];
+            self.state.prev_accelerations[i] = DVec3::ZERO;
+        }
+    }
+}
+
+impl Model {
+    /// Recomputes inverse masses and the force terms that run.
+    pub fn refresh(&mut self) {
+        self.refresh_inv_mass(None);
+        let p = &self.params;
+        self.terms = ForceTerms {
+            gravity: p.gravity != DVec3::ZERO,
+            springs: !self.springs.is_empty(),
+            aero: !self.triangles.is_empty() && p.air_density > 0.0 && p.drag_coefficient > 0.0,
+            air_damping: p.air_damping > 0.0,
+            ground: p.ground.is_some(),
+        };
+    }
+
+    fn refresh_inv_mass(&mut self, grabbed: Option<usize>) {
+        for (i, w) in self.inv_mass.iter_mut().enumerate() {
+            let m = self.mass[i];
+            *w = if self.pinned[i] || grabbed == Some(i) || m <= 0.0 {
+                0.0
+            } else {
+                1.0 / m
+            };
+        }
+    }
+
+    /// Energy of positions `x` and velocities `v`; gravity relative to y = 0.
+    pub fn energy(&self, x: &[DVec3], v: &[DVec3]) -> Energy {
+        let mut e = Energy::default();
+        for i in 0..x.len() {
+            if self.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let m = self.mass[i];
+            e.kinetic += 0.5 * m * v[i].length_squared();
+            e.gravity -= m * self.params.gravity.dot(x[i]);
+            if let Some(g) = self.params.ground {
+                let depth = g.height - x[i].y;
+                if depth > 0.0 {
+                    e.elastic += 0.5 * g.stiffness * depth * depth;
+                }
+            }
+        }
+        for s in &self.springs {
+            let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
+            e.elastic += 0.5 * s.stiffness * stretch * stretch;
+        }
+        e
+    }
+}
+
+/// Centre and radius (m) of a sphere around the points, for runaway detection and framing.
+pub fn bounding_sphere(points: &[DVec3]) -> (DVec3, f64) {
+    let Some(&first) = points.first() else {
+        return (DVec3::ZERO, 0.0);
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let center = (lo + hi) * 0.5;
+    (center, (hi - lo).length() * 0.5)
+}

@@ -1,0 +1,141 @@
+//! From the simulation's `f64` state to the renderer's plain `f32` slices:
+//! positions, springs and bars as coloured lines (by kind or by strain
+//! `(l - L) / L`), pinned flags, colliders. Buffers are reused frame to frame.
+
+use cloth_sandbox::session::Session;
+use cloth_sandbox::sim::{SpringKind, System};
+use glam::{Vec2, Vec3};
+
+use crate::render::geometry::{kind_color, strain_color};
+use crate::render::{SceneFrame, ViewOptions};
+
+/// Reusable per-frame vectors handed to the renderer.
+#[derive(Default)]
+pub struct FrameData {
+    /// Positions as `f32` (non-finite values pass through; the renderer drops them).
+    pub positions: Vec<Vec3>,
+    uvs: Vec<Vec2>,
+    lines: Vec<[u32; 2]>,
+    colors: Vec<[f32; 4]>,
+    pinned: Vec<bool>,
+}
+
+/// Colour index of a spring kind (see `kind_color`).
+fn kind_index(kind: SpringKind) -> usize {
+    match kind {
+        SpringKind::Structural => 0,
+        SpringKind::Shear => 1,
+        SpringKind::Bend => 2,
+        SpringKind::Other => 3,
+    }
+}
+
+/// Strain `(l - L) / L` of a segment, 0 for a zero rest length.
+fn strain(positions: &[Vec3], a: u32, b: u32, rest: f64) -> f32 {
+    let (Some(pa), Some(pb)) = (positions.get(a as usize), positions.get(b as usize)) else {
+        return 0.0;
+    };
+    if rest <= 1e-12 {
+        return 0.0;
+    }
+    ((f64::from(pa.distance(*pb)) - rest) / rest) as f32
+}
+
+impl FrameData {
+    /// Copies the positions (for picking) without rebuilding anything else.
+    pub fn refresh_positions(&mut self, system: &System) {
+        self.positions.clear();
+        self.positions
+            .extend(system.positions().iter().map(|p| p.as_vec3()));
+    }
+
+    /// Rebuilds everything the renderer needs from `system`.
+    pub fn build(&mut self, system: &System, view: &ViewOptions, by_strain: bool) {
+        self.refresh_positions(system);
+        self.uvs.clear();
+        self.uvs.extend(system.uvs().iter().map(|uv| uv.as_vec2()));
+        self.pinned.clear();
+        self.pinned
+            .extend((0..system.particle_count()).map(|i| system.is_pinned(i)));
+        self.lines.clear();
+        self.colors.clear();
+        if view.springs {
+            for s in system.springs() {
+                self.lines.push([s.a, s.b]);
+                self.colors.push(if by_strain {
+                    strain_color(strain(&self.positions, s.a, s.b, s.rest))
+                } else {
+                    kind_color(kind_index(s.kind))
+                });
+            }
+            for b in system.bars() {
+                self.lines.push([b.a, b.b]);
+                self.colors.push(if by_strain {
+                    strain_color(strain(&self.positions, b.a, b.b, b.length))
+                } else {
+                    kind_color(4)
+                });
+            }
+        }
+    }
+
+    /// The renderer's view of this frame.
+    pub fn scene_frame<'a>(
+        &'a self,
+        system: &'a System,
+        highlight: Option<usize>,
+    ) -> SceneFrame<'a> {
+        let params = system.params();
+        SceneFrame {
+            positions: &self.positions,
+            triangles: system.triangles(),
+            uvs: &self.uvs,
+            lines: &self.lines,
+            line_colors: &self.colors,
+            pinned: &self.pinned,
+            highlight,
+            ground: params.ground.map(|g| g.height as f32),
+            sphere: params.sphere.map(|s| (s.center.as_vec3(), s.radius as f32)),
+        }
+    }
+}
+
+/// The box to frame when a scene loads: its particles and its sphere, if any.
+pub fn scene_bounds(session: &Session) -> (Vec3, Vec3) {
+    let system = session.system();
+    let points: Vec<Vec3> = system.positions().iter().map(|p| p.as_vec3()).collect();
+    let (mut lo, mut hi) =
+        cloth_sandbox::view::bounds(&points).unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+    // A line hanging from pins (chain, rope, spring) swings below them: frame
+    // the half-disc it can sweep, not just where it starts.
+    if system.triangles().is_empty() {
+        for (i, p) in points.iter().enumerate() {
+            if !system.is_pinned(i) || !p.is_finite() {
+                continue;
+            }
+            let reach = points
+                .iter()
+                .filter(|q| q.is_finite())
+                .map(|q| q.distance(*p))
+                .fold(0.0f32, f32::max);
+            lo = lo.min(*p - Vec3::new(reach, reach, 0.0));
+            hi = hi.max(*p + Vec3::new(reach, 0.0, 0.0));
+        }
+    }
+    // Scenes with a ground show it: things fall onto it.
+    if let Some(g) = system.params().ground {
+        let y = g.height as f32;
+        if y.is_finite() {
+            lo.y = lo.y.min(y);
+        }
+    }
+    if let Some(s) = system.params().sphere {
+        let c = s.center.as_vec3();
+        let r = s.radius as f32;
+        if c.is_finite() && r.is_finite() {
+            lo = lo.min(c - Vec3::splat(r));
+            hi = hi.max(c + Vec3::splat(r));
+        }
+    }
+    (lo, hi)
+}

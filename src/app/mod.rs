@@ -1,0 +1,504 @@
+//! The desktop app: a winit window with the scene drawn by wgpu and an egui side
+//! panel. Input goes to egui first; what egui does not use drives the camera and
+//! the picking. Dependencies point one way: app -> render -> (library) session/sim.
+
+pub mod frame;
+pub mod gfx;
+pub mod input;
+pub mod panel;
+pub mod screenshot;
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use glam::Vec2;
+use winit::application::ApplicationHandler;
+use winit::dpi::LogicalSize;
+use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
+use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
+use winit::keyboard::{KeyCode, ModifiersState, PhysicalKey};
+use winit::window::{Window, WindowId};
+
+use cloth_sandbox::session::Session;
+use cloth_sandbox::view::{FlyKeys, OrbitCamera, pick_particle};
+
+use crate::render::ViewOptions;
+use frame::FrameData;
+use gfx::Gfx;
+use input::{Button, Mouse, MouseAction};
+use panel::{Action, PanelState};
+
+/// Window title (the Xvfb test finds the window by it).
+pub const TITLE: &str = "cloth-sandbox";
+
+/// Pick radius around the cursor, in logical pixels.
+const PICK_RADIUS: f32 = 12.0;
+
+/// Options for the desktop app.
+#[derive(Debug, Clone, Default)]
+pub struct AppOptions {
+    /// Scene to open (built-in name or file); the default cloth when `None`.
+    pub scene: Option<String>,
+    /// `key=value` overrides applied to the scene.
+    pub set: Vec<String>,
+}
+
+/// Runs the desktop app; on failure prints one `error:` line and returns 1.
+pub fn main(options: AppOptions) -> std::process::ExitCode {
+    match run(options) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(err) => {
+            eprintln!("error: {err:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+/// Opens the window and runs until the user quits. Returns an error (one
+/// sentence) when there is no display or no graphics adapter.
+pub fn run(options: AppOptions) -> anyhow::Result<()> {
+    let session = Session::load_with(options.scene.as_deref().unwrap_or("cloth"), &options.set)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let event_loop = new_event_loop()?;
+    event_loop.set_control_flow(ControlFlow::Poll);
+    let mut app = App::new(session);
+    event_loop
+        .run_app(&mut app)
+        .context("the window system stopped the event loop")?;
+    match app.fatal.take() {
+        Some(err) => Err(err),
+        None => Ok(()),
+    }
+}
+
+/// `EventLoop::new`, with winit's panics (a missing libxkbcommon-x11) and errors
+/// (no display) turned into one clear sentence.
+fn new_event_loop() -> anyhow::Result<EventLoop<()>> {
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let result = std::panic::catch_unwind(EventLoop::new);
+    std::panic::set_hook(hook);
+    match result {
+        Ok(Ok(event_loop)) => Ok(event_loop),
+        Ok(Err(err)) => {
+            let text = err.to_string();
+            if text.contains("DISPLAY") || text.contains("WAYLAND") {
+                anyhow::bail!(
+                    "no display to open a window on: neither DISPLAY nor WAYLAND_DISPLAY is set; run it in an X11 or Wayland session (or under Xvfb), or use `cloth screenshot` for off-screen images"
+                )
+            }
+            anyhow::bail!("cannot connect to the window system: {text}")
+        }
+        Err(panic) => {
+            let text = panic
+                .downcast_ref::<String>()
+                .map(String::as_str)
+                .or_else(|| panic.downcast_ref::<&str>().copied())
+                .unwrap_or("unknown failure");
+            anyhow::bail!(
+                "cannot start the window system: {text} (on Debian/Ubuntu: apt-get install libxkbcommon-x11-0 libx11-xcb1 libxcursor1 libxi6)"
+            )
+        }
+    }
+}
+
+/// The running app: window, GPU, panel and session.
+struct App {
+    session: Session,
+    gfx: Option<Gfx>,
+    egui_ctx: egui::Context,
+    egui_state: Option<egui_winit::State>,
+    camera: OrbitCamera,
+    view: ViewOptions,
+    panel: PanelState,
+    mouse: Mouse,
+    fly: FlyKeys,
+    modifiers: ModifiersState,
+    frame_data: FrameData,
+    last_frame: Instant,
+    /// Smoothed frame time (s).
+    frame_time: f64,
+    hovered: Option<usize>,
+    fatal: Option<anyhow::Error>,
+}
+
+impl App {
+    fn new(session: Session) -> Self {
+        let mut app = Self {
+            session,
+            gfx: None,
+            egui_ctx: egui::Context::default(),
+            egui_state: None,
+            camera: OrbitCamera::default(),
+            view: ViewOptions::default(),
+            panel: PanelState::default(),
+            mouse: Mouse::default(),
+            fly: FlyKeys::default(),
+            modifiers: ModifiersState::empty(),
+            frame_data: FrameData::default(),
+            last_frame: Instant::now(),
+            frame_time: 1.0 / 60.0,
+            hovered: None,
+            fatal: None,
+        };
+        app.scene_loaded();
+        app
+    }
+
+    /// After a scene (re)load: frame it and pick sensible display defaults.
+    fn scene_loaded(&mut self) {
+        self.frame_camera();
+        let has_surface = !self.session.system().triangles().is_empty();
+        self.view.mesh = has_surface;
+        self.view.particles = !has_surface;
+        self.view.springs = !has_surface;
+        self.panel.scene_changed(&self.session);
+    }
+
+    /// "Reset view": the default orientation, framed on the scene.
+    fn frame_camera(&mut self) {
+        self.camera = OrbitCamera::default();
+        let (lo, hi) = frame::scene_bounds(&self.session);
+        self.camera.frame(lo, hi);
+    }
+
+    /// Origin and size (px) of the scene's part of the window.
+    fn scene_rect(&self) -> (Vec2, Vec2) {
+        self.gfx
+            .as_ref()
+            .map_or((Vec2::ZERO, Vec2::ONE), |g| g.renderer.viewport())
+    }
+
+    /// Size (px) of the scene's part of the window.
+    fn viewport(&self) -> Vec2 {
+        self.scene_rect().1
+    }
+
+    /// A window position (px) in the scene's coordinates.
+    fn to_scene(&self, window: Vec2) -> Vec2 {
+        window - self.scene_rect().0
+    }
+
+    fn pixels_per_point(&self) -> f32 {
+        self.gfx
+            .as_ref()
+            .map_or(1.0, |g| g.window.scale_factor() as f32)
+    }
+
+    /// Whether the cursor is over the panel or an egui popup, or egui is using
+    /// the pointer (dragging a slider). Decided from the cursor's position, not
+    /// from egui's last frame, so a quick move from the panel followed by a click
+    /// on the scene still reaches the scene.
+    fn over_ui(&self) -> bool {
+        if self.egui_ctx.egui_is_using_pointer() {
+            return true;
+        }
+        let Some(cursor) = self.mouse.cursor else {
+            return false;
+        };
+        let (origin, size) = self.scene_rect();
+        let local = cursor - origin;
+        if local.x < 0.0 || local.y < 0.0 || local.x >= size.x || local.y >= size.y {
+            return true;
+        }
+        let ppp = self.pixels_per_point();
+        let pos = egui::pos2(cursor.x / ppp, cursor.y / ppp);
+        self.egui_ctx
+            .layer_id_at(pos)
+            .is_some_and(|layer| layer.order != egui::Order::Background)
+    }
+
+    /// The particle under `cursor`, if any.
+    fn pick(&mut self, cursor: Vec2) -> Option<usize> {
+        self.frame_data.refresh_positions(self.session.system());
+        pick_particle(
+            &self.camera,
+            self.viewport(),
+            self.to_scene(cursor),
+            &self.frame_data.positions,
+            PICK_RADIUS * self.pixels_per_point(),
+        )
+    }
+
+    fn apply_mouse(&mut self, action: MouseAction) {
+        match action {
+            MouseAction::TogglePin(i) => {
+                let pinned = self.session.system().is_pinned(i);
+                self.session.system_mut().set_pinned(i, !pinned);
+                log::info!(
+                    "{} particle {i}",
+                    if pinned { "unpinned" } else { "pinned" }
+                );
+            }
+            MouseAction::Drag { particle, cursor } => {
+                let anchor = match self.session.system().grabbed() {
+                    Some((j, target)) if j == particle => target,
+                    _ => self
+                        .session
+                        .system()
+                        .positions()
+                        .get(particle)
+                        .copied()
+                        .unwrap_or_default(),
+                };
+                let anchor = anchor.as_vec3();
+                if let Some(target) =
+                    self.camera
+                        .drag_point(self.to_scene(cursor), self.viewport(), anchor)
+                    && target.is_finite()
+                {
+                    if self.session.system().grabbed().is_none() {
+                        log::info!("dragging particle {particle}");
+                    }
+                    self.session.system_mut().grab(particle, target.as_dvec3());
+                }
+            }
+            MouseAction::Release => {
+                if let Some((i, _)) = self.session.system().grabbed() {
+                    log::info!("released particle {i}");
+                }
+                self.session.system_mut().release();
+            }
+            MouseAction::Orbit(d) => self.camera.orbit(d),
+            MouseAction::Pan(d) => self.camera.pan(d, self.viewport()),
+        }
+    }
+
+    fn apply(&mut self, action: Action, event_loop: &ActiveEventLoop) {
+        match action {
+            Action::Quit => {
+                log::info!("quit");
+                event_loop.exit();
+            }
+            Action::ResetView => self.frame_camera(),
+            Action::LoadScene(name) => match self.session.load_scene(&name) {
+                Ok(()) => {
+                    self.mouse.cancel();
+                    self.scene_loaded();
+                }
+                Err(e) => self.panel.error = Some(e.to_string()),
+            },
+            Action::Reset => {
+                log::info!("scene reset");
+                self.mouse.cancel();
+                if let Err(e) = self.session.reset() {
+                    self.panel.error = Some(e.to_string());
+                }
+                self.panel.scene_changed(&self.session);
+            }
+            Action::Set(key, value) => {
+                let rebuild = self.session.needs_rebuild(&key);
+                match self.session.set(&key, &value) {
+                    Ok(()) => {
+                        self.panel.error = None;
+                        if rebuild {
+                            self.mouse.cancel();
+                            self.frame_camera();
+                        }
+                    }
+                    Err(e) => self.panel.error = Some(e.to_string()),
+                }
+                self.panel.scene_changed(&self.session);
+            }
+            Action::TogglePause => self.session.set_paused(!self.session.paused()),
+            Action::SafeStepping(on) => self.session.set_safe_stepping(on),
+            Action::Step => {
+                self.session.single_step();
+            }
+        }
+    }
+
+    fn key(&mut self, event: &KeyEvent, event_loop: &ActiveEventLoop) {
+        let PhysicalKey::Code(code) = event.physical_key else {
+            return;
+        };
+        let down = event.state == ElementState::Pressed;
+        match code {
+            KeyCode::KeyW => self.fly.forward = down,
+            KeyCode::KeyS => self.fly.back = down,
+            KeyCode::KeyA => self.fly.left = down,
+            KeyCode::KeyD => self.fly.right = down,
+            KeyCode::KeyE => self.fly.up = down,
+            KeyCode::KeyQ => self.fly.down = down,
+            _ if !down || event.repeat => {}
+            KeyCode::Escape => self.apply(Action::Quit, event_loop),
+            KeyCode::KeyR => self.apply(Action::Reset, event_loop),
+            KeyCode::Space => self.apply(Action::TogglePause, event_loop),
+            KeyCode::KeyF | KeyCode::Home => self.apply(Action::ResetView, event_loop),
+            KeyCode::Period => self.apply(Action::Step, event_loop),
+            _ => {}
+        }
+    }
+
+    fn redraw(&mut self, event_loop: &ActiveEventLoop) {
+        let now = Instant::now();
+        let elapsed = now.duration_since(self.last_frame).as_secs_f64().min(0.25);
+        self.last_frame = now;
+        self.frame_time = self.frame_time * 0.9 + elapsed * 0.1;
+
+        if self.fly.any() {
+            self.camera.fly(self.fly, elapsed as f32);
+        }
+        let report = self.session.frame(elapsed);
+        self.panel.record(&report, self.frame_time);
+
+        let (Some(gfx), Some(egui_state)) = (self.gfx.as_mut(), self.egui_state.as_mut()) else {
+            return;
+        };
+        let raw = egui_state.take_egui_input(&gfx.window);
+        let mut actions = Vec::new();
+        let mut free = egui::Rect::NOTHING;
+        let adapter = gfx.adapter_name.clone();
+        let ui_output = self.egui_ctx.run_ui(raw, |ui| {
+            (actions, free) =
+                panel::show(ui, &mut self.panel, &self.session, &mut self.view, &adapter);
+        });
+        let ppp = ui_output.pixels_per_point;
+        if free.is_positive() {
+            gfx.renderer.set_viewport(
+                Vec2::new(free.min.x, free.min.y) * ppp,
+                Vec2::new(free.width(), free.height()) * ppp,
+            );
+        }
+        egui_state.handle_platform_output(&gfx.window, ui_output.platform_output.clone());
+
+        self.frame_data
+            .build(self.session.system(), &self.view, self.panel.strain_colors);
+        let highlight = self.mouse.dragged().or(self.hovered);
+        let frame = self
+            .frame_data
+            .scene_frame(self.session.system(), highlight);
+        gfx.draw(&frame, &self.camera, &self.view, &self.egui_ctx, ui_output);
+
+        for action in actions {
+            self.apply(action, event_loop);
+        }
+    }
+}
+
+impl ApplicationHandler for App {
+    fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        if self.gfx.is_some() {
+            return;
+        }
+        let attributes = Window::default_attributes()
+            .with_title(format!("{TITLE} — {}", self.session.name()))
+            .with_inner_size(LogicalSize::new(1200.0, 760.0))
+            .with_min_inner_size(LogicalSize::new(320.0, 240.0));
+        let window = match event_loop.create_window(attributes) {
+            Ok(w) => Arc::new(w),
+            Err(e) => {
+                self.fatal = Some(anyhow::anyhow!("cannot open a window: {e}"));
+                event_loop.exit();
+                return;
+            }
+        };
+        match Gfx::new(event_loop, window.clone()) {
+            Ok(gfx) => {
+                log::info!("drawing with {}", gfx.adapter_name);
+                let max_side = gfx.device.limits().max_texture_dimension_2d as usize;
+                self.egui_state = Some(egui_winit::State::new(
+                    self.egui_ctx.clone(),
+                    egui::ViewportId::ROOT,
+                    &window,
+                    Some(window.scale_factor() as f32),
+                    None,
+                    Some(max_side),
+                ));
+                self.gfx = Some(gfx);
+                self.last_frame = Instant::now();
+                window.request_redraw();
+            }
+            Err(e) => {
+                self.fatal = Some(e);
+                event_loop.exit();
+            }
+        }
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        let consumed = match (&mut self.egui_state, &self.gfx) {
+            (Some(state), Some(gfx)) => state.on_window_event(&gfx.window, &event).consumed,
+            _ => false,
+        };
+        let over_ui = self.over_ui();
+        match event {
+            WindowEvent::CloseRequested => event_loop.exit(),
+            WindowEvent::Resized(size) => {
+                if let Some(gfx) = self.gfx.as_mut() {
+                    gfx.resize(size.width, size.height);
+                }
+            }
+            WindowEvent::RedrawRequested => self.redraw(event_loop),
+            WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
+            WindowEvent::Focused(false) => {
+                self.fly = FlyKeys::default();
+                if let Some(a) = self.mouse.cancel() {
+                    self.apply_mouse(a);
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. } => {
+                let released = event.state == ElementState::Released;
+                if released || !(consumed || self.egui_ctx.egui_wants_keyboard_input()) {
+                    self.key(&event, event_loop);
+                }
+            }
+            WindowEvent::CursorMoved { position, .. } => {
+                let p = Vec2::new(position.x as f32, position.y as f32);
+                if let Some(a) = self.mouse.moved(p) {
+                    self.apply_mouse(a);
+                }
+                self.hovered = if self.mouse.gesture == input::Gesture::Idle && !self.over_ui() {
+                    self.pick(p)
+                } else {
+                    None
+                };
+            }
+            WindowEvent::CursorLeft { .. } => {
+                self.hovered = None;
+            }
+            WindowEvent::MouseInput { state, button, .. } => {
+                let button = match button {
+                    MouseButton::Left => Button::Left,
+                    MouseButton::Right => Button::Right,
+                    MouseButton::Middle => Button::Middle,
+                    _ => return,
+                };
+                match state {
+                    ElementState::Pressed if !over_ui => {
+                        let picked = match (button, self.mouse.cursor) {
+                            (Button::Left, Some(c)) => self.pick(c),
+                            _ => None,
+                        };
+                        if let Some(a) =
+                            self.mouse.press(button, self.modifiers.shift_key(), picked)
+                        {
+                            self.apply_mouse(a);
+                        }
+                    }
+                    ElementState::Pressed => {}
+                    ElementState::Released => {
+                        if let Some(a) = self.mouse.release(button) {
+                            self.apply_mouse(a);
+                        }
+                    }
+                }
+            }
+            WindowEvent::MouseWheel { delta, .. } if !over_ui => {
+                let steps = match delta {
+                    MouseScrollDelta::LineDelta(_, y) => y,
+                    MouseScrollDelta::PixelDelta(p) => p.y as f32 / 40.0,
+                };
+                self.camera.zoom(steps);
+            }
+            _ => {}
+        }
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(gfx) = &self.gfx {
+            gfx.window.request_redraw();
+        }
+    }
+}

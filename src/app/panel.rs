@@ -1,0 +1,429 @@
+//! The egui side panel: scene and integrator, parameter sliders (only those the
+//! scene uses), play/pause/step/reset and speed, display toggles, live stats and
+//! the divergence notice. It edits view options directly and returns every
+//! change to the simulation as an `Action` for the app to apply.
+
+use std::time::Instant;
+
+use cloth_sandbox::scene::{Layout, Resolved, builtin_scenes};
+use cloth_sandbox::session::{FrameReport, Session};
+use cloth_sandbox::sim::Integrator;
+use egui::{Color32, RichText, Ui};
+
+use crate::render::ViewOptions;
+
+/// Something the user asked for in the panel (or by key).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Quit the app (Esc).
+    Quit,
+    /// Frame the scene with the default camera.
+    ResetView,
+    /// Open another scene.
+    LoadScene(String),
+    /// Rebuild the scene with the current settings (R).
+    Reset,
+    /// Set a scene key (`--set` syntax).
+    Set(String, String),
+    /// Pause or resume (Space).
+    TogglePause,
+    /// Run one step.
+    Step,
+    /// Turn safe stepping on or off.
+    SafeStepping(bool),
+}
+
+/// Panel state that lives between frames.
+#[derive(Default)]
+pub struct PanelState {
+    /// The scene's settings, refreshed whenever they change.
+    resolved: Option<Resolved>,
+    /// Colour springs by strain instead of kind.
+    pub strain_colors: bool,
+    /// Last error from a scene change, shown until the next success.
+    pub error: Option<String>,
+    sim_ms: f64,
+    behind: bool,
+    frame_time: f64,
+    steps_in_window: u64,
+    window_start: Option<Instant>,
+    steps_per_second: f64,
+}
+
+impl PanelState {
+    /// Re-reads the scene's settings after a load, reset or edit.
+    pub fn scene_changed(&mut self, session: &Session) {
+        match session.scene().resolve() {
+            Ok(r) => self.resolved = Some(r),
+            Err(e) => self.error = Some(e.to_string()),
+        }
+    }
+
+    /// Folds one frame's timings into the stats.
+    pub fn record(&mut self, report: &FrameReport, frame_time: f64) {
+        self.sim_ms = 0.9 * self.sim_ms + 0.1 * report.sim_ms;
+        self.behind = report.behind;
+        self.frame_time = frame_time;
+        self.steps_in_window += u64::from(report.steps);
+        let now = Instant::now();
+        let start = *self.window_start.get_or_insert(now);
+        let span = now.duration_since(start).as_secs_f64();
+        if span >= 0.5 {
+            self.steps_per_second = self.steps_in_window as f64 / span;
+            self.steps_in_window = 0;
+            self.window_start = Some(now);
+        }
+    }
+}
+
+/// A slider over `range` that reports a finished change (on release for drags).
+fn slider(
+    ui: &mut Ui,
+    value: &mut f64,
+    range: std::ops::RangeInclusive<f64>,
+    label: &str,
+    log: bool,
+) -> bool {
+    let r = ui.add(
+        egui::Slider::new(value, range)
+            .logarithmic(log)
+            .text(label)
+            .max_decimals(6),
+    );
+    r.changed()
+}
+
+/// Integer slider.
+fn int_slider(
+    ui: &mut Ui,
+    value: &mut u32,
+    range: std::ops::RangeInclusive<u32>,
+    label: &str,
+) -> bool {
+    ui.add(egui::Slider::new(value, range).text(label))
+        .changed()
+}
+
+fn vec3(v: glam::DVec3) -> String {
+    format!("{},{},{}", v.x, v.y, v.z)
+}
+
+/// Draws the panel; returns what the user asked for and the rectangle (points)
+/// left for the scene.
+pub fn show(
+    ui: &mut Ui,
+    state: &mut PanelState,
+    session: &Session,
+    view: &mut ViewOptions,
+    adapter: &str,
+) -> (Vec<Action>, egui::Rect) {
+    let mut actions = Vec::new();
+    egui::Panel::left("controls")
+        .resizable(true)
+        .default_size(290.0)
+        .show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                contents(ui, state, session, view, adapter, &mut actions);
+            });
+        });
+    (actions, ui.available_rect_before_wrap())
+}
+
+fn contents(
+    ui: &mut Ui,
+    state: &mut PanelState,
+    session: &Session,
+    view: &mut ViewOptions,
+    adapter: &str,
+    actions: &mut Vec<Action>,
+) {
+    ui.heading("cloth-sandbox");
+    ui.label(RichText::new("Click: pin/unpin · drag particle: move · right-drag: orbit · middle/shift-right: pan · wheel: zoom · WASD/QE: fly · F: reset view · R: reset · Space: pause · Esc: quit").small());
+    ui.separator();
+
+    // Scene and integrator.
+    let mut scene = session.name().to_string();
+    egui::ComboBox::from_label("Scene")
+        .selected_text(scene.as_str())
+        .show_ui(ui, |ui| {
+            for b in builtin_scenes() {
+                ui.selectable_value(&mut scene, b.name.to_string(), b.name);
+            }
+        });
+    if scene != session.name() {
+        actions.push(Action::LoadScene(scene));
+    }
+    let Some(r) = state.resolved.clone() else {
+        return;
+    };
+    let p = r.params;
+    let mut integrator = p.integrator;
+    egui::ComboBox::from_label("Integrator")
+        .selected_text(integrator.name())
+        .show_ui(ui, |ui| {
+            for i in Integrator::ALL {
+                ui.selectable_value(&mut integrator, i, i.name());
+            }
+        });
+    if integrator != p.integrator {
+        actions.push(Action::Set("integrator".into(), integrator.name().into()));
+    }
+
+    // Run controls.
+    ui.horizontal(|ui| {
+        let label = if session.paused() { "Play" } else { "Pause" };
+        if ui.button(label).clicked() {
+            actions.push(Action::TogglePause);
+        }
+        if ui
+            .add_enabled(session.paused(), egui::Button::new("Step"))
+            .clicked()
+        {
+            actions.push(Action::Step);
+        }
+        if ui.button("Reset").clicked() {
+            actions.push(Action::Reset);
+        }
+    });
+    // The scene's own steps per frame (its speed); safe stepping may run more,
+    // smaller steps over the same simulated time.
+    let mut substeps = r.substeps;
+    if ui
+        .add(
+            egui::Slider::new(&mut substeps, 1..=2000)
+                .logarithmic(true)
+                .text("speed (steps/frame)"),
+        )
+        .changed()
+    {
+        actions.push(Action::Set("substeps".into(), substeps.to_string()));
+    }
+    let mut safe = session.safe_stepping();
+    if ui
+        .checkbox(&mut safe, "safe stepping")
+        .on_hover_text(
+            "Keep dt below half the integrator's critical step, with more substeps per frame",
+        )
+        .changed()
+    {
+        actions.push(Action::SafeStepping(safe));
+    }
+    match session.step_choice() {
+        Some(c) if c.safe => {
+            let limit = (c.stretch_limit)
+                .map(|t| format!(", stretch <= {:.0}%", t * 100.0))
+                .unwrap_or_default();
+            ui.label(format!(
+                "{} substeps/frame of dt = {:.3e} s{limit}",
+                c.substeps, c.dt
+            ));
+        }
+        Some(_) => {
+            ui.colored_label(
+                Color32::from_rgb(255, 170, 60),
+                format!(
+                    "{} has no stable step here without more damping",
+                    p.integrator
+                ),
+            );
+        }
+        None => {
+            ui.label(format!(
+                "{} substeps/frame of dt = {:.3e} s (unchecked)",
+                session.substeps(),
+                p.dt
+            ));
+        }
+    }
+
+    if session.divergence().is_none() {
+        // Always one line, so the controls below never jump.
+        if session.paused() {
+            ui.label("Paused (Space or Play resumes).");
+        } else if state.behind {
+            ui.colored_label(
+                Color32::from_rgb(255, 200, 60),
+                "Slower than real time (step budget used up).",
+            );
+        } else {
+            ui.label("Running in real time.");
+        }
+    }
+    if let Some(d) = session.divergence() {
+        ui.separator();
+        ui.colored_label(
+            Color32::from_rgb(255, 110, 90),
+            "Simulation diverged and was paused:",
+        );
+        ui.label(&d.message);
+        match d.margin {
+            Some(m) => ui.label(format!("dt / dt_crit = {m:.2} at t = {:.3} s", d.time)),
+            None => ui.label(format!("at t = {:.3} s", d.time)),
+        };
+        ui.label("Lower dt or the stiffness, or try another integrator, then reset.");
+        if ui.button("Reset scene").clicked() {
+            actions.push(Action::Reset);
+        }
+    }
+    if let Some(e) = &state.error {
+        ui.colored_label(Color32::from_rgb(255, 170, 60), e);
+    }
+
+    // Parameters the scene uses.
+    let system = session.system();
+    let has_springs = !system.springs().is_empty();
+    let has_surface = !system.triangles().is_empty();
+    let set =
+        |actions: &mut Vec<Action>, k: &str, v: String| actions.push(Action::Set(k.into(), v));
+    ui.separator();
+    egui::CollapsingHeader::new("Parameters")
+        .default_open(true)
+        .show(ui, |ui| {
+            if has_springs {
+                let mut k = r.stiffness;
+                if slider(ui, &mut k, 0.01..=100_000.0, "stiffness k (N/m)", true) {
+                    set(actions, "stiffness", k.to_string());
+                }
+                let mut b = r.damping;
+                if slider(ui, &mut b, 0.0..=100.0, "damping b (N·s/m)", true) {
+                    set(actions, "damping", b.to_string());
+                }
+            }
+            let mut rest = r.rest_length;
+            if slider(ui, &mut rest, 0.001..=5.0, "rest length (m)", true) {
+                set(actions, "rest_length", rest.to_string());
+            }
+            match r.layout {
+                Layout::Grid | Layout::Lattice => {
+                    let mut w = r.width;
+                    if int_slider(ui, &mut w, 2..=128, "width (particles)") {
+                        set(actions, "width", w.to_string());
+                    }
+                    let mut h = r.height;
+                    if int_slider(ui, &mut h, 2..=128, "height (particles)") {
+                        set(actions, "height", h.to_string());
+                    }
+                    if r.layout == Layout::Lattice {
+                        let mut d = r.depth;
+                        if int_slider(ui, &mut d, 2..=32, "depth (particles)") {
+                            set(actions, "depth", d.to_string());
+                        }
+                    }
+                }
+                Layout::Chain | Layout::Rope => {
+                    let mut w = r.width;
+                    if int_slider(ui, &mut w, 2..=200, "length (particles)") {
+                        set(actions, "width", w.to_string());
+                    }
+                }
+                Layout::Spring => {}
+            }
+            let mut m = r.particle_mass;
+            if slider(ui, &mut m, 0.0001..=10.0, "particle mass (kg)", true) {
+                set(actions, "particle_mass", m.to_string());
+            }
+            let mut g = p.gravity;
+            if slider(ui, &mut g.y, -30.0..=10.0, "gravity y (m/s²)", false) {
+                set(actions, "gravity", vec3(g));
+            }
+            if has_surface {
+                ui.label("Wind (m/s)");
+                let mut w = p.wind;
+                let mut changed = slider(ui, &mut w.x, -20.0..=20.0, "x", false);
+                changed |= slider(ui, &mut w.y, -20.0..=20.0, "y", false);
+                changed |= slider(ui, &mut w.z, -20.0..=20.0, "z", false);
+                if changed {
+                    set(actions, "wind", vec3(w));
+                }
+                let mut gust = p.gust;
+                if slider(ui, &mut gust, 0.0..=10.0, "gust (m/s)", false) {
+                    set(actions, "gust", gust.to_string());
+                }
+            }
+            let mut dt = p.dt;
+            if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true) {
+                set(actions, "dt", dt.to_string());
+            }
+            if !system.bars().is_empty() {
+                let mut it = p.bar_iterations;
+                if int_slider(ui, &mut it, 0..=64, "bar relaxation iterations") {
+                    set(actions, "bar_iterations", it.to_string());
+                }
+            }
+            if let Some(limit) = p.stretch_limit {
+                let mut l = limit;
+                if slider(ui, &mut l, 0.0..=1.0, "stretch limit", false) {
+                    set(actions, "stretch_limit", l.to_string());
+                }
+            }
+        });
+
+    // Stats.
+    egui::CollapsingHeader::new("Stats")
+        .default_open(true)
+        .show(ui, |ui| {
+            ui.label(format!(
+                "particles {} · springs {} · bars {} · triangles {}",
+                system.particle_count(),
+                system.springs().len(),
+                system.bars().len(),
+                system.triangles().len()
+            ));
+            ui.label(format!(
+                "sim {:.2} ms/frame · {:.0} steps/s · frame {:.1} ms",
+                state.sim_ms,
+                state.steps_per_second,
+                state.frame_time * 1e3
+            ));
+            ui.label(format!(
+                "t = {:.3} s · step {}",
+                system.time(),
+                system.steps_taken()
+            ));
+            let e = system.energy();
+            ui.label(format!(
+                "energy {:.4} J (kinetic {:.4}, gravity {:.4}, elastic {:.4})",
+                e.total(),
+                e.kinetic,
+                e.gravity,
+                e.elastic
+            ));
+            let s = system.stability();
+            let margin = s.margin;
+            let color = if !margin.is_finite() || margin >= 1.0 {
+                Color32::from_rgb(255, 90, 80)
+            } else if margin >= 0.7 {
+                Color32::from_rgb(255, 200, 60)
+            } else {
+                Color32::from_rgb(120, 220, 120)
+            };
+            ui.colored_label(color, format!("stability dt / dt_crit = {margin:.3}"));
+            ui.label(RichText::new(format!("adapter: {adapter}")).small());
+        });
+    // Display.
+    egui::CollapsingHeader::new("Display")
+        .default_open(true)
+        .show(ui, |ui| {
+            ui.horizontal_wrapped(|ui| {
+                ui.checkbox(&mut view.mesh, "mesh");
+                ui.checkbox(&mut view.wireframe, "wireframe");
+                ui.checkbox(&mut view.textured, "texture");
+            });
+            ui.horizontal_wrapped(|ui| {
+                ui.checkbox(&mut view.springs, "springs");
+                ui.checkbox(&mut state.strain_colors, "by strain");
+            });
+            ui.horizontal_wrapped(|ui| {
+                ui.checkbox(&mut view.particles, "particles");
+                ui.checkbox(&mut view.pins, "pins");
+            });
+            ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"));
+            ui.horizontal(|ui| {
+                ui.label("background");
+                ui.color_edit_button_srgb(&mut view.background);
+                if ui.button("Reset view").clicked() {
+                    actions.push(Action::ResetView);
+                }
+            });
+        });
+}

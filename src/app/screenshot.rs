@@ -1,0 +1,124 @@
+//! `cloth screenshot`: run a scene for N steps and render it off-screen to a PNG
+//! with the app's renderer, no window or display needed.
+
+use std::path::PathBuf;
+
+use anyhow::Context as _;
+
+use super::frame::{self, FrameData};
+use crate::render::ViewOptions;
+use crate::render::offscreen::{Offscreen, write_png};
+use cloth_sandbox::session::Session;
+use cloth_sandbox::view::OrbitCamera;
+
+/// Arguments of `cloth screenshot`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ScreenshotArgs {
+    /// Scene to load (a built-in name or a scene file).
+    #[arg(long, default_value = "cloth")]
+    pub scene: String,
+    /// Simulation steps to run before rendering.
+    #[arg(long, default_value_t = 0)]
+    pub steps: u64,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x640", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Override a scene parameter (same keys as the panel and `--set` elsewhere); repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Output PNG file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Draw the triangle edges.
+    #[arg(long)]
+    pub wireframe: bool,
+    /// Draw the springs as lines, coloured by kind.
+    #[arg(long)]
+    pub springs: bool,
+    /// Draw the springs coloured by strain instead of kind (implies --springs).
+    #[arg(long)]
+    pub strain: bool,
+    /// Draw every particle.
+    #[arg(long)]
+    pub particles: bool,
+    /// Do not draw the surface.
+    #[arg(long)]
+    pub no_mesh: bool,
+    /// Plain front/back colours instead of the checker texture.
+    #[arg(long)]
+    pub no_texture: bool,
+    /// Camera yaw in degrees (0 looks along -z).
+    #[arg(long, allow_negative_numbers = true)]
+    pub yaw: Option<f32>,
+    /// Camera pitch in degrees (positive looks down on the scene).
+    #[arg(long, allow_negative_numbers = true)]
+    pub pitch: Option<f32>,
+}
+
+/// Parses `WIDTHxHEIGHT`.
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
+    let w: u32 = w
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad width in {s:?}"))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height in {s:?}"))?;
+    if !(1..=8192).contains(&w) || !(1..=8192).contains(&h) {
+        return Err(format!("size {s:?} out of range (1..=8192 each side)"));
+    }
+    Ok((w, h))
+}
+
+/// Runs the scene and writes the picture.
+pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
+    let (width, height) = args.size;
+    let mut session =
+        Session::load_with(&args.scene, &args.set).map_err(|e| anyhow::anyhow!("{e}"))?;
+    for _ in 0..args.steps {
+        session.single_step();
+        if let Some(d) = session.divergence() {
+            anyhow::bail!(
+                "the simulation diverged before step {}: {}",
+                args.steps,
+                d.message
+            );
+        }
+    }
+    // Scenes without a surface (spring, chain, rope) draw as springs and particles.
+    let surfaceless = session.system().triangles().is_empty();
+    let options = ViewOptions {
+        mesh: !args.no_mesh,
+        wireframe: args.wireframe,
+        springs: args.springs || args.strain || surfaceless,
+        particles: args.particles || surfaceless,
+        textured: !args.no_texture,
+        ..ViewOptions::default()
+    };
+    let mut camera = OrbitCamera::default();
+    let (lo, hi) = frame::scene_bounds(&session);
+    camera.frame(lo, hi);
+    if let Some(y) = args.yaw {
+        camera.yaw = y.to_radians();
+    }
+    if let Some(p) = args.pitch {
+        camera.pitch = p.to_radians().clamp(-1.5, 1.5);
+    }
+    let mut data = FrameData::default();
+    data.build(session.system(), &options, args.strain);
+    let frame = data.scene_frame(session.system(), None);
+    let mut off = Offscreen::new(width, height)?;
+    let pixels = off.render(&frame, &camera, &options)?;
+    write_png(&args.out, width, height, &pixels)
+        .with_context(|| format!("writing the screenshot to {}", args.out.display()))?;
+    eprintln!(
+        "wrote {} ({width}x{height}, adapter {})",
+        args.out.display(),
+        off.adapter_name()
+    );
+    Ok(())
+}

@@ -1,0 +1,614 @@
+//! From a scene spec to a system: fill in defaults, check every value against its
+//! range (the error names the field and the range), then lay out particles, springs,
+//! bars, triangles and pins.
+
+use glam::{DMat3, DVec2, DVec3};
+
+use super::values::{PinPreset, Pins};
+use super::{Layout, Orientation, SceneError, SceneSpec};
+use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
+
+/// Largest grid side (particles), so a typo cannot ask for billions of particles.
+pub const GRID_MAX_SIDE: u32 = 1024;
+/// Largest chain or rope length (particles).
+pub const LINE_MAX: u32 = 100_000;
+/// Largest lattice side (particles).
+pub const LATTICE_MAX_SIDE: u32 = 64;
+
+/// Every parameter of a scene in effect, checked.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Resolved {
+    /// Layout.
+    pub layout: Layout,
+    /// Grid orientation.
+    pub orientation: Orientation,
+    /// Particles across.
+    pub width: u32,
+    /// Particles down.
+    pub height: u32,
+    /// Particles deep.
+    pub depth: u32,
+    /// Spacing in m.
+    pub rest_length: f64,
+    /// Mass per particle in kg.
+    pub particle_mass: f64,
+    /// Spring stiffness in N/m.
+    pub stiffness: f64,
+    /// Spring damping in N·s/m.
+    pub damping: f64,
+    /// Shear stiffness multiple.
+    pub shear_scale: f64,
+    /// Bend stiffness multiple.
+    pub bend_scale: f64,
+    /// Pinned particles.
+    pub pins: Vec<usize>,
+    /// Steps per displayed frame.
+    pub substeps: u32,
+    /// Position of the layout's anchor in m.
+    pub origin: DVec3,
+    /// Rotation in degrees about z, x, y.
+    pub rotation: DVec3,
+    /// Initial spring stretch in m.
+    pub stretch: f64,
+    /// Simulation parameters.
+    pub params: Params,
+}
+
+fn invalid(origin: &str, field: &str, message: String) -> SceneError {
+    SceneError::Invalid {
+        origin: origin.to_string(),
+        field: field.to_string(),
+        message,
+    }
+}
+
+/// Checks `value` is finite and in `[lo, hi]` (`lo_open`: strictly above `lo`).
+fn ranged(
+    origin: &str,
+    field: &str,
+    value: f64,
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+) -> Result<f64, SceneError> {
+    let low_ok = if lo_open { value > lo } else { value >= lo };
+    if value.is_finite() && low_ok && value <= hi {
+        return Ok(value);
+    }
+    let bracket = if lo_open { "(" } else { "[" };
+    Err(invalid(
+        origin,
+        field,
+        format!("= {value} is out of range: must be a finite number in {bracket}{lo}, {hi}]"),
+    ))
+}
+
+fn count(origin: &str, field: &str, value: u32, lo: u32, hi: u32) -> Result<u32, SceneError> {
+    if (lo..=hi).contains(&value) {
+        Ok(value)
+    } else {
+        Err(invalid(
+            origin,
+            field,
+            format!("= {value} is out of range: must be an integer in [{lo}, {hi}]"),
+        ))
+    }
+}
+
+fn vector(origin: &str, field: &str, v: DVec3, max_norm: f64) -> Result<DVec3, SceneError> {
+    if v.is_finite() && v.length() <= max_norm {
+        Ok(v)
+    } else {
+        Err(invalid(
+            origin,
+            field,
+            format!(
+                "= ({}, {}, {}) is out of range: components must be finite, length at most {max_norm}",
+                v.x, v.y, v.z
+            ),
+        ))
+    }
+}
+
+fn one_of<T: Copy>(
+    origin: &str,
+    options: &[(&str, Option<T>)],
+) -> Result<Option<(String, T)>, SceneError> {
+    let given: Vec<_> = options
+        .iter()
+        .filter_map(|(k, v)| v.map(|v| (k.to_string(), v)))
+        .collect();
+    if given.len() > 1 {
+        let names: Vec<_> = given.iter().map(|(k, _)| format!("`{k}`")).collect();
+        return Err(invalid(
+            origin,
+            &given[0].0,
+            format!(
+                "conflicts with {}: give only one of them",
+                names[1..].join(", ")
+            ),
+        ));
+    }
+    Ok(given.into_iter().next())
+}
+
+/// Fills in defaults and checks ranges.
+pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
+    let o = origin;
+    let layout = spec.layout;
+    let (width, height, depth) = match layout {
+        Layout::Grid => (
+            count(o, "width", spec.width.unwrap_or(32), 1, GRID_MAX_SIDE)?,
+            count(o, "height", spec.height.unwrap_or(32), 1, GRID_MAX_SIDE)?,
+            1,
+        ),
+        Layout::Lattice => (
+            count(o, "width", spec.width.unwrap_or(7), 1, LATTICE_MAX_SIDE)?,
+            count(o, "height", spec.height.unwrap_or(4), 1, LATTICE_MAX_SIDE)?,
+            count(o, "depth", spec.depth.unwrap_or(4), 1, LATTICE_MAX_SIDE)?,
+        ),
+        Layout::Chain | Layout::Rope => (
+            count(o, "width", spec.width.unwrap_or(11), 1, LINE_MAX)?,
+            1,
+            1,
+        ),
+        Layout::Spring => (2, 1, 1),
+    };
+    let particles = (width as usize) * (height as usize) * (depth as usize);
+
+    let rest_length = match one_of(o, &[("rest_length", spec.rest_length), ("size", spec.size)])? {
+        Some((k, v)) if k == "size" => {
+            ranged(o, "size", v, 0.0, false, 1e4)? / (width.max(2) - 1) as f64
+        }
+        Some((_, v)) => ranged(o, "rest_length", v, 0.0, false, 1e3)?,
+        None => 0.1,
+    };
+    let particle_mass = match one_of(
+        o,
+        &[
+            ("particle_mass", spec.particle_mass),
+            ("total_mass", spec.total_mass),
+        ],
+    )? {
+        Some((k, v)) if k == "total_mass" => {
+            ranged(o, "total_mass", v, 0.0, true, 1e9)? / particles as f64
+        }
+        Some((_, v)) => ranged(o, "particle_mass", v, 0.0, true, 1e6)?,
+        None => 0.01,
+    };
+    let stiffness = match one_of(
+        o,
+        &[
+            ("stiffness", spec.stiffness),
+            ("stiffness_per_mass", spec.stiffness_per_mass),
+        ],
+    )? {
+        Some((k, v)) if k == "stiffness_per_mass" => {
+            ranged(o, "stiffness_per_mass", v, 0.0, false, 1e12)? * particle_mass
+        }
+        Some((_, v)) => ranged(o, "stiffness", v, 0.0, false, 1e9)?,
+        None => 100.0,
+    };
+    let damping_options = [
+        ("damping", spec.damping),
+        ("damping_ratio", spec.damping_ratio),
+        ("damping_per_mass", spec.damping_per_mass),
+    ];
+    let damping = match one_of(o, &damping_options)? {
+        Some((k, v)) if k == "damping_ratio" => {
+            ranged(o, "damping_ratio", v, 0.0, false, 100.0)?
+                * 2.0
+                * (stiffness * particle_mass).sqrt()
+        }
+        Some((k, v)) if k == "damping_per_mass" => {
+            ranged(o, "damping_per_mass", v, 0.0, false, 1e9)? * particle_mass
+        }
+        Some((_, v)) => ranged(o, "damping", v, 0.0, false, 1e9)?,
+        None => 0.0,
+    };
+    let shear_scale = ranged(
+        o,
+        "shear_scale",
+        spec.shear_scale.unwrap_or(1.0),
+        0.0,
+        false,
+        1e3,
+    )?;
+    let bend_scale = ranged(
+        o,
+        "bend_scale",
+        spec.bend_scale.unwrap_or(1.0),
+        0.0,
+        false,
+        1e3,
+    )?;
+
+    let integrator = match &spec.integrator {
+        None => Integrator::default(),
+        Some(name) => Integrator::from_name(name).ok_or_else(|| {
+            let names: Vec<_> = Integrator::ALL.iter().map(|i| i.name()).collect();
+            invalid(
+                o,
+                "integrator",
+                format!(
+                    "`{name}` is not an integrator: expected one of {}",
+                    names.join(", ")
+                ),
+            )
+        })?,
+    };
+    let ground = match spec.ground_height {
+        None => None,
+        Some(h) => Some(Ground {
+            height: ranged(o, "ground_height", h, -1e6, false, 1e6)?,
+            stiffness: ranged(
+                o,
+                "ground_stiffness",
+                spec.ground_stiffness.unwrap_or(1e4),
+                0.0,
+                false,
+                1e12,
+            )?,
+            damping: ranged(
+                o,
+                "ground_damping",
+                spec.ground_damping.unwrap_or(0.0),
+                0.0,
+                false,
+                1e9,
+            )?,
+        }),
+    };
+    let sphere = match spec.sphere_center {
+        None => None,
+        Some(c) => Some(Sphere {
+            center: vector(o, "sphere_center", c.0, 1e6)?,
+            radius: ranged(
+                o,
+                "sphere_radius",
+                spec.sphere_radius.unwrap_or(0.5),
+                0.0,
+                true,
+                1e6,
+            )?,
+        }),
+    };
+    let stretch_limit = match spec.stretch_limit {
+        None => None,
+        Some(t) => Some(ranged(o, "stretch_limit", t, 0.0, false, 100.0)?),
+    };
+    let params = Params {
+        gravity: vector(
+            o,
+            "gravity",
+            spec.gravity.map_or(DVec3::new(0.0, -9.81, 0.0), |v| v.0),
+            1e4,
+        )?,
+        wind: vector(o, "wind", spec.wind.map_or(DVec3::ZERO, |v| v.0), 1e4)?,
+        gust: ranged(o, "gust", spec.gust.unwrap_or(0.0), 0.0, false, 1e4)?,
+        air_density: ranged(
+            o,
+            "air_density",
+            spec.air_density.unwrap_or(1.2),
+            0.0,
+            false,
+            1e4,
+        )?,
+        drag_coefficient: ranged(
+            o,
+            "drag_coefficient",
+            spec.drag_coefficient.unwrap_or(1.0),
+            0.0,
+            false,
+            1e3,
+        )?,
+        air_damping: ranged(
+            o,
+            "air_damping",
+            spec.air_damping.unwrap_or(0.0),
+            0.0,
+            false,
+            1e9,
+        )?,
+        ground,
+        sphere,
+        integrator,
+        dt: ranged(o, "dt", spec.dt.unwrap_or(1.0 / 960.0), 0.0, true, 1.0)?,
+        bar_iterations: count(
+            o,
+            "bar_iterations",
+            spec.bar_iterations.unwrap_or(0),
+            0,
+            10_000,
+        )?,
+        stretch_limit,
+        seed: spec.seed.unwrap_or(1),
+    };
+    let substeps = count(o, "substeps", spec.substeps.unwrap_or(16), 1, 100_000)?;
+
+    let pins = match spec.pins.clone().unwrap_or(Pins::Preset(match layout {
+        Layout::Grid => PinPreset::TopCorners,
+        Layout::Lattice => PinPreset::None,
+        _ => PinPreset::First,
+    })) {
+        Pins::Indices(list) => {
+            if let Some(&bad) = list.iter().find(|&&i| i >= particles) {
+                return Err(invalid(
+                    o,
+                    "pins",
+                    format!(
+                        "index {bad} is out of range: the scene has {particles} particles (0 to {})",
+                        particles - 1
+                    ),
+                ));
+            }
+            list
+        }
+        Pins::Preset(p) => preset_pins(p, layout, width as usize, height as usize, particles),
+    };
+    let default_origin = match (layout, spec.orientation.unwrap_or_default()) {
+        (Layout::Grid, Orientation::Vertical) => DVec3::new(
+            -0.5 * (width - 1) as f64 * rest_length,
+            (height - 1) as f64 * rest_length,
+            0.0,
+        ),
+        (Layout::Grid, Orientation::Horizontal) => DVec3::new(
+            -0.5 * (width - 1) as f64 * rest_length,
+            1.0,
+            -0.5 * (height - 1) as f64 * rest_length,
+        ),
+        _ => DVec3::ZERO,
+    };
+    Ok(Resolved {
+        layout,
+        orientation: spec.orientation.unwrap_or_default(),
+        width,
+        height,
+        depth,
+        rest_length,
+        particle_mass,
+        stiffness,
+        damping,
+        shear_scale,
+        bend_scale,
+        pins,
+        substeps,
+        origin: vector(
+            o,
+            "origin",
+            spec.origin.map_or(default_origin, |v| v.0),
+            1e6,
+        )?,
+        rotation: vector(
+            o,
+            "rotation",
+            spec.rotation.map_or(DVec3::ZERO, |v| v.0),
+            1e6,
+        )?,
+        stretch: ranged(o, "stretch", spec.stretch.unwrap_or(1.0), -1e3, false, 1e3)?,
+        params,
+    })
+}
+
+fn preset_pins(preset: PinPreset, layout: Layout, w: usize, h: usize, n: usize) -> Vec<usize> {
+    let mut pins = match (preset, layout) {
+        (PinPreset::None, _) => vec![],
+        (PinPreset::First, _) => vec![0],
+        (_, Layout::Grid) => match preset {
+            PinPreset::Corners => vec![0, w - 1, (h - 1) * w, h * w - 1],
+            PinPreset::TopCorners => vec![0, w - 1],
+            PinPreset::TopEdge => (0..w).collect(),
+            PinPreset::LeftEdge => (0..h).map(|r| r * w).collect(),
+            _ => vec![],
+        },
+        // Off a grid, the grid presets mean the ends of the line or block.
+        (PinPreset::Corners | PinPreset::TopCorners, _) => vec![0, n - 1],
+        _ => vec![0],
+    };
+    pins.sort_unstable();
+    pins.dedup();
+    pins
+}
+
+impl Resolved {
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        (self.width * self.height * self.depth) as usize
+    }
+
+    /// Lays out the system.
+    pub fn build(&self) -> System {
+        let n = self.particle_count();
+        let masses = vec![self.particle_mass; n];
+        let spring = |a: usize, b: usize, rest: f64, scale: f64, kind| Spring {
+            a: a as u32,
+            b: b as u32,
+            rest,
+            stiffness: self.stiffness * scale,
+            damping: self.damping * scale,
+            kind,
+        };
+        let (mut positions, mut springs, mut bars, mut triangles, mut uvs) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let l = self.rest_length;
+        match self.layout {
+            Layout::Grid => {
+                let (w, h) = (self.width as usize, self.height as usize);
+                for r in 0..h {
+                    for c in 0..w {
+                        let (u, v) = (c as f64 * l, r as f64 * l);
+                        positions.push(
+                            self.origin
+                                + match self.orientation {
+                                    Orientation::Vertical => DVec3::new(u, -v, 0.0),
+                                    Orientation::Horizontal => DVec3::new(u, 0.0, v),
+                                },
+                        );
+                        uvs.push(DVec2::new(
+                            c as f64 / (w.max(2) - 1) as f64,
+                            r as f64 / (h.max(2) - 1) as f64,
+                        ));
+                    }
+                }
+                let p = |r: usize, c: usize| r * w + c;
+                let diagonal = l * std::f64::consts::SQRT_2;
+                for r in 0..h {
+                    for c in 0..w {
+                        if c + 1 < w {
+                            springs.push(spring(
+                                p(r, c),
+                                p(r, c + 1),
+                                l,
+                                1.0,
+                                SpringKind::Structural,
+                            ));
+                        }
+                        if r + 1 < h {
+                            springs.push(spring(
+                                p(r, c),
+                                p(r + 1, c),
+                                l,
+                                1.0,
+                                SpringKind::Structural,
+                            ));
+                        }
+                        if self.shear_scale > 0.0 && r + 1 < h && c + 1 < w {
+                            springs.push(spring(
+                                p(r, c),
+                                p(r + 1, c + 1),
+                                diagonal,
+                                self.shear_scale,
+                                SpringKind::Shear,
+                            ));
+                            springs.push(spring(
+                                p(r, c + 1),
+                                p(r + 1, c),
+                                diagonal,
+                                self.shear_scale,
+                                SpringKind::Shear,
+                            ));
+                        }
+                        if self.bend_scale > 0.0 && c + 2 < w {
+                            springs.push(spring(
+                                p(r, c),
+                                p(r, c + 2),
+                                2.0 * l,
+                                self.bend_scale,
+                                SpringKind::Bend,
+                            ));
+                        }
+                        if self.bend_scale > 0.0 && r + 2 < h {
+                            springs.push(spring(
+                                p(r, c),
+                                p(r + 2, c),
+                                2.0 * l,
+                                self.bend_scale,
+                                SpringKind::Bend,
+                            ));
+                        }
+                        if r + 1 < h && c + 1 < w {
+                            let (a, b, d, e) = (p(r, c), p(r, c + 1), p(r + 1, c), p(r + 1, c + 1));
+                            triangles.push([a, b, d].map(|i| i as u32));
+                            triangles.push([b, e, d].map(|i| i as u32));
+                        }
+                    }
+                }
+            }
+            Layout::Spring => {
+                positions.push(self.origin);
+                positions.push(self.origin - DVec3::Y * (l + self.stretch));
+                springs.push(spring(0, 1, l, 1.0, SpringKind::Other));
+            }
+            Layout::Chain | Layout::Rope => {
+                for i in 0..self.width as usize {
+                    positions.push(self.origin + DVec3::X * (i as f64 * l));
+                    if i > 0 {
+                        if self.layout == Layout::Chain {
+                            springs.push(spring(i - 1, i, l, 1.0, SpringKind::Other));
+                        } else {
+                            bars.push(Bar {
+                                a: (i - 1) as u32,
+                                b: i as u32,
+                                length: l,
+                            });
+                        }
+                    }
+                }
+            }
+            Layout::Lattice => {
+                let (w, h, d) = (
+                    self.width as usize,
+                    self.height as usize,
+                    self.depth as usize,
+                );
+                let rad = self.rotation * (std::f64::consts::PI / 180.0);
+                let rotation = DMat3::from_rotation_y(rad.y)
+                    * DMat3::from_rotation_x(rad.x)
+                    * DMat3::from_rotation_z(rad.z);
+                let centre = DVec3::new((w - 1) as f64, (h - 1) as f64, (d - 1) as f64) * (0.5 * l);
+                let index = |x: usize, y: usize, z: usize| (z * h + y) * w + x;
+                for z in 0..d {
+                    for y in 0..h {
+                        for x in 0..w {
+                            let local = DVec3::new(x as f64, y as f64, z as f64) * l - centre;
+                            positions.push(self.origin + rotation * local);
+                        }
+                    }
+                }
+                // Every neighbour within one cell: axis (structural), face diagonal
+                // (shear) and body diagonal (other), as in seed 002's cube.
+                for z in 0..d {
+                    for y in 0..h {
+                        for x in 0..w {
+                            for dz in 0..=1usize {
+                                for dy in -1..=1i64 {
+                                    for dx in -1..=1i64 {
+                                        let forward = dz == 1 || dy == 1 || (dy == 0 && dx == 1);
+                                        let (nx, ny, nz) = (x as i64 + dx, y as i64 + dy, z + dz);
+                                        if !forward
+                                            || nx < 0
+                                            || ny < 0
+                                            || nx >= w as i64
+                                            || ny >= h as i64
+                                            || nz >= d
+                                        {
+                                            continue;
+                                        }
+                                        let steps = dx.unsigned_abs() as usize
+                                            + dy.unsigned_abs() as usize
+                                            + dz;
+                                        let kind = [
+                                            SpringKind::Structural,
+                                            SpringKind::Shear,
+                                            SpringKind::Other,
+                                        ][steps - 1];
+                                        let rest = l * (steps as f64).sqrt();
+                                        springs.push(spring(
+                                            index(x, y, z),
+                                            index(nx as usize, ny as usize, nz),
+                                            rest,
+                                            1.0,
+                                            kind,
+                                        ));
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        let uvs = if triangles.is_empty() {
+            Vec::new()
+        } else {
+            uvs
+        };
+        let topology = Topology {
+            springs,
+            bars,
+            triangles,
+            uvs,
+        };
+        System::new(masses, positions, &self.pins, topology, self.params)
+    }
+}

@@ -1,0 +1,384 @@
+//! Scenes: TOML descriptions of a system (layout, sizes, materials, forces, pins,
+//! integrator), the built-in ones from the seed documents, validation with errors
+//! that name the field and the allowed range, and building a [`System`] from them.
+//!
+//! Scene files and the command line's `--set key=value` share the same keys.
+
+mod build;
+mod values;
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+pub use build::GRID_MAX_SIDE;
+pub use values::{Pins, Vector};
+
+use crate::sim::{Integrator, System};
+
+/// How the particles are laid out and connected.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Layout {
+    /// A `width` x `height` cloth with structural, shear and bend springs and a surface.
+    #[default]
+    Grid,
+    /// Seed 002's mass on a spring: a fixed and a free mass, displaced from rest.
+    Spring,
+    /// A line of `width` masses joined by springs (seed 002's chain pendulum).
+    Chain,
+    /// A `width` x `height` x `depth` block of masses (seed 002's jelly cube).
+    Lattice,
+    /// A line of `width` masses joined by rigid bars (seed 001's rope).
+    Rope,
+}
+
+/// Orientation of a grid cloth.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Orientation {
+    /// In the x-y plane, rows going down (a hanging cloth).
+    #[default]
+    Vertical,
+    /// In the x-z plane (a cloth lying flat, e.g. falling onto something).
+    Horizontal,
+}
+
+/// A scene as written in a file. Where two keys give the same quantity in different
+/// terms (`rest_length` or `size`, `particle_mass` or `total_mass`, `stiffness` or
+/// `stiffness_per_mass`, `damping`, `damping_ratio` or `damping_per_mass`), give one.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SceneSpec {
+    /// Short name.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// One line saying what the scene shows.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Particle layout.
+    pub layout: Layout,
+    /// Grid orientation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub orientation: Option<Orientation>,
+    /// Particles across (grid, lattice) or along (chain, rope).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub width: Option<u32>,
+    /// Particles down (grid, lattice).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height: Option<u32>,
+    /// Particles deep (lattice).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub depth: Option<u32>,
+    /// Spacing between neighbours in m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rest_length: Option<f64>,
+    /// Width of the grid in m (spacing = size / (width - 1)), instead of `rest_length`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub size: Option<f64>,
+    /// Mass of each particle in kg.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub particle_mass: Option<f64>,
+    /// Mass of all particles together in kg, instead of `particle_mass`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub total_mass: Option<f64>,
+    /// Spring stiffness k in N/m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// Stiffness per kg of particle mass, N/(m·kg): k = this × particle_mass.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stiffness_per_mass: Option<f64>,
+    /// Spring damping b in N·s/m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping: Option<f64>,
+    /// Damping as a fraction of critical, b = ratio × 2 sqrt(k m) (seed 002).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping_ratio: Option<f64>,
+    /// Damping per kg of particle mass: b = this × particle_mass.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping_per_mass: Option<f64>,
+    /// Shear springs' stiffness as a multiple of k (grid; default 1, 0 = none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shear_scale: Option<f64>,
+    /// Bend springs' stiffness as a multiple of k (grid; default 1, 0 = none).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bend_scale: Option<f64>,
+    /// Wind velocity in m/s, `"x,y,z"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wind: Option<Vector>,
+    /// Gust amplitude in m/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gust: Option<f64>,
+    /// Air density in kg/m³ (aero drag).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub air_density: Option<f64>,
+    /// Drag coefficient (aero drag; 0 turns it off).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drag_coefficient: Option<f64>,
+    /// Viscous air damping c in N·s/m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub air_damping: Option<f64>,
+    /// Gravity in m/s², `"x,y,z"` or just the y component.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gravity: Option<Vector>,
+    /// Pinned particles: `corners`, `top-corners`, `top-edge`, `left-edge`, `first`,
+    /// `none`, or a list of indices.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pins: Option<Pins>,
+    /// Integrator name.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub integrator: Option<String>,
+    /// Time step in s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+    /// Steps per displayed frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub substeps: Option<u32>,
+    /// Random seed (gusts).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// Position of particle 0 in m (grid, chain, rope: the first particle; lattice:
+    /// the block's centre; spring: the fixed end).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<Vector>,
+    /// Rotation in degrees, applied about z, then x, then y (lattice).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation: Option<Vector>,
+    /// Initial stretch of the spring beyond its rest length in m (spring).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stretch: Option<f64>,
+    /// Height of a ground plane in m (absent: no ground).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground_height: Option<f64>,
+    /// Ground penalty stiffness in N/m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground_stiffness: Option<f64>,
+    /// Ground contact damping in N·s/m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground_damping: Option<f64>,
+    /// Centre of a sphere collider in m (absent: no sphere).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sphere_center: Option<Vector>,
+    /// Sphere radius in m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sphere_radius: Option<f64>,
+    /// Rigid-bar relaxation passes per step (rope).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bar_iterations: Option<u32>,
+    /// Maximum stretch tau (Provot): springs no longer than (1 + tau) L.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stretch_limit: Option<f64>,
+}
+
+/// Keys that give the same quantity: setting one clears the others.
+const ALTERNATIVES: &[&[&str]] = &[
+    &["rest_length", "size"],
+    &["particle_mass", "total_mass"],
+    &["stiffness", "stiffness_per_mass"],
+    &["damping", "damping_ratio", "damping_per_mass"],
+];
+
+/// A scene error: always names where the input came from, and the field when there is one.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// Neither a built-in scene nor a readable file.
+    #[error("unknown scene `{name}`: not a built-in scene (one of: {builtins}) and not a file")]
+    UnknownScene {
+        /// What was asked for.
+        name: String,
+        /// The built-in names.
+        builtins: String,
+    },
+    /// The file exists but cannot be read.
+    #[error("cannot read scene file {path}: {source}")]
+    Read {
+        /// The path.
+        path: String,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// TOML syntax, an unknown key or a wrong type.
+    #[error("{origin}: {message}")]
+    Parse {
+        /// Where the text came from.
+        origin: String,
+        /// The parser's message (names the key and line).
+        message: String,
+    },
+    /// A value out of its range.
+    #[error("{origin}: `{field}` {message}")]
+    Invalid {
+        /// Where the value came from.
+        origin: String,
+        /// The field.
+        field: String,
+        /// What is wrong and what is allowed.
+        message: String,
+    },
+}
+
+/// A built-in scene: its name and TOML text.
+#[derive(Clone, Copy, Debug)]
+pub struct BuiltinScene {
+    /// Name, as given to `--scene`.
+    pub name: &'static str,
+    /// The scene file's text.
+    pub toml: &'static str,
+}
+
+macro_rules! builtin {
+    ($name:literal) => {
+        BuiltinScene {
+            name: $name,
+            toml: include_str!(concat!("../../assets/scenes/", $name, ".toml")),
+        }
+    };
+}
+
+const BUILTINS: &[BuiltinScene] = &[
+    builtin!("cloth"),
+    builtin!("flag"),
+    builtin!("sheet"),
+    builtin!("drape"),
+    builtin!("spring"),
+    builtin!("chain"),
+    builtin!("jelly"),
+    builtin!("rope"),
+    builtin!("bench"),
+    builtin!("bench-wind"),
+];
+
+/// The built-in scenes, the default (`cloth`) first.
+pub fn builtin_scenes() -> &'static [BuiltinScene] {
+    BUILTINS
+}
+
+/// A scene ready to build: the spec and where it came from (for error messages).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    /// The spec, with overrides applied.
+    pub spec: SceneSpec,
+    /// "built-in scene `cloth`" or "scene file path/to.toml".
+    pub origin: String,
+}
+
+impl Scene {
+    /// Parses TOML text; `origin` says where it came from in errors.
+    pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
+        let spec: SceneSpec = toml::from_str(text).map_err(|e| SceneError::Parse {
+            origin: origin.to_string(),
+            message: e.to_string().trim().replace('\n', " "),
+        })?;
+        let scene = Self {
+            spec,
+            origin: origin.to_string(),
+        };
+        scene.resolve()?;
+        Ok(scene)
+    }
+
+    /// A built-in scene by name, or a scene file by path.
+    pub fn load(name_or_path: &str) -> Result<Self, SceneError> {
+        if let Some(builtin) = BUILTINS.iter().find(|b| b.name == name_or_path) {
+            return Self::parse(builtin.toml, &format!("built-in scene `{}`", builtin.name));
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() {
+            let builtins = BUILTINS
+                .iter()
+                .map(|b| b.name)
+                .collect::<Vec<_>>()
+                .join(", ");
+            return Err(SceneError::UnknownScene {
+                name: name_or_path.to_string(),
+                builtins,
+            });
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
+            path: name_or_path.to_string(),
+            source,
+        })?;
+        Self::parse(&text, &format!("scene file {name_or_path}"))
+    }
+
+    /// The default scene (`cloth`).
+    pub fn default_scene() -> Self {
+        Self::load("cloth").expect("the built-in cloth scene is valid")
+    }
+
+    /// Sets one key from text, as `--set key=value` does: the value is read as TOML
+    /// (`32`, `0.5`, `[0, 5]`, `true`) or, failing that, as a string (`corners`,
+    /// `1,0,0`). Setting one of a group of alternative keys clears the others. On
+    /// error the scene is unchanged.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
+        let origin = format!("--set {key}={value}");
+        let mut table = toml::Table::try_from(&self.spec).map_err(|e| SceneError::Parse {
+            origin: origin.clone(),
+            message: e.to_string(),
+        })?;
+        let parsed = toml::from_str::<toml::Table>(&format!("v = {value}"))
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(value.trim().to_string()));
+        for group in ALTERNATIVES.iter().filter(|g| g.contains(&key)) {
+            for other in group.iter().filter(|k| **k != key) {
+                table.remove(*other);
+            }
+        }
+        table.insert(key.to_string(), parsed);
+        let spec: SceneSpec = table
+            .try_into()
+            .map_err(|e: toml::de::Error| SceneError::Parse {
+                origin: origin.clone(),
+                message: e.message().trim().to_string(),
+            })?;
+        let candidate = Self {
+            spec,
+            origin: self.origin.clone(),
+        };
+        candidate.resolve().map_err(|e| match e {
+            SceneError::Invalid { field, message, .. } => SceneError::Invalid {
+                origin,
+                field,
+                message,
+            },
+            other => other,
+        })?;
+        *self = candidate;
+        Ok(())
+    }
+
+    /// Applies `key=value` overrides in order.
+    pub fn set_all<'a>(
+        &mut self,
+        assignments: impl IntoIterator<Item = &'a str>,
+    ) -> Result<(), SceneError> {
+        for assignment in assignments {
+            let Some((key, value)) = assignment.split_once('=') else {
+                return Err(SceneError::Parse {
+                    origin: format!("--set {assignment}"),
+                    message: "expected key=value, e.g. --set stiffness=500".to_string(),
+                });
+            };
+            self.set(key.trim(), value)?;
+        }
+        Ok(())
+    }
+
+    /// Every parameter in effect, with defaults filled in and ranges checked.
+    pub fn resolve(&self) -> Result<build::Resolved, SceneError> {
+        build::resolve(&self.spec, &self.origin)
+    }
+
+    /// Builds the system.
+    pub fn build(&self) -> Result<System, SceneError> {
+        Ok(self.resolve()?.build())
+    }
+
+    /// The integrator the scene asks for.
+    pub fn integrator(&self) -> Result<Integrator, SceneError> {
+        Ok(self.resolve()?.params.integrator)
+    }
+}
+
+pub use build::Resolved;

@@ -1,0 +1,374 @@
+//! A running scene as an interactive front end drives it, headless: the scene
+//! spec with the user's edits, the system built from it, fixed-step pacing
+//! (`substeps` steps of `dt` per 1/60 s of wall time, whatever the frame rate),
+//! pause / single step / reset, divergence, live parameter edits, and safe stepping
+//! (on by default): the step is kept below half the integrator's critical step, with
+//! more substeps so that each frame still covers the same simulated time.
+
+use std::time::Instant;
+
+use crate::scene::{Scene, SceneError};
+use crate::sim::safe::{self, DEFAULT_SAFETY};
+use crate::sim::{Clock, SpringKind, System};
+
+/// Most substeps per frame safe stepping may choose; past it the simulation runs
+/// slower than real time rather than with an unsafe step.
+pub const MAX_SAFE_SUBSTEPS: u32 = 100_000;
+
+/// Stretch limit (Provot's tau) that safe stepping adds to a cloth with aero drag
+/// and no limit of its own. Drag grows with the stretched area (as L²) and a spring
+/// only as k L, so a soft enough cloth in a strong wind has no equilibrium and
+/// stretches without bound; the limit stops that. At the default settings the cloth
+/// stretches about 6%, so the limit does not act.
+pub const SAFE_STRETCH_LIMIT: f64 = 0.5;
+
+/// Wall-clock seconds that `substeps` steps stand for (one frame at 60 Hz).
+pub const FRAME_PERIOD: f64 = 1.0 / 60.0;
+
+/// Most wall-clock milliseconds one frame may spend stepping before the
+/// simulation falls behind real time instead of freezing the UI.
+pub const STEP_BUDGET_MS: f64 = 25.0;
+
+/// Scene keys whose change needs the system rebuilt (topology or layout);
+/// every other key applies live.
+const REBUILD_KEYS: &[&str] = &[
+    "layout",
+    "orientation",
+    "width",
+    "height",
+    "depth",
+    "size",
+    "pins",
+    "origin",
+    "rotation",
+    "stretch",
+    "shear_scale",
+    "bend_scale",
+    "seed",
+];
+
+/// What happened when the simulation diverged.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DivergenceReport {
+    /// The core's description (what and when).
+    pub message: String,
+    /// Simulated time (s) of the divergence.
+    pub time: f64,
+    /// Stability margin `dt / dt_crit` at the time, if the estimate has one.
+    pub margin: Option<f64>,
+}
+
+/// What one frame did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameReport {
+    /// Steps run.
+    pub steps: u32,
+    /// Wall-clock milliseconds spent stepping.
+    pub sim_ms: f64,
+    /// True when the frame could not run every step due: the simulation is
+    /// running slower than real time.
+    pub behind: bool,
+}
+
+/// A scene running interactively.
+pub struct Session {
+    scene: Scene,
+    name: String,
+    system: System,
+    clock: Clock,
+    paused: bool,
+    divergence: Option<DivergenceReport>,
+    /// Rest length the springs were last scaled to (m).
+    rest_length: f64,
+    /// Steps per 1/60 s of wall time.
+    substeps: u32,
+    /// Smoothed cost of one step (ms).
+    ms_per_step: f64,
+    /// Whether safe stepping chooses dt and substeps.
+    safe_stepping: bool,
+    /// What safe stepping chose, when it is on.
+    step_choice: Option<StepChoice>,
+}
+
+/// What safe stepping chose for the running system.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepChoice {
+    /// Steps per frame.
+    pub substeps: u32,
+    /// Step in s.
+    pub dt: f64,
+    /// Whether the step is below the safety fraction of a finite critical step
+    /// (false when the integrator has no stable step, e.g. explicit Euler undamped).
+    pub safe: bool,
+    /// The stretch limit safe stepping added, if any.
+    pub stretch_limit: Option<f64>,
+}
+
+impl Session {
+    /// Loads a built-in scene or scene file and applies `key=value` overrides.
+    pub fn load_with(name: &str, overrides: &[String]) -> Result<Self, SceneError> {
+        let mut scene = Scene::load(name)?;
+        scene.set_all(overrides.iter().map(String::as_str))?;
+        Self::new(scene, name)
+    }
+
+    /// Starts `scene`, named `name` in the UI.
+    pub fn new(scene: Scene, name: &str) -> Result<Self, SceneError> {
+        let resolved = scene.resolve()?;
+        let system = resolved.build();
+        Ok(Self {
+            scene,
+            name: name.to_string(),
+            system,
+            clock: Clock::default(),
+            paused: false,
+            divergence: None,
+            rest_length: resolved.rest_length,
+            substeps: resolved.substeps,
+            ms_per_step: 0.0,
+            safe_stepping: true,
+            step_choice: None,
+        }
+        .with_step_choice())
+    }
+
+    fn with_step_choice(mut self) -> Self {
+        self.choose_step();
+        self
+    }
+
+    /// Applies the scene's dt and substeps, or, with safe stepping on, a step no
+    /// larger than `DEFAULT_SAFETY * dt_crit` and as many substeps as keep the
+    /// simulated time per frame (`substeps * dt` of the scene) the same, up to
+    /// [`MAX_SAFE_SUBSTEPS`] (beyond that the simulation runs slower, never unsafe).
+    fn choose_step(&mut self) {
+        let Ok(resolved) = self.scene.resolve() else {
+            return;
+        };
+        let (user_dt, user_substeps) = (resolved.params.dt, resolved.substeps);
+        let mut params = *self.system.params();
+        params.dt = user_dt;
+        params.stretch_limit = resolved.params.stretch_limit;
+        let mut substeps = user_substeps;
+        self.step_choice = None;
+        if self.safe_stepping {
+            let frame_time = user_dt * f64::from(user_substeps);
+            let choice = safe::safe_step(
+                self.system.model(),
+                frame_time,
+                DEFAULT_SAFETY,
+                MAX_SAFE_SUBSTEPS,
+            );
+            let safe_dt = choice.dt_critical.map(|c| DEFAULT_SAFETY * c);
+            if let Some(limit) = safe_dt.filter(|l| *l < user_dt) {
+                params.dt = limit.min(choice.dt);
+                substeps = ((frame_time / params.dt).ceil() as u32).clamp(1, MAX_SAFE_SUBSTEPS);
+            }
+            let added_limit = (self.system.force_terms().aero && params.stretch_limit.is_none())
+                .then_some(SAFE_STRETCH_LIMIT);
+            params.stretch_limit = params.stretch_limit.or(added_limit);
+            self.step_choice = Some(StepChoice {
+                substeps,
+                dt: params.dt,
+                safe: safe_dt.is_some(),
+                stretch_limit: added_limit,
+            });
+        }
+        if *self.system.params() != params {
+            self.system.set_params(params);
+        }
+        self.substeps = substeps;
+    }
+
+    /// Whether safe stepping is on.
+    pub fn safe_stepping(&self) -> bool {
+        self.safe_stepping
+    }
+
+    /// Turns safe stepping on or off.
+    pub fn set_safe_stepping(&mut self, on: bool) {
+        self.safe_stepping = on;
+        self.choose_step();
+    }
+
+    /// What safe stepping chose (None when it is off).
+    pub fn step_choice(&self) -> Option<StepChoice> {
+        self.step_choice
+    }
+
+    /// Replaces the running scene with another one, dropping the user's edits.
+    /// On error nothing changes.
+    pub fn load_scene(&mut self, name: &str) -> Result<(), SceneError> {
+        let (paused, safe_stepping) = (self.paused, self.safe_stepping);
+        *self = Self::load_with(name, &[])?;
+        self.paused = paused;
+        self.set_safe_stepping(safe_stepping);
+        Ok(())
+    }
+
+    /// Name of the scene (as loaded).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The scene spec with the user's edits.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The running system.
+    pub fn system(&self) -> &System {
+        &self.system
+    }
+
+    /// The running system, for pinning and dragging.
+    pub fn system_mut(&mut self) -> &mut System {
+        &mut self.system
+    }
+
+    /// Whether the simulation is paused.
+    pub fn paused(&self) -> bool {
+        self.paused
+    }
+
+    /// Pauses or resumes; resuming forgets the wall time spent paused.
+    pub fn set_paused(&mut self, paused: bool) {
+        if !paused {
+            self.clock.reset();
+        }
+        self.paused = paused;
+    }
+
+    /// The last divergence, until the next reset or rebuild.
+    pub fn divergence(&self) -> Option<&DivergenceReport> {
+        self.divergence.as_ref()
+    }
+
+    /// Steps per 1/60 s of wall time (the "speed").
+    pub fn substeps(&self) -> u32 {
+        self.substeps
+    }
+
+    /// Smoothed wall-clock cost of one step (ms).
+    pub fn ms_per_step(&self) -> f64 {
+        self.ms_per_step
+    }
+
+    /// Rebuilds the system from the scene with the user's edits (R, "Reset").
+    /// Pins made by clicking are dropped; the pause state is kept.
+    pub fn reset(&mut self) -> Result<(), SceneError> {
+        let resolved = self.scene.resolve()?;
+        self.system = resolved.build();
+        self.rest_length = resolved.rest_length;
+        self.substeps = resolved.substeps;
+        self.clock.reset();
+        self.divergence = None;
+        self.choose_step();
+        Ok(())
+    }
+
+    /// Whether changing `key` rebuilds the system rather than applying live.
+    pub fn needs_rebuild(&self, key: &str) -> bool {
+        REBUILD_KEYS.contains(&key)
+    }
+
+    /// Sets a scene key from text (as `--set key=value`). Layout keys (width,
+    /// height, ...) rebuild the system with every other setting kept; the rest
+    /// (stiffness, damping, rest length, wind, mass, gravity, dt, integrator, ...)
+    /// apply to the running system without disturbing its state. On error
+    /// nothing changes.
+    pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
+        let mut scene = self.scene.clone();
+        scene.set(key, value)?;
+        let resolved = scene.resolve()?;
+        self.scene = scene;
+        if self.needs_rebuild(key) {
+            return self.reset();
+        }
+        // Spring constants per kind, taken from a system freshly built with the
+        // new values so that the builder's per-kind scales stay in one place.
+        let fresh = resolved.build();
+        for kind in SpringKind::ALL {
+            if let Some(s) = fresh.springs().iter().find(|s| s.kind == kind) {
+                self.system.set_spring_stiffness(kind, s.stiffness);
+                self.system.set_spring_damping(kind, s.damping);
+            }
+        }
+        // The cloth grows or shrinks with its rest length (positions too, about the
+        // pins), so strains are kept: changing the rest length of springs pinned in
+        // place would store the energy of a huge compression and release it at once.
+        if resolved.rest_length != self.rest_length && self.rest_length > 0.0 {
+            self.system.rescale(resolved.rest_length / self.rest_length);
+            self.rest_length = resolved.rest_length;
+        }
+        self.system.set_particle_mass(resolved.particle_mass);
+        self.system.set_params(resolved.params);
+        self.substeps = resolved.substeps;
+        self.choose_step();
+        Ok(())
+    }
+
+    /// Advances by `elapsed` wall-clock seconds at the scene's speed, unless
+    /// paused or diverged. Runs at most what fits in `STEP_BUDGET_MS`.
+    pub fn frame(&mut self, elapsed: f64) -> FrameReport {
+        if self.paused || self.divergence.is_some() {
+            return FrameReport::default();
+        }
+        let dt = self.system.params().dt;
+        let speed = f64::from(self.substeps) * dt / FRAME_PERIOD;
+        let budget = if self.ms_per_step > 0.0 {
+            (STEP_BUDGET_MS / self.ms_per_step).floor().clamp(1.0, 1e6) as u32
+        } else {
+            self.substeps
+        };
+        let max_steps = budget.min(self.substeps.saturating_mul(16)).max(1);
+        let due = self.clock.advance(elapsed, speed, dt, max_steps);
+        let report = self.run_steps(due.steps);
+        FrameReport {
+            behind: due.dropped > 0.0,
+            ..report
+        }
+    }
+
+    /// One step, whether paused or not (the "Step" button).
+    pub fn single_step(&mut self) -> FrameReport {
+        if self.divergence.is_some() {
+            return FrameReport::default();
+        }
+        self.run_steps(1)
+    }
+
+    fn run_steps(&mut self, steps: u32) -> FrameReport {
+        let start = Instant::now();
+        let mut done = 0;
+        for _ in 0..steps {
+            done += 1;
+            if let Err(d) = self.system.step() {
+                let margin = Some(self.system.stability().margin).filter(|m| m.is_finite());
+                log::warn!("simulation diverged: {d}");
+                self.divergence = Some(DivergenceReport {
+                    message: d.to_string(),
+                    time: d.time(),
+                    margin,
+                });
+                self.paused = true;
+                self.system.release();
+                break;
+            }
+        }
+        let sim_ms = start.elapsed().as_secs_f64() * 1e3;
+        if done > 0 {
+            let per = sim_ms / f64::from(done);
+            self.ms_per_step = if self.ms_per_step > 0.0 {
+                0.8 * self.ms_per_step + 0.2 * per
+            } else {
+                per
+            };
+        }
+        FrameReport {
+            steps: done,
+            sim_ms,
+            behind: false,
+        }
+    }
+}

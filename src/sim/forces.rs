@@ -1,0 +1,199 @@
+//! Force terms, each separate, each run only when the scene uses it (see [`ForceTerms`]).
+//!
+//! Units are SI: positions in m, velocities in m/s, forces in N.
+//! - gravity: `m g`;
+//! - damped springs: `f_a = -(k (l - L) + b (v_a - v_b)·u) u`, `f_b = -f_a`;
+//! - aerodynamic drag per triangle (seed 000): `v_rel` = mean vertex velocity minus
+//!   wind, `F = -1/2 rho C_d A (v_rel·n) |v_rel| n`, a third to each vertex;
+//! - viscous air damping `-c v` (seed 002);
+//! - ground penalty contact `k_c d n - c_g (v·n) n` for a particle at depth `d > 0`.
+
+use glam::DVec3;
+use rayon::prelude::*;
+
+use super::Model;
+
+/// Below this length (m) a spring or triangle edge is treated as degenerate.
+pub const EPSILON_LENGTH: f64 = 1e-12;
+
+/// Spring count above which spring forces are computed on several threads.
+const PARALLEL_SPRINGS: usize = 20_000;
+
+/// Whether the model's spring forces are computed on several threads.
+pub fn uses_threads(model: &Model) -> bool {
+    model.springs.len() >= PARALLEL_SPRINGS
+}
+
+/// Which force terms a model evaluates. Derived from the scene: a term that cannot
+/// contribute is not run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ForceTerms {
+    /// Uniform gravity (gravity is non-zero).
+    pub gravity: bool,
+    /// Damped springs (the model has springs).
+    pub springs: bool,
+    /// Per-triangle aerodynamic drag (triangles, and air density and drag coefficient > 0).
+    pub aero: bool,
+    /// Viscous air damping (coefficient > 0).
+    pub air_damping: bool,
+    /// Ground penalty contact (the scene has a ground).
+    pub ground: bool,
+}
+
+impl ForceTerms {
+    /// Names of the terms that run, for reports.
+    pub fn names(&self) -> Vec<&'static str> {
+        let mut names = Vec::new();
+        for (on, name) in [
+            (self.gravity, "gravity"),
+            (self.springs, "springs"),
+            (self.aero, "aero-drag"),
+            (self.air_damping, "air-damping"),
+            (self.ground, "ground-contact"),
+        ] {
+            if on {
+                names.push(name);
+            }
+        }
+        names
+    }
+}
+
+impl Model {
+    /// Accelerations `a = F / m + g` at positions `x`, velocities `v` and time `t`,
+    /// written into `out` (zero for pinned particles). `spring_forces` is scratch
+    /// space of one entry per spring.
+    pub fn accelerations(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        t: f64,
+        spring_forces: &mut [DVec3],
+        out: &mut [DVec3],
+    ) {
+        self.forces(x, v, t, spring_forces, out);
+        let g = if self.terms.gravity {
+            self.params.gravity
+        } else {
+            DVec3::ZERO
+        };
+        for (a, &w) in out.iter_mut().zip(&self.inv_mass) {
+            *a = if w > 0.0 { *a * w + g } else { DVec3::ZERO };
+        }
+    }
+
+    /// Total force on each particle except gravity, written into `out`.
+    pub fn forces(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        t: f64,
+        spring_forces: &mut [DVec3],
+        out: &mut [DVec3],
+    ) {
+        out.fill(DVec3::ZERO);
+        if self.terms.springs {
+            self.add_spring_forces(x, v, spring_forces, out);
+        }
+        if self.terms.aero {
+            self.add_aero_forces(x, v, t, out);
+        }
+        if self.terms.air_damping {
+            let c = self.params.air_damping;
+            for (f, &vi) in out.iter_mut().zip(v) {
+                *f -= c * vi;
+            }
+        }
+        if self.terms.ground {
+            self.add_ground_forces(x, v, out);
+        }
+    }
+
+    /// Spring forces in two passes: each spring's force on its `a` end (one writer
+    /// per spring), then each particle gathers from its own springs (one writer per
+    /// particle). No two threads ever write the same memory.
+    fn add_spring_forces(
+        &self,
+        x: &[DVec3],
+        v: &[DVec3],
+        spring_forces: &mut [DVec3],
+        out: &mut [DVec3],
+    ) {
+        let force_on_a = |s: &super::Spring| {
+            let (a, b) = (s.a as usize, s.b as usize);
+            spring_force(x[a] - x[b], v[a] - v[b], s.rest, s.stiffness, s.damping)
+        };
+        let parallel = uses_threads(self);
+        if parallel {
+            (spring_forces.par_iter_mut().zip(self.springs.par_iter()))
+                .for_each(|(f, s)| *f = force_on_a(s));
+        } else {
+            for (f, s) in spring_forces.iter_mut().zip(&self.springs) {
+                *f = force_on_a(s);
+            }
+        }
+        let spring_forces = &*spring_forces;
+        let gather = |(i, f): (usize, &mut DVec3)| {
+            for (spring, sign) in self.adjacency.springs_of(i) {
+                *f += sign * spring_forces[spring];
+            }
+        };
+        if parallel {
+            out.par_iter_mut().enumerate().for_each(gather);
+        } else {
+            out.iter_mut().enumerate().for_each(gather);
+        }
+    }
+
+    fn add_aero_forces(&self, x: &[DVec3], v: &[DVec3], t: f64, out: &mut [DVec3]) {
+        let wind = self.wind.at(t);
+        let half_rho_cd = 0.5 * self.params.air_density * self.params.drag_coefficient;
+        for tri in &self.triangles {
+            let [a, b, c] = tri.map(|i| i as usize);
+            let v_rel = (v[a] + v[b] + v[c]) / 3.0 - wind;
+            let f = aero_force(x[a], x[b], x[c], v_rel, half_rho_cd) / 3.0;
+            out[a] += f;
+            out[b] += f;
+            out[c] += f;
+        }
+    }
+
+    fn add_ground_forces(&self, x: &[DVec3], v: &[DVec3], out: &mut [DVec3]) {
+        let Some(ground) = self.params.ground else {
+            return;
+        };
+        for ((f, xi), vi) in out.iter_mut().zip(x).zip(v) {
+            let depth = ground.height - xi.y;
+            if depth > 0.0 {
+                f.y += ground.stiffness * depth - ground.damping * vi.y;
+            }
+        }
+    }
+}
+
+/// Force on end `a` of a damped spring, given `d = x_a - x_b` and `dv = v_a - v_b`.
+/// Zero for coincident endpoints (no direction to push along).
+#[inline]
+pub fn spring_force(d: DVec3, dv: DVec3, rest: f64, k: f64, b: f64) -> DVec3 {
+    let l = d.length();
+    if l <= EPSILON_LENGTH {
+        return DVec3::ZERO;
+    }
+    let u = d / l;
+    -(k * (l - rest) + b * dv.dot(u)) * u
+}
+
+/// Aerodynamic drag on a triangle `(a, b, c)` moving at `v_rel` relative to the air:
+/// `-1/2 rho C_d A (v_rel·n) |v_rel| n`, with `half_rho_cd = rho C_d / 2`.
+/// Zero for a zero-area triangle or zero relative velocity.
+#[inline]
+pub fn aero_force(a: DVec3, b: DVec3, c: DVec3, v_rel: DVec3, half_rho_cd: f64) -> DVec3 {
+    let cross = (b - a).cross(c - a);
+    let twice_area = cross.length();
+    let speed = v_rel.length();
+    if twice_area <= EPSILON_LENGTH * EPSILON_LENGTH || speed <= EPSILON_LENGTH {
+        return DVec3::ZERO;
+    }
+    let n = cross / twice_area;
+    -half_rho_cd * (0.5 * twice_area) * v_rel.dot(n) * speed * n
+}

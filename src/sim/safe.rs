@@ -1,0 +1,91 @@
+//! Safe stepping: the number of substeps `n` that splits a frame of `T` seconds into
+//! steps `h = T / n <= safety * dt_crit`, where `dt_crit` is the integrator's critical
+//! step on the Gershgorin bound of the highest angular frequency (see
+//! [`super::stability`]): `omega_max <= sqrt(max_i (2 sum_j k_j + k_c) / m_i)`.
+//!
+//! The bound holds for springs at or beyond their rest length (each spring's
+//! linearised stiffness block then has eigenvalues between 0 and `k`), so a step
+//! below it is stable for the linear part of the model whatever k, b or mass the
+//! user picks. A strongly compressed spring adds a transverse term
+//! `k (1 - L/l) < 0` (buckling) that the bound does not cover: that is why the app
+//! scales the whole cloth when the user changes its rest length (see
+//! [`super::System::rescale`]).
+//!
+//! It costs one pass over the springs and a bisection on a 2x2 amplification
+//! matrix: cheap enough to call whenever a slider moves.
+
+use super::{Integrator, Model, stability};
+
+/// Default fraction of the critical step that safe stepping keeps below.
+pub const DEFAULT_SAFETY: f64 = 0.5;
+/// Default cap on substeps per frame, so that one frame cannot take unbounded time.
+pub const DEFAULT_MAX_SUBSTEPS: u32 = 100_000;
+
+/// What safe stepping chose for one frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SafeStep {
+    /// Substeps per frame (at least 1).
+    pub substeps: u32,
+    /// The step that results, `frame_time / substeps`, in s.
+    pub dt: f64,
+    /// Critical step of the integrator on the Gershgorin bound, in s: `Some(inf)` for
+    /// no limit (implicit Euler, or nothing oscillates), `None` when no step is stable
+    /// (explicit Euler or RK2 without enough damping).
+    pub dt_critical: Option<f64>,
+    /// Whether the step meets `dt <= safety * dt_critical`. False when no step is
+    /// stable or when `max_substeps` was not enough.
+    pub safe: bool,
+}
+
+/// Substeps for a frame of `frame_time` seconds so that each step stays below
+/// `safety` (in (0, 1]) times the critical step of `model.params.integrator`, capped
+/// at `max_substeps`. Ignores `model.params.dt`.
+pub fn safe_step(model: &Model, frame_time: f64, safety: f64, max_substeps: u32) -> SafeStep {
+    let max_substeps = max_substeps.max(1);
+    let safety = if safety.is_finite() && safety > 0.0 {
+        safety.min(1.0)
+    } else {
+        DEFAULT_SAFETY
+    };
+    let omega = stability::omega_max_bound(model);
+    let zeta = stability::damping_ratio(model, omega);
+    let dt_critical = stability::critical_step(model.params.integrator, omega, zeta);
+    if !(frame_time.is_finite() && frame_time > 0.0) {
+        return SafeStep {
+            substeps: 1,
+            dt: frame_time,
+            dt_critical,
+            safe: false,
+        };
+    }
+    let (substeps, safe) = match dt_critical {
+        Some(c) if c.is_infinite() => (1, true),
+        Some(c) => {
+            let wanted = (frame_time / (safety * c)).ceil();
+            if wanted <= max_substeps as f64 {
+                ((wanted as u32).max(1), true)
+            } else {
+                (max_substeps, false)
+            }
+        }
+        None => (max_substeps, false),
+    };
+    SafeStep {
+        substeps,
+        dt: frame_time / substeps as f64,
+        dt_critical,
+        safe,
+    }
+}
+
+/// Substeps per frame of `frame_time` seconds for the model's integrator, keeping the
+/// step below `safety * dt_crit` (capped at [`DEFAULT_MAX_SUBSTEPS`]).
+pub fn safe_substeps(model: &Model, frame_time: f64, safety: f64) -> u32 {
+    safe_step(model, frame_time, safety, DEFAULT_MAX_SUBSTEPS).substeps
+}
+
+/// Whether `integrator` has a stable step on an undamped oscillator (false for
+/// explicit Euler and RK2, whose safe stepping relies on damping).
+pub fn has_undamped_limit(integrator: Integrator) -> bool {
+    stability::critical_step(integrator, 1.0, 0.0).is_some()
+}

@@ -1,0 +1,200 @@
+//! The `cloth` command line as a user runs it: exit codes, output fields, dumps and
+//! error messages.
+
+use std::process::{Command, Output};
+
+fn cloth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cloth"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn run_prints_the_summary() {
+    let o = cloth(&["run", "--scene", "chain", "--duration", "0.5"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    for field in [
+        "steps",
+        "simulated time",
+        "wall time",
+        "steps/s",
+        "energy",
+        "bounding box",
+        "max speed",
+    ] {
+        assert!(out.contains(field), "missing {field} in\n{out}");
+    }
+    assert!(out.contains("500"), "0.5 s at dt 1e-3 is 500 steps:\n{out}");
+}
+
+#[test]
+fn run_json_is_one_object_with_the_fields() {
+    let o = cloth(&[
+        "run", "--scene", "bench", "--steps", "10", "--json", "--set", "width=8", "--set",
+        "height=8",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).expect("one JSON object");
+    assert_eq!(v["steps"], 10);
+    assert_eq!(v["particles"], 64);
+    for field in [
+        "simulated_time",
+        "wall_time",
+        "steps_per_second",
+        "particle_steps_per_second",
+        "spring_steps_per_second",
+        "energy",
+        "bounding_box",
+        "max_speed",
+    ] {
+        assert!(!v[field].is_null(), "missing {field}");
+    }
+}
+
+#[test]
+fn dump_with_zero_steps_writes_the_initial_state() {
+    let path = std::env::temp_dir().join(format!("cloth-dump-{}.csv", std::process::id()));
+    let o = cloth(&[
+        "run",
+        "--scene",
+        "bench",
+        "--steps",
+        "0",
+        "--dump",
+        path.to_str().unwrap(),
+        "--set",
+        "width=4",
+        "--set",
+        "height=3",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&path).unwrap();
+    std::fs::remove_file(&path).ok();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "index,x,y,z");
+    assert_eq!(lines.len(), 1 + 12);
+    // The peers' layout: particle r*N + c at (c h, 1 - r h, 0), h = 1/(N-1) over the width.
+    let fields: Vec<f64> = lines[1 + 5]
+        .split(',')
+        .map(|f| f.parse().unwrap())
+        .collect();
+    let h = 1.0 / 3.0;
+    assert_eq!(fields[0], 5.0);
+    assert!(
+        (fields[1] - h).abs() < 1e-12 && (fields[2] - (1.0 - h)).abs() < 1e-12 && fields[3] == 0.0,
+        "{fields:?}"
+    );
+}
+
+#[test]
+fn divergence_exits_3_with_time_and_hint() {
+    let o = cloth(&[
+        "run",
+        "--scene",
+        "cloth",
+        "--set",
+        "stiffness=100000",
+        "--duration",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let err = stderr(&o);
+    assert!(err.contains("diverged") && err.contains("t = "), "{err}");
+    assert!(
+        err.contains("smaller dt") && err.contains("implicit-euler"),
+        "{err}"
+    );
+}
+
+#[test]
+fn bad_input_exits_2_with_a_message() {
+    for (args, needle) in [
+        (vec!["run", "--scene", "nosuchscene"], "unknown scene"),
+        (vec!["run", "--set", "particle_mass=-1"], "particle_mass"),
+        (vec!["run", "--integrator", "leapfrog"], "leapfrog"),
+        (vec!["run", "--dt", "nan"], "dt"),
+        (vec!["run", "--set", "width=0"], "width"),
+        (
+            vec!["info", "--scene", "/nonexistent/scene.toml"],
+            "unknown scene",
+        ),
+        (vec!["run", "--steps", "-5"], "steps"),
+    ] {
+        let o = cloth(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"), "{args:?} panicked");
+    }
+}
+
+#[test]
+fn a_scene_file_with_a_typo_names_file_and_key() {
+    let path = std::env::temp_dir().join(format!("cloth-typo-{}.toml", std::process::id()));
+    std::fs::write(&path, "layout = \"grid\"\nwidht = 10\n").unwrap();
+    let o = cloth(&["info", "--scene", path.to_str().unwrap()]);
+    std::fs::remove_file(&path).ok();
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert!(err.contains("widht") && err.contains("cloth-typo"), "{err}");
+}
+
+#[test]
+fn info_reports_counts_terms_parameters_and_stability() {
+    let o = cloth(&["info", "--scene", "cloth", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    assert_eq!(v["particles"], 1024);
+    assert_eq!(v["springs_per_kind"]["structural"], 2 * 32 * 31);
+    assert_eq!(v["triangles"], 2 * 31 * 31);
+    let terms: Vec<&str> = v["force_terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_str().unwrap())
+        .collect();
+    assert!(
+        terms.contains(&"aero-drag") && terms.contains(&"springs") && terms.contains(&"gravity")
+    );
+    assert!(v["stability"]["dt_over_dt_critical"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["parameters"]["integrator"], "symplectic-euler");
+
+    let chain = cloth(&["info", "--scene", "chain"]);
+    let text = stdout(&chain);
+    assert!(
+        text.contains("particles: 11") && text.contains("air-damping"),
+        "{text}"
+    );
+    assert!(!text.contains("aero-drag"), "{text}");
+}
+
+#[test]
+fn scenes_lists_every_builtin() {
+    let out = stdout(&cloth(&["scenes"]));
+    for name in [
+        "cloth",
+        "flag",
+        "spring",
+        "chain",
+        "jelly",
+        "rope",
+        "sheet",
+        "drape",
+        "bench",
+        "bench-wind",
+    ] {
+        assert!(
+            out.lines().any(|l| l.starts_with(name)),
+            "{name} missing:\n{out}"
+        );
+    }
+}

@@ -1,0 +1,104 @@
+#!/usr/bin/env bash
+# Drives the real app under Xvfb: start it, click a particle (pin), drag
+# another, resize the window, press R, press Esc; passes when the app logged each action, exited 0
+# and its log holds no error or panic.
+#
+# Needs: Xvfb, xdotool (and ImageMagick's `import` when SHOT_DIR is set, to save
+# screenshots there), a Vulkan or GL driver (Mesa's lavapipe will do).
+# Usage: tests/xvfb_app.sh            (from the repository root)
+#        CLOTH_BIN=path/to/cloth SHOT_DIR=/tmp/shots tests/xvfb_app.sh
+set -euo pipefail
+
+cd "$(dirname "$0")/.."
+BIN=${CLOTH_BIN:-target/release/cloth}
+if [[ ! -x $BIN ]]; then
+    cargo build --release --quiet
+fi
+for tool in Xvfb xdotool; do
+    command -v "$tool" >/dev/null || { echo "xvfb_app: $tool is not installed" >&2; exit 1; }
+done
+
+WORK=$(mktemp -d)
+LOG=$WORK/app.log
+XVFB_PID=""
+APP_PID=""
+cleanup() {
+    [[ -n $APP_PID ]] && kill "$APP_PID" 2>/dev/null || true
+    [[ -n $XVFB_PID ]] && kill "$XVFB_PID" 2>/dev/null || true
+    rm -rf "$WORK"
+}
+trap cleanup EXIT
+fail() {
+    echo "xvfb_app: FAIL: $*" >&2
+    echo "---- app log ----" >&2
+    cat "$LOG" >&2 || true
+    exit 1
+}
+
+# A free display, chosen by Xvfb itself.
+Xvfb -displayfd 3 -screen 0 1280x800x24 -nolisten tcp 3>"$WORK/display" 2>"$WORK/xvfb.log" &
+XVFB_PID=$!
+for _ in $(seq 50); do [[ -s $WORK/display ]] && break; sleep 0.1; done
+[[ -s $WORK/display ]] || fail "Xvfb did not start: $(cat "$WORK/xvfb.log")"
+export DISPLAY=":$(head -1 "$WORK/display")"
+export XDG_RUNTIME_DIR=$WORK/xdg
+mkdir -m 700 "$XDG_RUNTIME_DIR"
+
+RUST_LOG=${RUST_LOG:-warn,cloth=info} "$BIN" >"$LOG" 2>&1 &
+APP_PID=$!
+WID=$(timeout 30 xdotool search --sync --name "cloth-sandbox" | head -1) || true
+[[ -n $WID ]] || fail "no window titled cloth-sandbox appeared"
+sleep 3
+shot() { [[ -n ${SHOT_DIR:-} ]] && mkdir -p "$SHOT_DIR" && import -window root "$SHOT_DIR/$1.png" || true; }
+shot 1-default
+
+# The window sits at (0, 0) (no window manager); the panel takes the left
+# ~300 px and the cloth is framed in the middle of the rest, particles ~15 px apart.
+# Pin: a click in the cloth's middle lands within the pick radius of a particle.
+xdotool mousemove --window "$WID" 760 420 click 1
+sleep 1
+grep -q "pinned particle" "$LOG" || fail "clicking the cloth pinned no particle"
+shot 2-pinned
+
+# Drag: press on the cloth, move in steps, release.
+xdotool mousemove --window "$WID" 700 560 mousedown 1
+for step in 1 2 3 4 5 6 7 8; do
+    xdotool mousemove --window "$WID" $((700 + step * 20)) $((560 + step * 8))
+    sleep 0.1
+done
+sleep 0.5
+shot 3-dragging
+xdotool mouseup 1
+sleep 0.5
+grep -q "dragging particle" "$LOG" || fail "press-and-drag on the cloth grabbed no particle"
+grep -q "released particle" "$LOG" || fail "releasing the mouse did not release the particle"
+
+# Resize small and back (the scene keeps drawing beside the panel).
+xdotool windowsize --sync "$WID" 420 260 || xdotool windowsize "$WID" 420 260
+sleep 1
+shot 4-small
+xdotool windowsize --sync "$WID" 1200 760 || xdotool windowsize "$WID" 1200 760
+sleep 1
+
+# R resets, Esc quits (keys need focus first).
+xdotool windowfocus --sync "$WID"
+xdotool key r
+sleep 1
+grep -q "scene reset" "$LOG" || fail "R did not reset the scene"
+shot 5-reset
+xdotool windowfocus --sync "$WID"
+xdotool key Escape
+set +e
+timeout 20 tail --pid="$APP_PID" -f /dev/null
+wait "$APP_PID"
+STATUS=$?
+set -e
+APP_PID=""
+[[ $STATUS -eq 0 ]] || fail "the app exited with status $STATUS"
+# Errors: ERROR-level log lines, panics, wgpu validation errors, or an error
+# message from the app. (Mesa's XDG_RUNTIME_DIR notice and winit's WARN-level
+# notes about Xvfb's missing XSETTINGS are not errors.)
+if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
+    fail "the log has errors"
+fi
+echo "xvfb_app: ok (pin, drag, resize, reset, quit; exit 0, clean log)"
