@@ -3,6 +3,9 @@
 //! One iteration is one 60 Hz frame of 16 steps (dt = 1/960 s); the reported
 //! throughput in elements/s is steps/s.
 
+// criterion_group! and criterion_main! generate undocumented items.
+#![allow(missing_docs)]
+
 use std::time::Duration;
 
 use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};

@@ -1151,7 +1151,7 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
     let acc = band.acc.as_mut_slice();
     let b = [row * g.stride, (row + 1) * g.stride, (row + 2) * g.stride];
     // Everything read or written by `block` lies inside these bounds.
-    assert!(S::LANES <= BLOCK && nv % S::LANES == 0 && acc.len() == SLOTS * 3 * nv);
+    assert!(S::LANES <= BLOCK && nv.is_multiple_of(S::LANES) && acc.len() == SLOTS * 3 * nv);
     assert!(b[2] + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
     assert!(ctx.col_mask.len() >= g.stride + nv);
     for a in ctx.x.iter().chain(ctx.v.iter()) {
