@@ -8,11 +8,12 @@
 //! thread). Linux only for the load figures (reads /proc).
 //!
 //! `cargo run --release --example grid_bench -- [--sizes 32,64,128,256,512]
-//! [--threads 1,2] [--runs 5] [--wind | --calm] [--quiet-wait 60]`
+//! [--threads 1,2] [--runs 5] [--wind | --calm] [--quiet-wait 60]
+//! [--simd avx512|avx2|baseline]`
 
 use std::time::{Duration, Instant};
 
-use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};
+use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, SimdLevel};
 
 const MAX_OTHER: f64 = 0.10;
 
@@ -78,6 +79,7 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let (mut sizes, mut threads, mut runs, mut quiet_wait) = (None, None, 5usize, 60.0);
     let mut winds = vec![false, true];
+    let mut simd = None;
     while let Some(a) = args.next() {
         match a.as_str() {
             "--sizes" => sizes = args.next(),
@@ -88,6 +90,14 @@ fn main() {
                     .next()
                     .and_then(|s| s.parse().ok())
                     .unwrap_or(quiet_wait)
+            }
+            "--simd" => {
+                simd = match args.next().as_deref() {
+                    Some("avx512") => Some(SimdLevel::Avx512),
+                    Some("avx2") => Some(SimdLevel::Avx2),
+                    Some("baseline") => Some(SimdLevel::Baseline),
+                    _ => None,
+                }
             }
             "--wind" => winds = vec![true],
             "--calm" => winds = vec![false],
@@ -114,9 +124,15 @@ fn main() {
                         wait_quiet(quiet_wait);
                         let mut cloth = GridCloth::new(spec.clone());
                         cloth.set_threads(t);
+                        if let Some(level) = simd {
+                            cloth.set_simd_level(level);
+                        }
                         cloth.steps(dt, 16);
                         let mut cloth = GridCloth::new(spec.clone());
                         cloth.set_threads(t);
+                        if let Some(level) = simd {
+                            cloth.set_simd_level(level);
+                        }
                         let (b0, c0) = (busy_seconds(), process_cpu_seconds());
                         let start = Instant::now();
                         cloth.steps(dt, 960);
