@@ -31,13 +31,19 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 /// One test only, so no other test thread allocates while we count.
+///
+/// `steps(dt, n)` allocates nothing on one or two threads. `step()` called in a
+/// loop on two threads enters the rayon pool once per call, and rayon's global job
+/// queue (a crossbeam `Injector`) allocates one block per 63 entries: that is
+/// rayon's, not the kernel's, so it is counted, printed and bounded, not zero.
 #[test]
 fn no_allocation_in_1000_steps() {
     let dt = 1.0 / 960.0;
-    for (n, threads) in [(32, 1), (128, 1), (128, 2)] {
+    for (n, threads) in [(32, 1), (128, 1), (128, 2), (256, 2)] {
         for wind in [false, true] {
             let mut cloth = GridCloth::new(GridSpec::peer_bench(n, wind));
             cloth.set_threads(threads);
+            assert_eq!(cloth.is_parallel(), threads > 1);
             cloth.steps(dt, 200); // let the pool's threads start (their start allocates)
             let before = ALLOCATIONS.load(Ordering::SeqCst);
             cloth.steps(dt, 1000);
@@ -45,19 +51,18 @@ fn no_allocation_in_1000_steps() {
             assert_eq!(
                 after - before,
                 0,
-                "steps(): N={n} threads={threads} wind={wind}"
+                "steps(dt, 1000): N={n} threads={threads} wind={wind}"
             );
             let before = ALLOCATIONS.load(Ordering::SeqCst);
             for _ in 0..1000 {
                 cloth.step(dt);
             }
-            let after = ALLOCATIONS.load(Ordering::SeqCst);
-            println!(
-                "step() x1000: N={n} threads={threads} wind={wind}: {} allocations",
-                after - before
-            );
+            let count = ALLOCATIONS.load(Ordering::SeqCst) - before;
+            println!("1000 x step(): N={n} threads={threads} wind={wind}: {count} allocations");
             if threads == 1 {
-                assert_eq!(after - before, 0, "step(): N={n} wind={wind}");
+                assert_eq!(count, 0, "step(): N={n} wind={wind}");
+            } else {
+                assert!(count <= 1000 / 63 + 2, "step(): N={n} wind={wind}: {count}");
             }
         }
     }

@@ -52,7 +52,7 @@ const TINY: f32 = 1e-30;
 
 /// Grids with fewer particles than this run on the calling thread even when
 /// several threads are allowed (threading costs more than it saves there).
-pub const PARALLEL_MIN_PARTICLES: usize = 96 * 96;
+pub const PARALLEL_MIN_PARTICLES: usize = 48 * 48;
 
 /// Stiffness and damping of one kind of spring.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
