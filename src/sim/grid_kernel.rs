@@ -21,12 +21,16 @@
 //!   below the cloth: every loop runs over whole SIMD blocks with no scalar tail.
 //!   Ghost particles are pinned at the origin; forces of springs or triangles that
 //!   reach a ghost are zeroed before use.
-//! * Each spring and each triangle is evaluated **once**. One fused loop per row
-//!   `s` computes the six springs that start on the row, `(s, c)` to `(s, c+1)`,
-//!   `(s, c+2)`, `(s+1, c)`, `(s+1, c+1)`, `(s+2, c)` and `(s, c+1)` to
-//!   `(s+1, c)`, and the two drag triangles of cell `(s, c)`, into a ring of three
-//!   row buffers. A particle on row `r` then *gathers* its total force from the
-//!   buffers of rows `r`, `r-1`, `r-2` and is integrated at once.
+//! * Each spring and each triangle is evaluated **once** (a plain per-particle
+//!   gather evaluates every spring twice), in one fused pass per row `s` over SIMD
+//!   blocks of columns: it computes the six springs that start on the row, `(s, c)`
+//!   to `(s, c+1)`, `(s, c+2)`, `(s+1, c)`, `(s+1, c+1)`, `(s+2, c)` and `(s, c+1)`
+//!   to `(s+1, c)`, and the two drag triangles of cell `(s, c)`; adds their forces
+//!   on rows `s+1` and `s+2` to a ring of three accumulator rows; moves the forces
+//!   between neighbours of the same row by one or two lanes (a lane shift carried
+//!   from block to block); and, the force on `(s, c)` now being complete,
+//!   integrates the particle at once. Positions and velocities are read from memory
+//!   once per step (neighbour reads hit L1) and written once.
 //! * The step reads the old state and writes the new one into a second set of
 //!   arrays (ping-pong), so row bands can run on different threads: a band first
 //!   recomputes the two spring rows above it, no thread writes memory another one
