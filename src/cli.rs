@@ -10,7 +10,7 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::safe::{DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, safe_step};
-use cloth_sandbox::sim::{Divergence, SpringKind, System, bounding_sphere};
+use cloth_sandbox::sim::{Divergence, Engine, SpringKind, System, bounding_sphere};
 use glam::DVec3;
 use serde_json::json;
 
@@ -109,6 +109,14 @@ pub struct RunArgs {
     /// step below half the integrator's critical step (Gershgorin estimate).
     #[arg(long)]
     safe: bool,
+    /// Always use the general f64 engine (by default a plain grid cloth stepped by
+    /// symplectic Euler runs on the f32 grid kernel; results agree to round-off).
+    #[arg(long)]
+    exact: bool,
+    /// Untimed steps before the timed run, after which the start state is restored
+    /// (as the peers' benchmarks warm up).
+    #[arg(long, default_value_t = 0, value_name = "N")]
+    warmup: u64,
 }
 
 /// `cloth info`.
@@ -213,10 +221,19 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
             }
         );
     }
+    system.set_fast_path(!args.exact);
+    let engine = system.engine();
+    // Setup is not timed: zero steps build the engine's buffers (and thread pool),
+    // and warm-up steps run from the start state, which is then put back.
+    let start_state = system.state().clone();
+    if system.run(args.warmup).is_err() {
+        system.set_state(start_state.clone());
+    }
+    system.set_state(start_state);
     let start = Instant::now();
     let outcome = system.run(steps);
     let wall = start.elapsed().as_secs_f64();
-    let summary = Summary::of(&system, wall);
+    let summary = Summary::of(&system, wall, engine);
     if let Some(path) = &args.dump {
         dump_csv(&system, path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
@@ -284,10 +301,12 @@ struct Summary {
     min: DVec3,
     max: DVec3,
     max_speed: f64,
+    engine: Engine,
+    threads: usize,
 }
 
 impl Summary {
-    fn of(system: &System, wall: f64) -> Self {
+    fn of(system: &System, wall: f64, engine: Engine) -> Self {
         let positions = system.positions();
         let (min, max) = positions
             .iter()
@@ -309,6 +328,8 @@ impl Summary {
             min,
             max,
             max_speed,
+            engine,
+            threads: rayon::current_num_threads(),
         }
     }
 
@@ -339,6 +360,8 @@ impl Summary {
             },
             "bounding_box": { "min": [self.min.x, self.min.y, self.min.z], "max": [self.max.x, self.max.y, self.max.z] },
             "max_speed": self.max_speed,
+            "engine": self.engine.name(),
+            "threads": self.threads,
         })
     }
 
@@ -364,6 +387,11 @@ impl Summary {
             self.min.x, self.min.y, self.min.z, self.max.x, self.max.y, self.max.z
         );
         println!("max speed       {:.4} m/s", self.max_speed);
+        println!(
+            "engine          {} ({} threads)",
+            self.engine.name(),
+            self.threads
+        );
     }
 }
 

@@ -164,3 +164,20 @@ fn a_rest_length_jump_scales_the_cloth_and_keeps_its_strains() {
     assert!((ratio / 1e4 - 1.0).abs() < 1e-6, "{ratio}");
     run_steps(&mut s, 3_000).unwrap();
 }
+
+#[test]
+fn the_default_cloth_needs_no_limit_and_runs_on_the_grid_kernel() {
+    let s = Session::load_with("cloth", &[]).unwrap();
+    assert_eq!(s.step_choice().unwrap().stretch_limit, None);
+    assert_eq!(s.system().engine(), cloth_sandbox::sim::Engine::Grid);
+}
+
+#[test]
+fn the_wind_load_ratio_separates_the_default_from_the_gale() {
+    use cloth_sandbox::session::{WIND_LOAD_NEEDING_A_LIMIT, wind_load_ratio};
+    let ratio =
+        |settings: &[(&str, &str)]| wind_load_ratio(&session(settings).scene().resolve().unwrap());
+    assert!(ratio(&[]) < 0.01 * WIND_LOAD_NEEDING_A_LIMIT);
+    let gale = ratio(&[("stiffness", "1"), ("wind", "20,20,20"), ("gust", "10")]);
+    assert!(gale > 10.0 * WIND_LOAD_NEEDING_A_LIMIT, "{gale}");
+}

@@ -6,6 +6,7 @@ use glam::{DMat3, DVec2, DVec3};
 
 use super::values::{PinPreset, Pins};
 use super::{Layout, Orientation, SceneError, SceneSpec};
+use crate::sim::GridShape;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 
 /// Largest grid side (particles), so a typo cannot ask for billions of particles.
@@ -603,11 +604,16 @@ impl Resolved {
         } else {
             uvs
         };
+        let grid = (self.layout == Layout::Grid).then_some(GridShape {
+            width: self.width as usize,
+            height: self.height as usize,
+        });
         let topology = Topology {
             springs,
             bars,
             triangles,
             uvs,
+            grid,
         };
         System::new(masses, positions, &self.pins, topology, self.params)
     }

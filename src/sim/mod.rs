@@ -7,6 +7,7 @@
 
 pub mod clock;
 pub mod constraints;
+pub mod fast_path;
 pub mod forces;
 pub mod grid_kernel;
 pub mod implicit;
@@ -19,6 +20,7 @@ pub mod wind;
 use glam::{DVec2, DVec3};
 
 pub use clock::Clock;
+pub use fast_path::{Engine, GridShape};
 pub use forces::ForceTerms;
 pub use integrators::Integrator;
 pub use safe::{SafeStep, safe_step, safe_substeps};
@@ -109,6 +111,9 @@ pub struct Topology {
     pub triangles: Vec<[u32; 3]>,
     /// Texture coordinates per particle (empty without a surface).
     pub uvs: Vec<DVec2>,
+    /// The grid's shape when the particles form a regular grid cloth
+    /// (`p = row * width + column`), which the grid fast path needs.
+    pub grid: Option<GridShape>,
 }
 
 /// Topology and parameters: what stays fixed while the state advances.
@@ -130,6 +135,8 @@ pub struct Model {
     pub triangles: Vec<[u32; 3]>,
     /// Texture coordinates per particle (empty without a surface).
     pub uvs: Vec<DVec2>,
+    /// Grid shape, for grid cloths.
+    pub grid: Option<GridShape>,
     /// Parameters.
     pub params: Params,
     /// Force terms that run.
@@ -233,6 +240,8 @@ pub struct System {
     start_center: DVec3,
     start_extent: f64,
     grabbed: Option<(usize, DVec3)>,
+    fast_path_allowed: bool,
+    fast_path: fast_path::FastPathSlot,
 }
 
 impl System {
@@ -250,6 +259,7 @@ impl System {
             bars,
             triangles,
             uvs,
+            grid,
         } = topology;
         let n = positions.len();
         assert_eq!(masses.len(), n, "one mass per particle");
@@ -271,6 +281,7 @@ impl System {
             bars,
             triangles,
             uvs,
+            grid,
             params,
             terms: ForceTerms::default(),
             wind,
@@ -289,6 +300,8 @@ impl System {
             start_center,
             start_extent,
             grabbed: None,
+            fast_path_allowed: false,
+            fast_path: fast_path::FastPathSlot::default(),
         };
         system.prepare_integrator();
         system
@@ -346,6 +359,22 @@ impl System {
     pub fn state(&self) -> &State {
         &self.state
     }
+
+    /// Puts back a state taken from this system with [`Self::state`] (e.g. to rerun
+    /// from the start). Ignored if its particle count differs.
+    pub fn set_state(&mut self, state: State) {
+        let n = self.particle_count();
+        if state.positions.len() != n || state.velocities.len() != n {
+            return;
+        }
+        self.mark_changed();
+        self.state = state;
+        if self.model.params.integrator == Integrator::Verlet
+            && self.state.prev_positions.len() != n
+        {
+            self.restart_verlet_history();
+        }
+    }
     /// Simulated time in s.
     pub fn time(&self) -> f64 {
         self.state.time
@@ -370,6 +399,7 @@ impl System {
 
     /// Pins or unpins particle `i` (ignored if out of range). A pinned particle stops.
     pub fn set_pinned(&mut self, i: usize, pinned: bool) {
+        self.mark_changed();
         if i >= self.particle_count() {
             return;
         }
@@ -384,6 +414,7 @@ impl System {
     /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
     /// hand and pulls its neighbours through their springs. Non-finite targets are ignored.
     pub fn grab(&mut self, i: usize, target: DVec3) {
+        self.mark_changed();
         if i >= self.particle_count() || !target.is_finite() {
             return;
         }
@@ -401,6 +432,7 @@ impl System {
 
     /// Lets go of the held particle: it is free again unless pinned.
     pub fn release(&mut self) {
+        self.mark_changed();
         if let Some((i, _)) = self.grabbed.take() {
             self.state.velocities[i] = DVec3::ZERO;
             self.model.refresh_inv_mass(None);
@@ -411,6 +443,7 @@ impl System {
     /// Changes parameters that need no rebuild (k and b go through
     /// [`Self::set_spring_stiffness`]); recomputes which force terms run.
     pub fn set_params(&mut self, params: Params) {
+        self.mark_changed();
         let integrator_changed = params.integrator != self.model.params.integrator;
         let dt_changed = params.dt != self.model.params.dt;
         self.model.params = params;
@@ -456,6 +489,7 @@ impl System {
     /// pinned). Strains and velocities are unchanged, so no energy is injected: this
     /// is how a rest-length edit applies to a running cloth.
     pub fn rescale(&mut self, factor: f64) {
+        self.mark_changed();
         if !(factor.is_finite() && factor > 0.0) {
             return;
         }
@@ -503,6 +537,7 @@ impl System {
     /// Advances one step of `dt`, then checks the state. On divergence the state is
     /// left as it is (the caller decides to reset).
     pub fn step(&mut self) -> Result<(), Divergence> {
+        self.mark_changed();
         if let Some((i, target)) = self.grabbed {
             self.state.positions[i] = target;
             self.state.velocities[i] = DVec3::ZERO;
@@ -524,6 +559,10 @@ impl System {
     /// threaded force path runs its whole loop on a pool thread, so the parallel loops
     /// inside go through worker-local queues and allocate nothing per step.
     pub fn run(&mut self, n: u64) -> Result<(), Divergence> {
+        if let Some(result) = self.run_on_grid(n) {
+            return result;
+        }
+        self.mark_changed();
         let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());
         if forces::uses_threads(&self.model) {
             let mut result = Ok(());
@@ -542,10 +581,15 @@ impl System {
             || p.sphere.is_some()
     }
 
+    /// Distance from the start (m) past which a particle counts as a runaway.
+    fn runaway_distance(&self) -> f64 {
+        RUNAWAY_EXTENT * (self.start_extent + 0.1) + 1000.0
+    }
+
     /// Checks for non-finite values and runaways.
     pub fn check(&self) -> Result<(), Divergence> {
         let (time, step) = (self.state.time, self.state.steps);
-        let far = RUNAWAY_EXTENT * (self.start_extent + 0.1) + 1000.0;
+        let far = self.runaway_distance();
         let mut max_speed2: f64 = 0.0;
         let mut max_dist2: f64 = 0.0;
         for (x, v) in self.state.positions.iter().zip(&self.state.velocities) {
@@ -567,6 +611,14 @@ impl System {
             return Err(Divergence::Runaway { time, step, what });
         }
         Ok(())
+    }
+
+    /// The f64 state is about to change outside the grid kernel: it must be copied
+    /// in again before the kernel next runs.
+    fn mark_changed(&mut self) {
+        if let Some(fast) = &mut self.fast_path.0 {
+            fast.in_sync = false;
+        }
     }
 
     fn prepare_integrator(&mut self) {

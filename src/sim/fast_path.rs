@@ -1,0 +1,255 @@
+//! The grid fast path: [`System::run`] hands a regular grid cloth stepped by
+//! symplectic Euler to the f32 stencil kernel of [`super::grid_kernel`] when the
+//! caller allows it ([`System::set_fast_path`]) and the system is one the kernel
+//! models exactly: a grid topology with uniform mass, one stiffness, damping and rest
+//! length per spring kind (rest `h`, `h√2`, `2h`), and no constraint, ground or air
+//! damping. Results then agree with the f64 general path to float32 round-off
+//! (about 1e-6 relative; `tests/fast_path.rs`).
+//!
+//! The f64 state stays the system's state: it is copied into the kernel when
+//! something outside changed it, and back after every chunk of steps, where the
+//! divergence check runs.
+
+use glam::DVec3;
+
+use super::grid_kernel::{GridCloth, GridSpec, SpringCoefficients};
+use super::{Integrator, SpringKind, System};
+
+/// Steps the kernel runs between copies back to the f64 state and divergence checks.
+const CHUNK: u64 = 32;
+
+/// Which code steps a system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Engine {
+    /// The general f64 path: any topology, force term, integrator or constraint.
+    General,
+    /// The f32 grid stencil kernel (symplectic Euler on plain grid cloths).
+    Grid,
+}
+
+impl Engine {
+    /// Name for reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::General => "general-f64",
+            Self::Grid => "grid-f32",
+        }
+    }
+}
+
+/// A grid's shape, recorded by the scene builder.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GridShape {
+    /// Particles per row.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+}
+
+/// The kernel, once built. A clone of a system starts without one and builds its own
+/// on first use (the kernel's buffers are not shared).
+#[derive(Debug, Default)]
+pub(super) struct FastPathSlot(pub(super) Option<FastPath>);
+
+impl Clone for FastPathSlot {
+    fn clone(&self) -> Self {
+        Self(None)
+    }
+}
+
+/// The kernel and what it was built from.
+#[derive(Debug)]
+pub(super) struct FastPath {
+    kernel: GridCloth,
+    spec: GridSpec,
+    /// Whether the kernel holds the same state as the f64 arrays.
+    pub(super) in_sync: bool,
+    /// Positions of the particles held in place (pinned or grabbed), exactly as
+    /// the f64 state had them: the kernel holds them in f32.
+    held: Vec<(usize, DVec3)>,
+}
+
+impl System {
+    /// Allows (or forbids) the f32 grid kernel for [`System::run`]. Off by default:
+    /// the library is exact (f64) unless asked otherwise.
+    pub fn set_fast_path(&mut self, allowed: bool) {
+        self.fast_path_allowed = allowed;
+        if !allowed {
+            self.fast_path.0 = None;
+        }
+    }
+
+    /// The engine [`System::run`] would use now.
+    pub fn engine(&self) -> Engine {
+        if self.fast_path_allowed && self.grid_spec().is_some() {
+            Engine::Grid
+        } else {
+            Engine::General
+        }
+    }
+
+    /// The kernel's description of this system, if the kernel models it exactly.
+    fn grid_spec(&self) -> Option<GridSpec> {
+        let model = &self.model;
+        let shape = model.grid?;
+        let p = &model.params;
+        let simple = p.integrator == Integrator::SymplecticEuler
+            && !self.has_constraints()
+            && p.ground.is_none()
+            && !model.terms.air_damping;
+        let mass = *model.mass.first()?;
+        if !simple || model.mass.iter().any(|&m| m != mass) {
+            return None;
+        }
+        // One coefficient set and rest length per kind, and the rest lengths of a grid.
+        let mut kinds: [Option<(f64, f64, f64)>; 3] = [None; 3];
+        for s in &model.springs {
+            let slot = match s.kind {
+                SpringKind::Structural => 0,
+                SpringKind::Shear => 1,
+                SpringKind::Bend => 2,
+                SpringKind::Other => return None,
+            };
+            let coefficients = (s.stiffness, s.damping, s.rest);
+            match kinds[slot] {
+                None => kinds[slot] = Some(coefficients),
+                Some(c) if c == coefficients => {}
+                Some(_) => return None,
+            }
+        }
+        let h = kinds[0].map(|c| c.2)?;
+        let rest_ratio = [1.0, std::f64::consts::SQRT_2, 2.0];
+        for (kind, ratio) in kinds.iter().zip(rest_ratio) {
+            if let Some((_, _, rest)) = kind
+                && (rest - ratio * h).abs() > 1e-12 * h.max(1e-300)
+            {
+                return None;
+            }
+        }
+        let coefficients = |k: Option<(f64, f64, f64)>| {
+            let (k, b, _) = k.unwrap_or((0.0, 0.0, 0.0));
+            SpringCoefficients { k, b }
+        };
+        let (air_density, drag_coefficient) = if model.terms.aero {
+            (p.air_density, p.drag_coefficient)
+        } else {
+            (0.0, 0.0)
+        };
+        let gravity = if model.terms.gravity {
+            p.gravity
+        } else {
+            DVec3::ZERO
+        };
+        Some(GridSpec {
+            width: shape.width,
+            height: shape.height,
+            spacing: h,
+            particle_mass: mass,
+            origin: [0.0; 3],
+            structural: coefficients(kinds[0]),
+            shear: coefficients(kinds[1]),
+            bend: coefficients(kinds[2]),
+            gravity: gravity.to_array(),
+            wind: p.wind.to_array(),
+            air_density,
+            drag_coefficient,
+            pinned: Vec::new(),
+        })
+        .filter(|spec| {
+            spec.spring_count() == model.springs.len() || kinds.iter().any(Option::is_none)
+        })
+    }
+
+    /// Runs `n` steps on the kernel if allowed and possible; `None` when the general
+    /// path must run them.
+    pub(super) fn run_on_grid(&mut self, n: u64) -> Option<Result<(), super::Divergence>> {
+        if !self.fast_path_allowed {
+            return None;
+        }
+        let spec = self.grid_spec()?;
+        // The kernel is taken out of `self` while it runs, so that the divergence
+        // check can borrow the system.
+        let mut fast = match self.fast_path.0.take() {
+            Some(fast) if fast.spec == spec => fast,
+            _ => {
+                let mut kernel = GridCloth::new(spec.clone());
+                kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
+                FastPath {
+                    kernel,
+                    spec,
+                    in_sync: false,
+                    held: Vec::new(),
+                }
+            }
+        };
+        if !fast.in_sync {
+            fast.kernel
+                .set_state(&self.state.positions, &self.state.velocities);
+            fast.held.clear();
+            for (i, &w) in self.model.inv_mass.iter().enumerate() {
+                fast.kernel.set_pinned(i, w == 0.0);
+                if w == 0.0 {
+                    fast.held.push((i, self.state.positions[i]));
+                }
+            }
+            fast.in_sync = true;
+        }
+        let dt = self.model.params.dt;
+        let gusty = self.model.wind.gust != 0.0 && self.model.terms.aero;
+        let mut done = 0;
+        let mut result = Ok(());
+        while done < n && result.is_ok() {
+            let chunk = CHUNK.min(n - done);
+            if gusty {
+                for i in 0..chunk {
+                    let t = self.state.time + (i as f64) * dt;
+                    fast.kernel.set_wind(self.model.wind.at(t));
+                    fast.kernel.step(dt);
+                }
+            } else {
+                fast.kernel.steps(dt, chunk as usize);
+            }
+            done += chunk;
+            // Simulated time advances by whole steps, as in the general path.
+            for _ in 0..chunk {
+                self.state.time += dt;
+            }
+            self.state.steps += chunk;
+            // A cheap scan of the kernel's own arrays; the f64 state (and the full
+            // check, with its message) only at the end or when the scan finds trouble.
+            if done == n || !self.kernel_state_plausible(&fast.kernel) {
+                fast.kernel.positions_into(&mut self.state.positions);
+                fast.kernel.velocities_into(&mut self.state.velocities);
+                for &(i, position) in &fast.held {
+                    self.state.positions[i] = position;
+                }
+                result = self.check();
+            }
+        }
+        self.fast_path.0 = Some(fast);
+        Some(result)
+    }
+
+    /// Whether the kernel's state passes the divergence check's limits: finite, no
+    /// speed above [`super::RUNAWAY_SPEED`], nothing beyond the runaway distance.
+    fn kernel_state_plausible(&self, kernel: &GridCloth) -> bool {
+        let far = self.runaway_distance();
+        let c = self.start_center.as_vec3();
+        let ([x, y, z], [vx, vy, vz]) = (kernel.raw_positions(), kernel.raw_velocities());
+        let (mut speed2, mut dist2) = (0.0f32, 0.0f32);
+        for i in 0..x.len() {
+            let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+            let (dx, dy, dz) = (x[i] - c.x, y[i] - c.y, z[i] - c.z);
+            // NaN fails every comparison: max() would drop it, so test it here.
+            speed2 = if v2.is_nan() {
+                f32::INFINITY
+            } else {
+                speed2.max(v2)
+            };
+            dist2 = dist2.max(dx * dx + dy * dy + dz * dz);
+        }
+        dist2.is_finite()
+            && (speed2 as f64) <= super::RUNAWAY_SPEED.powi(2)
+            && (dist2 as f64) <= far * far
+    }
+}
