@@ -398,6 +398,7 @@ fn contents(
                 Color32::from_rgb(120, 220, 120)
             };
             ui.colored_label(color, format!("stability dt / dt_crit = {margin:.3}"));
+            ui.label(format!("engine {}", system.engine().name()));
             ui.label(RichText::new(format!("adapter: {adapter}")).small());
         });
     // Display.

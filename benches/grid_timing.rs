@@ -7,7 +7,7 @@
 //! runs (max). `cpu/wall` is this process's CPU time over wall time (~1 per busy
 //! thread). Linux only for the load figures (reads /proc).
 //!
-//! `cargo run --release --example grid_bench -- [--sizes 32,64,128,256,512]
+//! `cargo bench --bench grid_timing -- [--sizes 32,64,128,256,512]
 //! [--threads 1,2] [--runs 5] [--wind | --calm] [--quiet-wait 60]
 //! [--simd avx512|avx2|baseline]`
 
@@ -101,6 +101,8 @@ fn main() {
             }
             "--wind" => winds = vec![true],
             "--calm" => winds = vec![false],
+            // `cargo bench` passes --bench to every bench binary.
+            "--bench" => {}
             _ => eprintln!("unknown argument {a}"),
         }
     }
