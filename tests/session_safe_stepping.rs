@@ -33,17 +33,17 @@ fn slider_extremes_stay_finite_with_safe_stepping() {
     let corners: &[&[(&str, &str)]] = &[
         &[
             ("stiffness", "100000"),
-            ("particle_mass", "0.0001"),
+            ("particle_mass", "0.000001"),
             ("dt", "0.05"),
         ],
         &[
             ("stiffness", "100000"),
-            ("particle_mass", "0.0001"),
+            ("particle_mass", "0.000001"),
             ("damping", "100"),
         ],
         &[
             ("stiffness", "0.01"),
-            ("particle_mass", "0.0001"),
+            ("particle_mass", "0.000001"),
             ("wind", "20,20,20"),
             ("gust", "10"),
         ],
@@ -56,7 +56,7 @@ fn slider_extremes_stay_finite_with_safe_stepping() {
         &[
             ("stiffness", "100000"),
             ("rest_length", "0.001"),
-            ("particle_mass", "0.0001"),
+            ("particle_mass", "0.000001"),
         ],
         &[
             ("stiffness", "100000"),
@@ -67,7 +67,7 @@ fn slider_extremes_stay_finite_with_safe_stepping() {
         &[
             ("integrator", "\"rk4\""),
             ("stiffness", "100000"),
-            ("particle_mass", "0.0001"),
+            ("particle_mass", "0.000001"),
         ],
         &[
             ("integrator", "\"verlet\""),
@@ -113,7 +113,7 @@ fn safe_stepping_keeps_simulated_time_per_frame() {
 fn without_safe_stepping_the_stiff_cloth_explodes() {
     let mut s = session(&[
         ("stiffness", "100000"),
-        ("particle_mass", "0.0001"),
+        ("particle_mass", "0.000001"),
         ("dt", "0.05"),
     ]);
     s.set_safe_stepping(false);

@@ -100,8 +100,12 @@ fn int_slider(
     range: std::ops::RangeInclusive<u32>,
     label: &str,
 ) -> bool {
-    ui.add(egui::Slider::new(value, range).text(label))
-        .changed()
+    ui.add(
+        egui::Slider::new(value, range)
+            .logarithmic(true)
+            .text(label),
+    )
+    .changed()
 }
 
 fn vec3(v: glam::DVec3) -> String {
@@ -295,12 +299,19 @@ fn contents(
             }
             match r.layout {
                 Layout::Grid | Layout::Lattice => {
+                    // Grids up to 512 x 512 run in real time on the grid kernel; a
+                    // lattice has 13 springs per particle and no fast path.
+                    let side = if r.layout == Layout::Grid {
+                        1..=512
+                    } else {
+                        2..=32
+                    };
                     let mut w = r.width;
-                    if int_slider(ui, &mut w, 2..=128, "width (particles)") {
+                    if int_slider(ui, &mut w, side.clone(), "width (particles)") {
                         set(actions, "width", w.to_string());
                     }
                     let mut h = r.height;
-                    if int_slider(ui, &mut h, 2..=128, "height (particles)") {
+                    if int_slider(ui, &mut h, side, "height (particles)") {
                         set(actions, "height", h.to_string());
                     }
                     if r.layout == Layout::Lattice {
@@ -319,7 +330,7 @@ fn contents(
                 Layout::Spring => {}
             }
             let mut m = r.particle_mass;
-            if slider(ui, &mut m, 0.0001..=10.0, "particle mass (kg)", true) {
+            if slider(ui, &mut m, 0.000_001..=10.0, "particle mass (kg)", true) {
                 set(actions, "particle_mass", m.to_string());
             }
             let mut g = p.gravity;
