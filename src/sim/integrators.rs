@@ -81,7 +81,7 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
     let h = model.params.dt;
     let t = state.time;
     match model.params.integrator {
-        Integrator::ExplicitEuler => {
+        Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
             let a = &mut work.accelerations;
             model.accelerations(
                 &state.positions,
@@ -90,33 +90,22 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
                 &mut work.spring_forces,
                 a,
             );
+            // Both take the acceleration of the old state; explicit Euler moves with
+            // the old velocity, symplectic Euler with the new one.
+            let symplectic = model.params.integrator == Integrator::SymplecticEuler;
             for ((x, v), a) in state
                 .positions
                 .iter_mut()
                 .zip(&mut state.velocities)
                 .zip(a.iter())
             {
-                *x += h * *v;
-                *v += h * *a;
-            }
-        }
-        Integrator::SymplecticEuler => {
-            let a = &mut work.accelerations;
-            model.accelerations(
-                &state.positions,
-                &state.velocities,
-                t,
-                &mut work.spring_forces,
-                a,
-            );
-            for ((x, v), a) in state
-                .positions
-                .iter_mut()
-                .zip(&mut state.velocities)
-                .zip(a.iter())
-            {
-                *v += h * *a;
-                *x += h * *v;
+                if symplectic {
+                    *v += h * *a;
+                    *x += h * *v;
+                } else {
+                    *x += h * *v;
+                    *v += h * *a;
+                }
             }
         }
         Integrator::Verlet => verlet(model, state, work, h, t),

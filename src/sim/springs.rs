@@ -125,17 +125,3 @@ impl Adjacency {
         })
     }
 }
-
-/// Number of springs of each kind in a `width` x `height` grid with structural, shear
-/// and bend springs, from the formulas (not by counting): used to check the builders.
-pub fn grid_spring_counts(width: usize, height: usize) -> [(SpringKind, usize); 3] {
-    let (w, h) = (width, height);
-    let structural = h * w.saturating_sub(1) + w * h.saturating_sub(1);
-    let shear = 2 * w.saturating_sub(1) * h.saturating_sub(1);
-    let bend = h * w.saturating_sub(2) + w * h.saturating_sub(2);
-    [
-        (SpringKind::Structural, structural),
-        (SpringKind::Shear, shear),
-        (SpringKind::Bend, bend),
-    ]
-}
