@@ -69,6 +69,69 @@ pub(super) struct FastPath {
     held: Vec<(usize, DVec3)>,
 }
 
+/// A grid cloth's springs and masses as the kernel needs them: one mass, and per
+/// kind (structural, shear, bend) one stiffness and damping with rest lengths `h`,
+/// `h√2`, `2h`, every spring of the stencil present for each kind that has any (a
+/// kind with none, e.g. `shear_scale = 0`, gets `k = b = 0`). Computed when springs
+/// or masses change, not on every run.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct GridSprings {
+    coefficients: [SpringCoefficients; 3],
+    spacing: f64,
+    mass: f64,
+}
+
+impl GridSprings {
+    /// The summary of `model`, or `None` when the kernel cannot model it.
+    pub(super) fn of(model: &super::Model) -> Option<Self> {
+        let shape = model.grid?;
+        let mass = *model.mass.first()?;
+        if model.mass.iter().any(|&m| m != mass) {
+            return None;
+        }
+        let mut kinds: [Option<(f64, f64, f64)>; 3] = [None; 3];
+        let mut counts = [0usize; 3];
+        for s in &model.springs {
+            let slot = match s.kind {
+                SpringKind::Structural => 0,
+                SpringKind::Shear => 1,
+                SpringKind::Bend => 2,
+                SpringKind::Other => return None,
+            };
+            let coefficients = (s.stiffness, s.damping, s.rest);
+            match kinds[slot] {
+                None => kinds[slot] = Some(coefficients),
+                Some(c) if c == coefficients => {}
+                Some(_) => return None,
+            }
+            counts[slot] += 1;
+        }
+        let h = kinds[0]?.2;
+        let (w, r) = (shape.width, shape.height);
+        let stencil = [
+            w.saturating_sub(1) * r + w * r.saturating_sub(1),
+            2 * w.saturating_sub(1) * r.saturating_sub(1),
+            w.saturating_sub(2) * r + w * r.saturating_sub(2),
+        ];
+        let rest_ratio = [1.0, std::f64::consts::SQRT_2, 2.0];
+        let mut coefficients = [SpringCoefficients::default(); 3];
+        for slot in 0..3 {
+            if let Some((k, b, rest)) = kinds[slot] {
+                let grid_rest = (rest - rest_ratio[slot] * h).abs() <= 1e-12 * h.max(1e-300);
+                if !grid_rest || counts[slot] != stencil[slot] {
+                    return None;
+                }
+                coefficients[slot] = SpringCoefficients { k, b };
+            }
+        }
+        Some(Self {
+            coefficients,
+            spacing: h,
+            mass,
+        })
+    }
+}
+
 impl System {
     /// Allows (or forbids) the f32 grid kernel for [`System::run`]. Off by default:
     /// the library is exact (f64) unless asked otherwise.
@@ -91,45 +154,15 @@ impl System {
     /// The kernel's description of this system, if the kernel models it exactly.
     fn grid_spec(&self) -> Option<GridSpec> {
         let model = &self.model;
-        let shape = model.grid?;
+        let (shape, springs) = (model.grid?, self.grid_springs?);
         let p = &model.params;
         let simple = p.integrator == Integrator::SymplecticEuler
             && !self.has_constraints()
             && p.ground.is_none()
             && !model.terms.air_damping;
-        let mass = *model.mass.first()?;
-        if !simple || model.mass.iter().any(|&m| m != mass) {
+        if !simple {
             return None;
         }
-        // One coefficient set and rest length per kind, and the rest lengths of a grid.
-        let mut kinds: [Option<(f64, f64, f64)>; 3] = [None; 3];
-        for s in &model.springs {
-            let slot = match s.kind {
-                SpringKind::Structural => 0,
-                SpringKind::Shear => 1,
-                SpringKind::Bend => 2,
-                SpringKind::Other => return None,
-            };
-            let coefficients = (s.stiffness, s.damping, s.rest);
-            match kinds[slot] {
-                None => kinds[slot] = Some(coefficients),
-                Some(c) if c == coefficients => {}
-                Some(_) => return None,
-            }
-        }
-        let h = kinds[0].map(|c| c.2)?;
-        let rest_ratio = [1.0, std::f64::consts::SQRT_2, 2.0];
-        for (kind, ratio) in kinds.iter().zip(rest_ratio) {
-            if let Some((_, _, rest)) = kind
-                && (rest - ratio * h).abs() > 1e-12 * h.max(1e-300)
-            {
-                return None;
-            }
-        }
-        let coefficients = |k: Option<(f64, f64, f64)>| {
-            let (k, b, _) = k.unwrap_or((0.0, 0.0, 0.0));
-            SpringCoefficients { k, b }
-        };
         let (air_density, drag_coefficient) = if model.terms.aero {
             (p.air_density, p.drag_coefficient)
         } else {
@@ -140,23 +173,21 @@ impl System {
         } else {
             DVec3::ZERO
         };
+        let [structural, shear, bend] = springs.coefficients;
         Some(GridSpec {
             width: shape.width,
             height: shape.height,
-            spacing: h,
-            particle_mass: mass,
+            spacing: springs.spacing,
+            particle_mass: springs.mass,
             origin: [0.0; 3],
-            structural: coefficients(kinds[0]),
-            shear: coefficients(kinds[1]),
-            bend: coefficients(kinds[2]),
+            structural,
+            shear,
+            bend,
             gravity: gravity.to_array(),
             wind: p.wind.to_array(),
             air_density,
             drag_coefficient,
             pinned: Vec::new(),
-        })
-        .filter(|spec| {
-            spec.spring_count() == model.springs.len() || kinds.iter().any(Option::is_none)
         })
     }
 

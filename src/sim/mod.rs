@@ -242,6 +242,8 @@ pub struct System {
     grabbed: Option<(usize, DVec3)>,
     fast_path_allowed: bool,
     fast_path: fast_path::FastPathSlot,
+    /// The springs and masses as the grid kernel sees them, summarised on each edit.
+    grid_springs: Option<fast_path::GridSprings>,
 }
 
 impl System {
@@ -286,7 +288,8 @@ impl System {
             terms: ForceTerms::default(),
             wind,
         };
-        model.refresh();
+        model.refresh_terms();
+        model.refresh_inv_mass(None);
         let (start_center, start_extent) = bounding_sphere(&positions);
         let state = State {
             velocities: vec![DVec3::ZERO; n],
@@ -302,7 +305,9 @@ impl System {
             grabbed: None,
             fast_path_allowed: false,
             fast_path: fast_path::FastPathSlot::default(),
+            grid_springs: None,
         };
+        system.grid_springs = fast_path::GridSprings::of(&system.model);
         system.prepare_integrator();
         system
     }
@@ -448,8 +453,7 @@ impl System {
         let dt_changed = params.dt != self.model.params.dt;
         self.model.params = params;
         self.model.wind = Wind::new(params.wind, params.gust, params.seed);
-        self.model.refresh();
-        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+        self.model.refresh_terms();
         if integrator_changed {
             self.prepare_integrator();
         } else if dt_changed && params.integrator == Integrator::Verlet {
@@ -462,6 +466,7 @@ impl System {
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.stiffness = stiffness;
         }
+        self.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
@@ -469,6 +474,7 @@ impl System {
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.damping = damping;
         }
+        self.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
@@ -482,6 +488,7 @@ impl System {
         for b in &mut self.model.bars {
             b.length *= factor;
         }
+        self.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
     /// Scales the whole system by `factor`: rest lengths, bar lengths and positions
@@ -521,6 +528,7 @@ impl System {
         }
         self.model.mass.fill(mass);
         self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+        self.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
     /// Energy now.
@@ -686,9 +694,8 @@ impl System {
 }
 
 impl Model {
-    /// Recomputes inverse masses and the force terms that run.
-    pub fn refresh(&mut self) {
-        self.refresh_inv_mass(None);
+    /// Recomputes which force terms run, from the parameters and topology.
+    pub fn refresh_terms(&mut self) {
         let p = &self.params;
         self.terms = ForceTerms {
             gravity: p.gravity != DVec3::ZERO,
