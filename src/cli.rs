@@ -10,7 +10,7 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::safe::{DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, safe_step};
-use cloth_sandbox::sim::{Divergence, Engine, SpringKind, System, bounding_sphere};
+use cloth_sandbox::sim::{Divergence, Engine, Integrator, SpringKind, System, bounding_sphere};
 use glam::DVec3;
 use serde_json::json;
 
@@ -303,6 +303,8 @@ struct Summary {
     max_speed: f64,
     engine: Engine,
     threads: usize,
+    /// Conjugate-gradient iterations of the last step, for implicit Euler.
+    solver_iterations: Option<usize>,
 }
 
 impl Summary {
@@ -330,6 +332,8 @@ impl Summary {
             max_speed,
             engine,
             threads: rayon::current_num_threads(),
+            solver_iterations: (system.params().integrator == Integrator::ImplicitEuler)
+                .then(|| system.solver_iterations()),
         }
     }
 
@@ -362,6 +366,7 @@ impl Summary {
             "max_speed": self.max_speed,
             "engine": self.engine.name(),
             "threads": self.threads,
+            "cg_iterations_last_step": self.solver_iterations,
         })
     }
 
@@ -392,6 +397,9 @@ impl Summary {
             self.engine.name(),
             self.threads
         );
+        if let Some(n) = self.solver_iterations {
+            println!("cg iterations   {n} (last step)");
+        }
     }
 }
 

@@ -198,3 +198,31 @@ fn scenes_lists_every_builtin() {
         );
     }
 }
+
+#[test]
+fn implicit_runs_report_their_solver_iterations() {
+    let run = |integrator: &str| -> serde_json::Value {
+        let o = cloth(&[
+            "run",
+            "--scene",
+            "cloth",
+            "--set",
+            "width=8",
+            "--set",
+            "height=8",
+            "--integrator",
+            integrator,
+            "--steps",
+            "5",
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        serde_json::from_str(stdout(&o).trim()).unwrap()
+    };
+    assert!(
+        run("implicit-euler")["cg_iterations_last_step"]
+            .as_u64()
+            .is_some_and(|n| n > 0)
+    );
+    assert!(run("symplectic-euler")["cg_iterations_last_step"].is_null());
+}

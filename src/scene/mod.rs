@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 pub use build::GRID_MAX_SIDE;
 pub use values::{Pins, Vector};
 
-use crate::sim::{Integrator, System};
+use crate::sim::System;
 
 /// How the particles are laid out and connected.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -301,11 +301,6 @@ impl Scene {
         Self::parse(&text, &format!("scene file {name_or_path}"))
     }
 
-    /// The default scene (`cloth`).
-    pub fn default_scene() -> Self {
-        Self::load("cloth").expect("the built-in cloth scene is valid")
-    }
-
     /// Sets one key from text, as `--set key=value` does: the value is read as TOML
     /// (`32`, `0.5`, `[0, 5]`, `true`) or, failing that, as a string (`corners`,
     /// `1,0,0`). Setting one of a group of alternative keys clears the others. On
@@ -373,11 +368,6 @@ impl Scene {
     /// Builds the system.
     pub fn build(&self) -> Result<System, SceneError> {
         Ok(self.resolve()?.build())
-    }
-
-    /// The integrator the scene asks for.
-    pub fn integrator(&self) -> Result<Integrator, SceneError> {
-        Ok(self.resolve()?.params.integrator)
     }
 }
 

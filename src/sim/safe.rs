@@ -14,7 +14,7 @@
 //! It costs one pass over the springs and a bisection on a 2x2 amplification
 //! matrix: cheap enough to call whenever a slider moves.
 
-use super::{Integrator, Model, stability};
+use super::{Model, stability};
 
 /// Default fraction of the critical step that safe stepping keeps below.
 pub const DEFAULT_SAFETY: f64 = 0.5;
@@ -82,10 +82,4 @@ pub fn safe_step(model: &Model, frame_time: f64, safety: f64, max_substeps: u32)
 /// step below `safety * dt_crit` (capped at [`DEFAULT_MAX_SUBSTEPS`]).
 pub fn safe_substeps(model: &Model, frame_time: f64, safety: f64) -> u32 {
     safe_step(model, frame_time, safety, DEFAULT_MAX_SUBSTEPS).substeps
-}
-
-/// Whether `integrator` has a stable step on an undamped oscillator (false for
-/// explicit Euler and RK2, whose safe stepping relies on damping).
-pub fn has_undamped_limit(integrator: Integrator) -> bool {
-    stability::critical_step(integrator, 1.0, 0.0).is_some()
 }
