@@ -179,13 +179,26 @@ fn scenes() {
 /// Loads a scene with the run's `--integrator` and `--dt` applied as overrides.
 fn load_run_scene(args: &RunArgs) -> Result<Scene, String> {
     let mut scene = args.scene.load().map_err(|e| e.to_string())?;
+    // The flags are scene keys; errors name the flag as the user typed it.
+    let flag = |scene: &mut Scene, key: &str, value: &str, shown: &str| {
+        scene.set(key, value).map_err(|e| match e {
+            SceneError::Invalid { field, message, .. } => {
+                format!("--{shown}: `{field}` {message}")
+            }
+            SceneError::Parse { message, .. } => format!("--{shown}: {message}"),
+            other => other.to_string(),
+        })
+    };
     if let Some(integrator) = &args.integrator {
-        scene
-            .set("integrator", &format!("\"{integrator}\""))
-            .map_err(|e| e.to_string())?;
+        flag(
+            &mut scene,
+            "integrator",
+            &format!("\"{integrator}\""),
+            &format!("integrator {integrator}"),
+        )?;
     }
     if let Some(dt) = &args.dt {
-        scene.set("dt", dt).map_err(|e| e.to_string())?;
+        flag(&mut scene, "dt", dt, &format!("dt {dt}"))?;
     }
     Ok(scene)
 }

@@ -121,8 +121,8 @@ fn bad_input_exits_2_with_a_message() {
     for (args, needle) in [
         (vec!["run", "--scene", "nosuchscene"], "unknown scene"),
         (vec!["run", "--set", "particle_mass=-1"], "particle_mass"),
-        (vec!["run", "--integrator", "leapfrog"], "leapfrog"),
-        (vec!["run", "--dt", "nan"], "dt"),
+        (vec!["run", "--integrator", "leapfrog"], "--integrator leapfrog"),
+        (vec!["run", "--dt", "nan"], "--dt nan: `dt`"),
         (vec!["run", "--set", "width=0"], "width"),
         (
             vec!["info", "--scene", "/nonexistent/scene.toml"],
