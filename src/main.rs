@@ -1,5 +1,5 @@
 //! The `cloth` binary: the desktop app when run without a subcommand, and the
-//! command line (`run`, `info`, `scenes`, `screenshot`) otherwise.
+//! command line (`run`, `info`, `scenes`, `screenshot`, `report`) otherwise.
 
 mod app;
 mod cli;

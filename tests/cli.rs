@@ -121,7 +121,10 @@ fn bad_input_exits_2_with_a_message() {
     for (args, needle) in [
         (vec!["run", "--scene", "nosuchscene"], "unknown scene"),
         (vec!["run", "--set", "particle_mass=-1"], "particle_mass"),
-        (vec!["run", "--integrator", "leapfrog"], "--integrator leapfrog"),
+        (
+            vec!["run", "--integrator", "leapfrog"],
+            "--integrator leapfrog",
+        ),
         (vec!["run", "--dt", "nan"], "--dt nan: `dt`"),
         (vec!["run", "--set", "width=0"], "width"),
         (
@@ -225,4 +228,17 @@ fn implicit_runs_report_their_solver_iterations() {
             .is_some_and(|n| n > 0)
     );
     assert!(run("symplectic-euler")["cg_iterations_last_step"].is_null());
+}
+
+#[test]
+fn the_app_refuses_bad_input_before_looking_for_a_display() {
+    // Exit 2 (bad input), not 1 (no display), even where there is no display.
+    let o = Command::new(env!("CARGO_BIN_EXE_cloth"))
+        .args(["--scene", "cloth", "--set", "width=0"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("width"));
 }

@@ -46,7 +46,16 @@ pub struct AppOptions {
 
 /// Runs the desktop app; on failure prints one `error:` line and returns 1.
 pub fn main(options: AppOptions) -> std::process::ExitCode {
-    match run(options) {
+    // Bad input exits 2, as on the command line; a missing display or adapter, 1.
+    let scene = options.scene.as_deref().unwrap_or("cloth");
+    let session = match Session::load_with(scene, &options.set) {
+        Ok(session) => session,
+        Err(err) => {
+            eprintln!("error: {err}");
+            return std::process::ExitCode::from(2);
+        }
+    };
+    match run(session) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
             eprintln!("error: {err:#}");
@@ -55,11 +64,9 @@ pub fn main(options: AppOptions) -> std::process::ExitCode {
     }
 }
 
-/// Opens the window and runs until the user quits. Returns an error (one
+/// Opens the window on `session` and runs until the user quits. Returns an error (one
 /// sentence) when there is no display or no graphics adapter.
-pub fn run(options: AppOptions) -> anyhow::Result<()> {
-    let session = Session::load_with(options.scene.as_deref().unwrap_or("cloth"), &options.set)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+pub fn run(session: Session) -> anyhow::Result<()> {
     let event_loop = new_event_loop()?;
     event_loop.set_control_flow(ControlFlow::Poll);
     let mut app = App::new(session);
