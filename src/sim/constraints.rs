@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::{Model, State, Workspace, forces::EPSILON_LENGTH};
+use super::{Model, Sphere, State, Workspace, forces::EPSILON_LENGTH};
 
 /// Applies every constraint the model has, then updates velocities.
 pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
@@ -37,15 +37,10 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     }
     if let Some(sphere) = p.sphere {
         for (xi, &w) in x.iter_mut().zip(&model.inv_mass) {
-            let d = *xi - sphere.center;
-            let dist = d.length();
-            if w > 0.0 && dist < sphere.radius {
-                let normal = if dist > EPSILON_LENGTH {
-                    d / dist
-                } else {
-                    DVec3::Y
-                };
-                *xi = sphere.center + normal * sphere.radius;
+            if w > 0.0
+                && let Some(outside) = out_of_sphere(*xi, &sphere)
+            {
+                *xi = outside;
             }
         }
     }
@@ -60,9 +55,48 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     }
 }
 
+/// Where a particle at `x` inside `sphere` is projected to (the nearest point of the
+/// surface; straight up from the centre), or `None` if it is not inside.
+pub(crate) fn out_of_sphere(x: DVec3, sphere: &Sphere) -> Option<DVec3> {
+    let d = x - sphere.center;
+    let dist = d.length();
+    if dist >= sphere.radius {
+        return None;
+    }
+    let normal = if dist > EPSILON_LENGTH {
+        d / dist
+    } else {
+        DVec3::Y
+    };
+    Some(sphere.center + normal * sphere.radius)
+}
+
+/// The correction `c` that brings particles at `xa` and `xb` (inverse masses `wa`,
+/// `wb`) to distance `target(l)` when it returns a length: `xa -= wa c`, `xb += wb c`
+/// (a pinned end stays put). `None` when nothing moves: both ends pinned, coincident
+/// particles (no direction), or no target.
+pub(crate) fn length_correction(
+    xa: DVec3,
+    xb: DVec3,
+    wa: f64,
+    wb: f64,
+    target: impl Fn(f64) -> Option<f64>,
+) -> Option<DVec3> {
+    let w = wa + wb;
+    if w == 0.0 {
+        return None;
+    }
+    let d = xa - xb;
+    let l = d.length();
+    if l <= EPSILON_LENGTH {
+        return None;
+    }
+    let goal = target(l)?;
+    Some((l - goal) / (l * w) * d)
+}
+
 /// Moves particles `a` and `b` along their joining line so that their distance becomes
-/// `target(l)` when it returns a length, sharing the move by inverse mass (a pinned end
-/// stays put). Coincident particles have no direction and are left alone.
+/// `target(l)` (see [`length_correction`]).
 fn restore_length(
     x: &mut [DVec3],
     inv_mass: &[f64],
@@ -71,17 +105,8 @@ fn restore_length(
     target: impl Fn(f64) -> Option<f64>,
 ) {
     let (wa, wb) = (inv_mass[a], inv_mass[b]);
-    let w = wa + wb;
-    if w == 0.0 {
-        return;
+    if let Some(c) = length_correction(x[a], x[b], wa, wb, target) {
+        x[a] -= wa * c;
+        x[b] += wb * c;
     }
-    let d = x[a] - x[b];
-    let l = d.length();
-    if l <= EPSILON_LENGTH {
-        return;
-    }
-    let Some(goal) = target(l) else { return };
-    let correction = (l - goal) / (l * w) * d;
-    x[a] -= wa * correction;
-    x[b] += wb * correction;
 }

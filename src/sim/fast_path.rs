@@ -77,6 +77,8 @@ pub(super) struct FastPath {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct GridSprings {
     coefficients: [SpringCoefficients; 3],
+    /// Which kinds exist.
+    present: [bool; 3],
     spacing: f64,
     mass: f64,
 }
@@ -126,6 +128,7 @@ impl GridSprings {
         }
         Some(Self {
             coefficients,
+            present: kinds.map(|k| k.is_some()),
             spacing: h,
             mass,
         })
@@ -152,26 +155,41 @@ impl System {
     }
 
     /// The kernel's description of this system, if the kernel models it exactly.
+    ///
+    /// Every parameter is named here (no `..`): a new one fails to compile until
+    /// it is either passed to the kernel or made a reason to refuse it.
     fn grid_spec(&self) -> Option<GridSpec> {
         let model = &self.model;
         let (shape, springs) = (model.grid?, self.grid_springs?);
-        let p = &model.params;
-        let simple = p.integrator == Integrator::SymplecticEuler
-            && !self.has_constraints()
-            && p.ground.is_none()
-            && !model.terms.air_damping;
-        if !simple {
+        let super::Params {
+            gravity,
+            wind,
+            gust: _, // the wind's gusts are set step by step (`run_on_grid`)
+            air_density,
+            drag_coefficient,
+            air_damping,
+            ground,
+            sphere,
+            integrator,
+            dt: _, // given to each run
+            bar_iterations: _, // bars are refused below
+            stretch_limit,
+            seed: _, // only the gusts use it
+        } = model.params;
+        let super::ForceTerms {
+            gravity: gravity_on,
+            springs: _, // the kernel always evaluates the stencil
+            aero,
+            air_damping: air_damping_on,
+            ground: _, // `ground` itself says
+        } = model.terms;
+        if !GridCloth::supports(integrator) || (!model.bars.is_empty() && model.params.bar_iterations > 0) {
             return None;
         }
-        let (air_density, drag_coefficient) = if model.terms.aero {
-            (p.air_density, p.drag_coefficient)
+        let (air_density, drag_coefficient) = if aero {
+            (air_density, drag_coefficient)
         } else {
             (0.0, 0.0)
-        };
-        let gravity = if model.terms.gravity {
-            p.gravity
-        } else {
-            DVec3::ZERO
         };
         let [structural, shear, bend] = springs.coefficients;
         Some(GridSpec {
@@ -183,11 +201,17 @@ impl System {
             structural,
             shear,
             bend,
-            gravity: gravity.to_array(),
-            wind: p.wind.to_array(),
+            gravity: if gravity_on { gravity } else { DVec3::ZERO }.to_array(),
+            wind: wind.to_array(),
             air_density,
             drag_coefficient,
             pinned: Vec::new(),
+            air_damping: if air_damping_on { air_damping } else { 0.0 },
+            ground,
+            sphere,
+            stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
+            integrator,
+            present: springs.present,
         })
     }
 
@@ -200,9 +224,21 @@ impl System {
         let spec = self.grid_spec()?;
         // The kernel is taken out of `self` while it runs, so that the divergence
         // check can borrow the system.
-        let mut fast = match self.fast_path.0.take() {
-            Some(fast) if fast.spec == spec => fast,
-            _ => {
+        let reused = self.fast_path.0.take().and_then(|mut fast| {
+            if fast.spec != spec {
+                // A live edit of a coefficient: updated in place, no new arrays or
+                // threads; a new shape or integrator needs a new kernel.
+                if !fast.kernel.respec(spec.clone()) {
+                    return None;
+                }
+                fast.spec = spec.clone();
+                fast.in_sync = false;
+            }
+            Some(fast)
+        });
+        let mut fast = match reused {
+            Some(fast) => fast,
+            None => {
                 let mut kernel = GridCloth::new(spec.clone());
                 kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
                 FastPath {
@@ -216,6 +252,9 @@ impl System {
         if !fast.in_sync {
             fast.kernel
                 .set_state(&self.state.positions, &self.state.velocities);
+            if let Some(u) = self.verlet_update_velocities() {
+                fast.kernel.set_update_velocities(&u);
+            }
             fast.held.clear();
             for (i, &w) in self.model.inv_mass.iter().enumerate() {
                 fast.kernel.set_pinned(i, w == 0.0);
@@ -254,11 +293,47 @@ impl System {
                 for &(i, position) in &fast.held {
                     self.state.positions[i] = position;
                 }
+                self.set_verlet_history_from(&fast.kernel);
                 result = self.check();
             }
         }
         self.fast_path.0 = Some(fast);
         Some(result)
+    }
+
+    /// Position Verlet's velocities of the last update, `(x - x_prev) / h`, from the
+    /// f64 history (`None` for the other integrators).
+    fn verlet_update_velocities(&self) -> Option<Vec<DVec3>> {
+        let state = &self.state;
+        if self.model.params.integrator != Integrator::Verlet
+            || state.prev_positions.len() != state.positions.len()
+        {
+            return None;
+        }
+        let h = self.model.params.dt;
+        Some(
+            (state.positions.iter().zip(&state.prev_positions))
+                .map(|(&x, &prev)| (x - prev) / h)
+                .collect(),
+        )
+    }
+
+    /// The f64 Verlet history from the kernel: `x_prev = x - h u`, and the last
+    /// acceleration from the velocity estimate `v = u + h/2 a`.
+    fn set_verlet_history_from(&mut self, kernel: &GridCloth) {
+        let state = &mut self.state;
+        if self.model.params.integrator != Integrator::Verlet
+            || state.prev_positions.len() != state.positions.len()
+        {
+            return;
+        }
+        let h = self.model.params.dt;
+        kernel.update_velocities_into(&mut state.prev_accelerations);
+        for i in 0..state.positions.len() {
+            let u = state.prev_accelerations[i];
+            state.prev_positions[i] = state.positions[i] - h * u;
+            state.prev_accelerations[i] = (state.velocities[i] - u) * (2.0 / h);
+        }
     }
 
     /// Whether the kernel's state passes the divergence check's limits: finite, no

@@ -47,6 +47,9 @@ use std::sync::OnceLock;
 use bytemuck::{Pod, Zeroable};
 use glam::DVec3;
 
+use super::constraints;
+use super::{Ground, Integrator, Sphere};
+
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
 const EPS2: f32 = 1e-24;
@@ -100,6 +103,19 @@ pub struct GridSpec {
     pub drag_coefficient: f64,
     /// Indices `r * width + c` of the pinned particles.
     pub pinned: Vec<usize>,
+    /// Viscous air damping `c` in `-c v`, N·s/m (0: none).
+    pub air_damping: f64,
+    /// Ground plane with penalty contact, if any.
+    pub ground: Option<Ground>,
+    /// Sphere collider, if any: particles inside are projected onto its surface.
+    pub sphere: Option<Sphere>,
+    /// Provot's stretch limit `tau`, if any: no spring longer than `(1 + tau) L`.
+    pub stretch_limit: Option<f64>,
+    /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
+    pub integrator: Integrator,
+    /// Which kinds of spring exist (structural, shear, bend); an absent kind has
+    /// `k = b = 0` and no stretch limit.
+    pub present: [bool; 3],
 }
 
 impl GridSpec {
@@ -128,6 +144,12 @@ impl GridSpec {
             air_density: if wind { 1.2 } else { 0.0 },
             drag_coefficient: 1.0,
             pinned: vec![0, n - 1],
+            air_damping: 0.0,
+            ground: None,
+            sphere: None,
+            stretch_limit: None,
+            integrator: Integrator::SymplecticEuler,
+            present: [true; 3],
         }
     }
 
@@ -249,6 +271,56 @@ struct Params {
     /// `ρ C_d / 12`: a third of the drag force with `A = |m| / 2`.
     drag: f32,
     dt: f32,
+    /// `-c` of the air damping `-c v`.
+    neg_air: f32,
+    /// Ground height, penalty stiffness and damping (height `f32::MIN`: no ground).
+    ground: [f32; 3],
+    /// 1 for explicit Euler (positions move with the old velocity), else 0.
+    explicit: f32,
+    /// `h/2` for position Verlet's velocity estimate `u + h/2 a`, else 0.
+    verlet_half_dt: f32,
+    /// Whether the velocity of the last position update `u` is its own array (Verlet).
+    verlet: bool,
+    /// Sphere centre, radius and squared radius, projected onto inside the fused step.
+    sphere: Option<([f32; 3], f32, f32)>,
+}
+
+impl Params {
+    /// The constants of `spec` (the step `dt` is set by each run).
+    fn of(spec: &GridSpec) -> Self {
+    let hs = spec.spacing;
+    // Index 0: structural (rest h), 1: bend (2h), 2: shear (h√2).
+    let kinds = [
+        (spec.structural, hs),
+        (spec.bend, 2.0 * hs),
+        (spec.shear, hs * std::f64::consts::SQRT_2),
+    ];
+    Params {
+        ks: kinds.map(|(kind, _)| kind.k as f32),
+        kls: kinds.map(|(kind, rest)| (kind.k * rest) as f32),
+        bs: kinds.map(|(kind, _)| kind.b as f32),
+        gravity: spec.gravity.map(|g| g as f32),
+        wind: spec.wind.map(|g| g as f32),
+        drag: (spec.air_density * spec.drag_coefficient / 12.0) as f32,
+        dt: 0.0,
+        neg_air: -spec.air_damping as f32,
+        ground: spec.ground.map_or([f32::MIN, 0.0, 0.0], |g| {
+            [g.height as f32, g.stiffness as f32, g.damping as f32]
+        }),
+        explicit: if spec.integrator == Integrator::ExplicitEuler {
+            1.0
+        } else {
+            0.0
+        },
+        verlet_half_dt: 0.0,
+        verlet: spec.integrator == Integrator::Verlet,
+        // With a stretch limit the sphere comes after it, in the constraint pass.
+        sphere: spec.sphere.filter(|_| spec.stretch_limit.is_none()).map(|s| {
+            let r = s.radius as f32;
+            (s.center.as_vec3().to_array(), r, r * r)
+        }),
+    }
+    }
 }
 
 /// Ring of accumulator rows: row `r` collects forces from rows `r-2` and `r-1`.
@@ -283,22 +355,31 @@ fn make_bands(grid: &Grid, n: usize) -> Vec<Band> {
         .collect()
 }
 
-/// Cloth state in padded f32 structure-of-arrays form.
+/// Cloth state in padded f32 structure-of-arrays form. A position is the unevaluated
+/// sum `x + xl` of two floats (a "double-float"), so that `x += h v` loses nothing
+/// to round-off (see the module doc, "Precision").
 #[derive(Clone, Debug)]
 struct State {
     x: [Buf; 3],
+    /// Low parts of the positions.
+    xl: [Buf; 3],
     v: [Buf; 3],
+    /// Position Verlet's velocity of the last position update, `(x - x_prev) / h`
+    /// (empty for the Euler methods, whose positions move with `v`).
+    u: [Buf; 3],
 }
 
-/// Output rows of a band (or of several consecutive bands): `x`, `y`, `z`, `vx`,
-/// `vy`, `vz`, each starting at the band's first row.
-struct Out<'a>([&'a mut [f32]; 6]);
+/// Output rows of a band (or of several consecutive bands): `x`, `y`, `z`, their
+/// low parts, `vx`, `vy`, `vz`, and (Verlet only, else empty) `ux`, `uy`, `uz`, each
+/// starting at the band's first row.
+struct Out<'a>([&'a mut [f32]; 12]);
 
 impl<'a> Out<'a> {
     fn split_at(self, at: usize) -> (Out<'a>, Out<'a>) {
-        let mut lo: [&'a mut [f32]; 6] = Default::default();
-        let mut hi: [&'a mut [f32]; 6] = Default::default();
+        let mut lo: [&'a mut [f32]; 12] = Default::default();
+        let mut hi: [&'a mut [f32]; 12] = Default::default();
         for (i, a) in self.0.into_iter().enumerate() {
+            let at = at.min(a.len());
             (lo[i], hi[i]) = a.split_at_mut(at);
         }
         (Out(lo), Out(hi))
@@ -350,20 +431,38 @@ impl GridCloth {
     /// Build the cloth at rest, flat in the x-y plane (see [`GridSpec`]). Runs on one
     /// thread until [`GridCloth::set_threads`] is called. A width or height of 0 is
     /// taken as 1; pinned indices out of range are ignored.
+    ///
+    /// # Panics
+    /// If the spec's integrator is not one the kernel has ([`GridCloth::supports`]).
     pub fn new(mut spec: GridSpec) -> Self {
+        assert!(
+            Self::supports(spec.integrator),
+            "the grid kernel has no {} step",
+            spec.integrator
+        );
         spec.width = spec.width.max(1);
         spec.height = spec.height.max(1);
         let grid = Grid::new(spec.width, spec.height);
+        let verlet = spec.integrator == Integrator::Verlet;
         let mut cur = State {
             x: std::array::from_fn(|_| Buf::zeros(grid.len())),
+            xl: std::array::from_fn(|_| Buf::zeros(grid.len())),
             v: std::array::from_fn(|_| Buf::zeros(grid.len())),
+            u: std::array::from_fn(|_| Buf::zeros(if verlet { grid.len() } else { 0 })),
         };
         for p in 0..grid.w * grid.h {
             let (r, c) = (p / grid.w, p % grid.w);
             let i = grid.index(p);
-            cur.x[0].as_mut_slice()[i] = (spec.origin[0] + c as f64 * spec.spacing) as f32;
-            cur.x[1].as_mut_slice()[i] = (spec.origin[1] - r as f64 * spec.spacing) as f32;
-            cur.x[2].as_mut_slice()[i] = spec.origin[2] as f32;
+            let start = [
+                spec.origin[0] + c as f64 * spec.spacing,
+                spec.origin[1] - r as f64 * spec.spacing,
+                spec.origin[2],
+            ];
+            for a in 0..3 {
+                let hi = start[a] as f32;
+                cur.x[a].as_mut_slice()[i] = hi;
+                cur.xl[a].as_mut_slice()[i] = (start[a] - hi as f64) as f32;
+            }
         }
         let mut inv_mass = Buf::zeros(grid.len());
         let inv_m = if spec.particle_mass > 0.0 {
@@ -384,23 +483,8 @@ impl GridCloth {
             col_mask.as_mut_slice()[c] = if c + 1 < grid.w { 1.0 } else { 0.0 };
             col_mask.as_mut_slice()[grid.stride + c] = if c + 2 < grid.w { 1.0 } else { 0.0 };
         }
-        let hs = spec.spacing;
-        // Index 0: structural (rest h), 1: bend (2h), 2: shear (h√2).
-        let kinds = [
-            (spec.structural, hs),
-            (spec.bend, 2.0 * hs),
-            (spec.shear, hs * std::f64::consts::SQRT_2),
-        ];
-        let params = Params {
-            ks: kinds.map(|(kind, _)| kind.k as f32),
-            kls: kinds.map(|(kind, rest)| (kind.k * rest) as f32),
-            bs: kinds.map(|(kind, _)| kind.b as f32),
-            gravity: spec.gravity.map(|g| g as f32),
-            wind: spec.wind.map(|g| g as f32),
-            drag: (spec.air_density * spec.drag_coefficient / 12.0) as f32,
-            dt: 0.0,
-        };
-        let drag_on = spec.air_density * spec.drag_coefficient != 0.0;
+        let params = Params::of(&spec);
+        let drag_on = params.drag != 0.0;
         GridCloth {
             params,
             next: cur.clone(),
@@ -416,6 +500,41 @@ impl GridCloth {
             grid,
             spec,
         }
+    }
+
+    /// Changes coefficients in place (stiffness, damping, mass, rest length, wind,
+    /// gravity, drag, air damping, colliders, stretch limit) without rebuilding the
+    /// arrays or the thread pool. Returns `false`, changing nothing, when `spec` has
+    /// another shape or another integrator: then build a new cloth. The particles'
+    /// inverse masses are reset to the new mass (pins included: pin them again).
+    pub fn respec(&mut self, spec: GridSpec) -> bool {
+        let same_shape = spec.width.max(1) == self.grid.w && spec.height.max(1) == self.grid.h;
+        if !same_shape || spec.integrator != self.spec.integrator {
+            return false;
+        }
+        let dt = (self.params.dt, self.params.verlet_half_dt);
+        self.params = Params::of(&spec);
+        (self.params.dt, self.params.verlet_half_dt) = dt;
+        self.drag_on = self.params.drag != 0.0;
+        let inv_m = if spec.particle_mass > 0.0 {
+            (1.0 / spec.particle_mass) as f32
+        } else {
+            0.0
+        };
+        for p in 0..self.len() {
+            self.inv_mass.as_mut_slice()[self.grid.index(p)] = inv_m;
+        }
+        self.spec = spec;
+        true
+    }
+
+    /// Whether the kernel steps with `integrator`: symplectic Euler, explicit Euler
+    /// and position Verlet (the methods with one force evaluation per step).
+    pub fn supports(integrator: Integrator) -> bool {
+        matches!(
+            integrator,
+            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet
+        )
     }
 
     /// The spec the cloth was built from (with the current wind and gravity).
@@ -502,11 +621,15 @@ impl GridCloth {
     /// once for all `n` steps, so prefer this to calling [`GridCloth::step`] in a loop.
     pub fn steps(&mut self, dt: f64, n: usize) {
         self.params.dt = dt as f32;
+        if self.params.verlet {
+            self.params.verlet_half_dt = (0.5 * dt) as f32;
+        }
         match self.pool.take() {
             Some(pool) => {
                 pool.install(|| {
                     for _ in 0..n {
                         self.one_step(true);
+                        self.constrain(dt);
                     }
                 });
                 self.pool = Some(pool);
@@ -514,6 +637,7 @@ impl GridCloth {
             None => {
                 for _ in 0..n {
                     self.one_step(false);
+                    self.constrain(dt);
                 }
             }
         }
@@ -524,30 +648,136 @@ impl GridCloth {
             grid: self.grid,
             p: self.params,
             x: self.cur.x.each_ref().map(Buf::as_slice),
+            xl: self.cur.xl.each_ref().map(Buf::as_slice),
             v: self.cur.v.each_ref().map(Buf::as_slice),
+            u: self.cur.u.each_ref().map(Buf::as_slice),
             inv_mass: self.inv_mass.as_slice(),
             col_mask: self.col_mask.as_slice(),
             drag: self.drag_on,
             simd: self.simd,
         };
         let real = self.grid.h * self.grid.stride;
-        let [x0, x1, x2] = self
-            .next
-            .x
-            .each_mut()
-            .map(|b| &mut b.as_mut_slice()[..real]);
-        let [v0, v1, v2] = self
-            .next
-            .v
-            .each_mut()
-            .map(|b| &mut b.as_mut_slice()[..real]);
-        let out = Out([x0, x1, x2, v0, v1, v2]);
+        fn rows(arrays: &mut [Buf; 3], real: usize) -> [&mut [f32]; 3] {
+            arrays.each_mut().map(|b| {
+                let a = b.as_mut_slice();
+                let len = real.min(a.len());
+                &mut a[..len]
+            })
+        }
+        let State { x, xl, v, u } = &mut self.next;
+        let ([x0, x1, x2], [l0, l1, l2]) = (rows(x, real), rows(xl, real));
+        let ([v0, v1, v2], [u0, u1, u2]) = (rows(v, real), rows(u, real));
+        let out = Out([x0, x1, x2, l0, l1, l2, v0, v1, v2, u0, u1, u2]);
         if parallel && self.par_bands.len() > 1 {
             run_bands(&ctx, &mut self.par_bands, out, true);
         } else {
             run_bands(&ctx, &mut self.seq_band, out, false);
         }
         std::mem::swap(&mut self.cur, &mut self.next);
+    }
+
+    /// The constraints the fused row pass leaves to after the step: Provot's stretch
+    /// limit, a Gauss-Seidel pass over the springs in the f64 engine's order (sorted
+    /// by their ends), then, with a stretch limit, the sphere. A move `δ` of a
+    /// particle also adds `δ / h` to its velocity, as in the f64 engine.
+    ///
+    /// Most rows of a cloth have no spring over its limit: a row is first checked
+    /// with one vectorisable pass per stencil direction and skipped if it has none.
+    /// Corrections to a row only move that row and the two below it, which are
+    /// checked after, so skipping rows changes nothing: the result is the full
+    /// Gauss-Seidel pass's.
+    fn constrain(&mut self, dt: f64) {
+        let Some(tau) = self.spec.stretch_limit else {
+            return;
+        };
+        let (w, h) = (self.grid.w, self.grid.h);
+        let spacing = self.spec.spacing;
+        // The stencil in the order the springs sort: (row, column) offsets, rest
+        // lengths and whether the kind exists.
+        let [structural, shear, bend] = self.spec.present;
+        let stencil = [
+            ((0, 1), spacing, structural),
+            ((0, 2), 2.0 * spacing, bend),
+            ((1, -1), std::f64::consts::SQRT_2 * spacing, shear),
+            ((1, 0), spacing, structural),
+            ((1, 1), std::f64::consts::SQRT_2 * spacing, shear),
+            ((2, 0), 2.0 * spacing, bend),
+        ];
+        let limit = 1.0 + tau;
+        for r in 0..h {
+            if !self.row_over_limit(r, &stencil, limit) {
+                continue;
+            }
+            for c in 0..w {
+                for &((dr, dc), rest, present) in &stencil {
+                    let (rb, cb) = (r + dr, c as isize + dc);
+                    if !present || rb >= h || cb < 0 || cb as usize >= w {
+                        continue;
+                    }
+                    let longest = limit * rest;
+                    let (a, b) = (r * w + c, rb * w + cb as usize);
+                    let (ia, ib) = (self.grid.index(a), self.grid.index(b));
+                    let inv_mass = self.inv_mass.as_slice();
+                    let (wa, wb) = (inv_mass[ia] as f64, inv_mass[ib] as f64);
+                    let (xa, xb) = (self.position_at(ia), self.position_at(ib));
+                    if let Some(fix) = constraints::length_correction(xa, xb, wa, wb, |l| {
+                        (l > longest).then_some(longest)
+                    }) {
+                        self.move_particle(ia, xa - wa * fix, dt);
+                        self.move_particle(ib, xb + wb * fix, dt);
+                    }
+                }
+            }
+        }
+        if let Some(sphere) = self.spec.sphere {
+            for p in 0..w * h {
+                let i = self.grid.index(p);
+                if self.inv_mass.as_slice()[i] > 0.0
+                    && let Some(outside) = constraints::out_of_sphere(self.position_at(i), &sphere)
+                {
+                    self.move_particle(i, outside, dt);
+                }
+            }
+        }
+    }
+
+    /// Whether any spring starting on row `r` may be longer than `limit` times its
+    /// rest length (a conservative float32 check: a margin of 1e-4 covers round-off).
+    fn row_over_limit(&self, r: usize, stencil: &[((usize, isize), f64, bool); 6], limit: f64) -> bool {
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
+        let [xl, yl, zl] = self.cur.xl.each_ref().map(Buf::as_slice);
+        let mut over = 0u32;
+        for &((dr, dc), rest, present) in stencil {
+            if !present || r + dr >= h {
+                continue;
+            }
+            let longest2 = ((limit * rest).powi(2) * (1.0 - 1e-4)) as f32;
+            let c0 = (-dc).max(0) as usize;
+            let c1 = w.saturating_sub(dc.max(0) as usize);
+            let (ia, ib) = (r * st, ((r + dr) * st) as isize + dc);
+            for c in c0..c1 {
+                let (i, j) = (ia + c, (ib + c as isize) as usize);
+                let dx = (x[i] - x[j]) + (xl[i] - xl[j]);
+                let dy = (y[i] - y[j]) + (yl[i] - yl[j]);
+                let dz = (z[i] - z[j]) + (zl[i] - zl[j]);
+                over += u32::from(dx * dx + dy * dy + dz * dz > longest2);
+            }
+        }
+        over > 0
+    }
+
+    /// Moves the particle at array index `i` to `to` (m) after a step of `dt`,
+    /// adding the move over `dt` to its velocities.
+    fn move_particle(&mut self, i: usize, to: DVec3, dt: f64) {
+        let dv = (to - self.position_at(i)) / dt;
+        self.set_position_at(i, to);
+        for a in 0..3 {
+            self.cur.v[a].as_mut_slice()[i] += dv[a] as f32;
+            if self.params.verlet {
+                self.cur.u[a].as_mut_slice()[i] += dv[a] as f32;
+            }
+        }
     }
 
     fn read_into(&self, arrays: &[Buf; 3], out: &mut [DVec3]) {
@@ -558,9 +788,50 @@ impl GridCloth {
         }
     }
 
+    /// Position of array index `i` in f64 (high plus low part).
+    fn position_at(&self, i: usize) -> DVec3 {
+        let (x, xl) = (&self.cur.x, &self.cur.xl);
+        DVec3::from_array(std::array::from_fn(|a| {
+            x[a].as_slice()[i] as f64 + xl[a].as_slice()[i] as f64
+        }))
+    }
+
+    /// Sets the position of array index `i` from f64, split into high and low parts.
+    fn set_position_at(&mut self, i: usize, q: DVec3) {
+        for a in 0..3 {
+            let hi = q[a] as f32;
+            self.cur.x[a].as_mut_slice()[i] = hi;
+            self.cur.xl[a].as_mut_slice()[i] = (q[a] - hi as f64) as f32;
+        }
+    }
+
     /// Copy the positions (m) of particles `0..out.len()` into `out`.
     pub fn positions_into(&self, out: &mut [DVec3]) {
-        self.read_into(&self.cur.x, out);
+        for (p, o) in out.iter_mut().enumerate().take(self.len()) {
+            *o = self.position_at(self.grid.index(p));
+        }
+    }
+
+    /// Position Verlet's velocities of the last position update, `(x - x_prev) / h`
+    /// (m/s), of particles `0..out.len()`; nothing for the other integrators.
+    pub fn update_velocities_into(&self, out: &mut [DVec3]) {
+        if self.params.verlet {
+            self.read_into(&self.cur.u, out);
+        }
+    }
+
+    /// Sets position Verlet's velocities of the last position update (m/s); ignored
+    /// for the other integrators.
+    pub fn set_update_velocities(&mut self, u: &[DVec3]) {
+        if !self.params.verlet {
+            return;
+        }
+        for (p, q) in u.iter().enumerate().take(self.len()) {
+            let j = self.grid.index(p);
+            for a in 0..3 {
+                self.cur.u[a].as_mut_slice()[j] = q[a] as f32;
+            }
+        }
     }
 
     /// Copy the velocities (m/s) of particles `0..out.len()` into `out`.
@@ -598,9 +869,12 @@ impl GridCloth {
     pub fn set_particle(&mut self, i: usize, position: DVec3, velocity: DVec3) {
         if i < self.len() {
             let j = self.grid.index(i);
+            self.set_position_at(j, position);
             for a in 0..3 {
-                self.cur.x[a].as_mut_slice()[j] = position[a] as f32;
                 self.cur.v[a].as_mut_slice()[j] = velocity[a] as f32;
+                if self.params.verlet {
+                    self.cur.u[a].as_mut_slice()[j] = velocity[a] as f32;
+                }
             }
         }
     }
@@ -608,17 +882,19 @@ impl GridCloth {
     /// Overwrite positions and velocities of particles `0..len` from f64 vectors
     /// (extra entries are ignored, missing ones left unchanged).
     pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
-        for (p, q) in positions.iter().enumerate().take(self.len()) {
-            let j = self.grid.index(p);
-            for a in 0..3 {
-                self.cur.x[a].as_mut_slice()[j] = q[a] as f32;
-            }
+        for (p, &q) in positions.iter().enumerate().take(self.len()) {
+            self.set_position_at(self.grid.index(p), q);
         }
         for (p, q) in velocities.iter().enumerate().take(self.len()) {
             let j = self.grid.index(p);
             for a in 0..3 {
                 self.cur.v[a].as_mut_slice()[j] = q[a] as f32;
             }
+        }
+        // Verlet's update velocities start equal to the velocities (call
+        // `set_update_velocities` after this to give them their own values).
+        if self.params.verlet {
+            self.set_update_velocities(velocities);
         }
     }
 
@@ -630,6 +906,9 @@ impl GridCloth {
                 self.inv_mass.as_mut_slice()[j] = 0.0;
                 for a in 0..3 {
                     self.cur.v[a].as_mut_slice()[j] = 0.0;
+                    if self.params.verlet {
+                        self.cur.u[a].as_mut_slice()[j] = 0.0;
+                    }
                 }
             } else if self.spec.particle_mass > 0.0 {
                 self.inv_mass.as_mut_slice()[j] = (1.0 / self.spec.particle_mass) as f32;
@@ -643,7 +922,10 @@ struct Ctx<'a> {
     grid: Grid,
     p: Params,
     x: [&'a [f32]; 3],
+    xl: [&'a [f32]; 3],
     v: [&'a [f32]; 3],
+    /// Verlet's update velocities (empty for the Euler methods).
+    u: [&'a [f32]; 3],
     inv_mass: &'a [f32],
     col_mask: &'a [f32],
     drag: bool,
@@ -1040,22 +1322,24 @@ mod x86 {
     }
 }
 
+/// A particle's position (high and low parts) and velocity, one per lane.
+type Particle<'a, V> = (&'a [V; 3], &'a [V; 3], &'a [V; 3]);
+
 /// Forces on the first ends of springs `i`-`j`, one per lane, times `mask` (if
 /// any): `f = (k L / l - k - b (d·dv) / l²) d = ((-b (d·dv) / l + k L) / l - k) d`
-/// with `d = x_i - x_j`, `dv = v_i - v_j`. `kind` is `[-k, k L, -b]`.
+/// with `d = x_i - x_j` (high parts and low parts subtracted separately, so that `d`
+/// is accurate to its own size, not to that of the positions), `dv = v_i - v_j`.
+/// `kind` is `[-k, k L, -b]`.
 #[inline(always)]
 fn spring<S: Simd>(
     s: S,
-    (xi, vi): (&[S::V; 3], &[S::V; 3]),
-    (xj, vj): (&[S::V; 3], &[S::V; 3]),
+    (xi, xli, vi): Particle<S::V>,
+    (xj, xlj, vj): Particle<S::V>,
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
 ) -> [S::V; 3] {
-    let d = [
-        s.sub(xi[0], xj[0]),
-        s.sub(xi[1], xj[1]),
-        s.sub(xi[2], xj[2]),
-    ];
+    let d: [S::V; 3] =
+        std::array::from_fn(|a| s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a])));
     let u = [
         s.sub(vi[0], vj[0]),
         s.sub(vi[1], vj[1]),
@@ -1114,12 +1398,24 @@ struct RowKernel<S: Simd> {
     zero: S::V,
     down: S::V,
     down2: S::V,
+    /// `-c` (air damping), ground height, `k_c`, damping, `explicit`, `h/2` (Verlet).
+    neg_air: S::V,
+    ground: [S::V; 3],
+    explicit: S::V,
+    verlet_half_dt: S::V,
+    inv_dt: S::V,
+    one: S::V,
+    /// Sphere centre, radius and squared radius (when the step projects onto it).
+    sphere: Option<([S::V; 3], S::V, S::V)>,
+    verlet: bool,
     x: [*const f32; 3],
+    xl: [*const f32; 3],
     v: [*const f32; 3],
+    u: [*const f32; 3],
     inv_mass: *const f32,
     col_mask: *const f32,
     acc: *mut f32,
-    out: [*mut f32; 6],
+    out: [*mut f32; 12],
     /// Array offsets of the rows `row`, `row + 1`, `row + 2`.
     b: [usize; 3],
     /// Accumulator offsets of the rows `row`, `row + 1`, `row + 2`.
@@ -1158,11 +1454,17 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
     assert!(S::LANES <= BLOCK && nv.is_multiple_of(S::LANES) && acc.len() == SLOTS * 3 * nv);
     assert!(b[2] + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
     assert!(ctx.col_mask.len() >= g.stride + nv);
-    for a in ctx.x.iter().chain(ctx.v.iter()) {
+    for a in ctx.x.iter().chain(&ctx.xl).chain(&ctx.v) {
         assert_eq!(a.len(), g.len());
     }
+    let verlet = ctx.p.verlet;
+    if verlet {
+        for a in &ctx.u {
+            assert_eq!(a.len(), g.len());
+        }
+    }
     if OWN {
-        for o in out.0.iter() {
+        for o in &out.0[..if verlet { 12 } else { 9 }] {
             assert!(lo + nv <= o.len());
         }
     }
@@ -1177,11 +1479,24 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
         third: s.splat(1.0 / 3.0),
         neg_drag: s.splat(-p.drag),
         dt: s.splat(p.dt),
+        neg_air: s.splat(p.neg_air),
+        ground: p.ground.map(|g| s.splat(g)),
+        explicit: s.splat(p.explicit),
+        verlet_half_dt: s.splat(p.verlet_half_dt),
+        inv_dt: s.splat(1.0 / p.dt),
+        one: s.splat(1.0),
+        sphere: p
+            .sphere
+            .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
+        verlet,
         zero: s.splat(0.0),
         down: s.splat(if row + 1 < g.h { 1.0 } else { 0.0 }),
         down2: s.splat(if row + 2 < g.h { 1.0 } else { 0.0 }),
         x: ctx.x.map(<[f32]>::as_ptr),
+        xl: ctx.xl.map(<[f32]>::as_ptr),
         v: ctx.v.map(<[f32]>::as_ptr),
+        // Without Verlet's own array the update velocity is the velocity.
+        u: if verlet { ctx.u } else { ctx.v }.map(<[f32]>::as_ptr),
         inv_mass: ctx.inv_mass.as_ptr(),
         col_mask: ctx.col_mask.as_ptr(),
         acc: acc.as_mut_ptr(),
@@ -1235,12 +1550,12 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
         ]
     };
     let [b0, b1, b2] = k.b;
-    let p00 = (&ld(k.x, b0 + c), &ld(k.v, b0 + c));
-    let p01 = (&ld(k.x, b0 + c + 1), &ld(k.v, b0 + c + 1));
-    let p02 = (&ld(k.x, b0 + c + 2), &ld(k.v, b0 + c + 2));
-    let p10 = (&ld(k.x, b1 + c), &ld(k.v, b1 + c));
-    let p11 = (&ld(k.x, b1 + c + 1), &ld(k.v, b1 + c + 1));
-    let p20 = (&ld(k.x, b2 + c), &ld(k.v, b2 + c));
+    let p00 = (&ld(k.x, b0 + c), &ld(k.xl, b0 + c), &ld(k.v, b0 + c));
+    let p01 = (&ld(k.x, b0 + c + 1), &ld(k.xl, b0 + c + 1), &ld(k.v, b0 + c + 1));
+    let p02 = (&ld(k.x, b0 + c + 2), &ld(k.xl, b0 + c + 2), &ld(k.v, b0 + c + 2));
+    let p10 = (&ld(k.x, b1 + c), &ld(k.xl, b1 + c), &ld(k.v, b1 + c));
+    let p11 = (&ld(k.x, b1 + c + 1), &ld(k.xl, b1 + c + 1), &ld(k.v, b1 + c + 1));
+    let p20 = (&ld(k.x, b2 + c), &ld(k.xl, b2 + c), &ld(k.v, b2 + c));
     let (m1, m2, m1d, down, down2) = if MASK {
         // SAFETY: as above.
         let (m1, m2) = unsafe {
@@ -1263,7 +1578,7 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
     let d2 = spring(s, p00, p20, bend, down2);
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
-        let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
+        let (va, vb, vd, ve) = (p00.2, p01.2, p10.2, p11.2);
         let bd: [S::V; 3] = std::array::from_fn(|i| s.add(vb[i], vd[i]));
         let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
         let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
@@ -1274,13 +1589,8 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
     } else {
         ([zero; 3], [zero; 3])
     };
-    let w = if OWN {
-        // SAFETY: as above.
-        unsafe { s.load(k.inv_mass.add(b0 + c)) }
-    } else {
-        zero
-    };
     let nv = k.nv;
+    let mut force = [zero; 3];
     for i in 0..3 {
         // Terms for the lane to the right (column c+1), two to the right (c+2) and,
         // on the next row, one to the right.
@@ -1311,17 +1621,109 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
                 own,
                 s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
             );
-            // SAFETY: as above; outputs hold `lo + nv` floats.
-            unsafe {
-                let f = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
-                let vn = s.mul_add(k.dt, s.mul_add(f, w, k.gravity[i]), p00.1[i]);
-                let vn = s.keep_if_positive(w, vn);
-                s.store(k.out[3 + i].add(k.lo + c), vn);
-                s.store(k.out[i].add(k.lo + c), s.mul_add(k.dt, vn, p00.0[i]));
-            }
+            // SAFETY: as above.
+            force[i] = s.add(unsafe { s.load(k.acc.add(k.a[0] + i * nv + c)) }, own);
         }
         carry[0][i] = l;
         carry[1][i] = q;
         carry[2][i] = m;
     }
+    if OWN {
+        // SAFETY: as above; outputs hold `lo + nv` floats.
+        unsafe { integrate(k, c, p00, force) };
+    }
+}
+
+/// Integrates the particles `(row, c .. c + LANES)` under `force` (springs and drag):
+/// adds air damping and the ground penalty, then steps them (see [`GridCloth`]'s
+/// integrators), projects them out of the sphere when the step does that, and writes
+/// the new state to the outputs.
+///
+/// # Safety
+/// As for [`block`], with `OWN`.
+#[inline(always)]
+unsafe fn integrate<S: Simd>(
+    k: &RowKernel<S>,
+    c: usize,
+    (x, xl, v): Particle<S::V>,
+    mut force: [S::V; 3],
+) {
+    let s = k.s;
+    let at = k.b[0] + c;
+    // SAFETY: inside the arrays (caller's contract).
+    let (w, u) = unsafe {
+        let u = if k.verlet {
+            [
+                s.load(k.u[0].add(at)),
+                s.load(k.u[1].add(at)),
+                s.load(k.u[2].add(at)),
+            ]
+        } else {
+            *v
+        };
+        (s.load(k.inv_mass.add(at)), u)
+    };
+    for i in 0..3 {
+        force[i] = s.mul_add(k.neg_air, v[i], force[i]);
+    }
+    // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
+    let [height, kc, cg] = k.ground;
+    let depth = s.sub(height, x[1]);
+    let push = s.mul_sub(kc, depth, s.mul(cg, v[1]));
+    force[1] = s.add(force[1], s.keep_if_positive(depth, push));
+    let mut xn = [k.zero; 3];
+    let mut xnl = [k.zero; 3];
+    let mut un = [k.zero; 3];
+    let mut vn = [k.zero; 3];
+    for i in 0..3 {
+        let a = s.mul_add(force[i], w, k.gravity[i]);
+        un[i] = s.keep_if_positive(w, s.mul_add(k.dt, a, u[i]));
+        // Explicit Euler moves with the old velocity, the others with the new one.
+        let moving = s.mul_add(k.explicit, s.sub(u[i], un[i]), un[i]);
+        (xn[i], xnl[i]) = add_double(s, (x[i], xl[i]), s.mul(k.dt, moving));
+        vn[i] = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un[i]));
+    }
+    if let Some((center, radius, radius2)) = k.sphere {
+        // Inside (and free): moved to `center + radius d / |d|`; the move `δ` also
+        // changes the velocities by `δ / h`.
+        let d: [S::V; 3] = std::array::from_fn(|i| s.sub(xn[i], center[i]));
+        let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
+        let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
+        let scale = s.mul(radius, s.rsqrt_or_zero(d2, EPS2));
+        for i in 0..3 {
+            let onto = s.mul_add(d[i], scale, center[i]);
+            let dx = s.mul(inside, s.sub(onto, xn[i]));
+            let dl = s.mul(inside, xnl[i]);
+            let dv = s.mul(s.sub(dx, dl), k.inv_dt);
+            xn[i] = s.add(xn[i], dx);
+            xnl[i] = s.sub(xnl[i], dl);
+            un[i] = s.add(un[i], dv);
+            vn[i] = s.add(vn[i], dv);
+        }
+    }
+    // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
+    unsafe {
+        let o = k.lo + c;
+        for i in 0..3 {
+            s.store(k.out[i].add(o), xn[i]);
+            s.store(k.out[3 + i].add(o), xnl[i]);
+            s.store(k.out[6 + i].add(o), vn[i]);
+            if k.verlet {
+                s.store(k.out[9 + i].add(o), un[i]);
+            }
+        }
+    }
+}
+
+/// `(hi, lo) + t` as a new double-float `(hi', lo')` with `|lo'| <= ulp(hi') / 2`:
+/// Knuth's two-sum of `hi + t` (exact whatever the magnitudes), its error added to
+/// `lo`, then renormalised.
+#[inline(always)]
+fn add_double<S: Simd>(s: S, (hi, lo): (S::V, S::V), t: S::V) -> (S::V, S::V) {
+    let sum = s.add(hi, t);
+    let t_part = s.sub(sum, hi);
+    let error = s.add(s.sub(hi, s.sub(sum, t_part)), s.sub(t, t_part));
+    let lo = s.add(lo, error);
+    let hi = s.add(sum, lo);
+    (hi, s.sub(lo, s.sub(hi, sum)))
 }
