@@ -10,6 +10,7 @@
 //! cloths move by 0.05 to 1 m over these runs).
 
 use cloth_sandbox::scene::Scene;
+use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, Precision, SpringCoefficients};
 use cloth_sandbox::sim::{Engine, System, safe};
 use glam::DVec3;
 
@@ -35,9 +36,8 @@ fn motion(start: &[DVec3], end: &[DVec3]) -> f64 {
 fn pair(name: &str, overrides: &[&str]) -> (System, System) {
     let mut fast = build(name, overrides);
     fast.set_fast_path(true);
-    assert_eq!(
-        fast.engine(),
-        Engine::Grid,
+    assert!(
+        fast.engine().is_grid(),
         "{name} {overrides:?} should run on the fast engine"
     );
     let exact = build(name, overrides);
@@ -57,26 +57,84 @@ fn compare(fast: &mut System, exact: &mut System, steps: u64) -> (f64, f64) {
 
 #[test]
 fn each_feature_agrees_with_the_f64_engine() {
-    // (scene, overrides, steps, bound in m)
-    let cases: &[(&str, &[&str], u64, f64)] = &[
-        ("cloth", &["air_damping=0.05"], 480, 1e-5),
-        ("cloth", &["ground_height=-1.2", "ground_stiffness=500"], 960, 1e-4),
-        ("cloth", &["integrator=\"verlet\""], 480, 1e-5),
-        ("cloth", &["integrator=\"explicit-euler\"", "damping=0.2"], 200, 1e-5),
-        ("cloth", &["stretch_limit=0.02"], 480, 1e-4),
-        ("cloth", &["wind=\"0,0,8\"", "gust=4"], 200, 1e-5),
-        ("drape", &[], 960, 1e-4),
-        ("drape", &["stretch_limit=0.1"], 960, 1e-4),
-        ("sheet", &[], 480, 1e-4),
-        ("bench", &["width=40", "height=24"], 480, 1e-5),
+    // (scene, base overrides, the feature's overrides, steps, bound in m). Without
+    // wind the motion is regular and the engines agree to about 1e-7 m over a
+    // simulated second; a cloth flapping in the wind amplifies round-off (measured:
+    // 2e-4 m apart after a second of the default cloth in steady wind), so the windy
+    // cases are compared before the flapping sets in, and the drape before it
+    // buckles over the sphere (about 0.35 s).
+    let still = &["gust=0", "wind=\"0,0,0\""][..];
+    let cases: &[(&str, &[&str], &[&str], u64, f64)] = &[
+        ("cloth", still, &["air_damping=0.005"], 960, 1e-6),
+        (
+            "cloth",
+            still,
+            &["ground_height=-0.05", "ground_stiffness=500"],
+            960,
+            1e-6,
+        ),
+        ("cloth", still, &["integrator=\"verlet\""], 960, 1e-6),
+        (
+            "cloth",
+            still,
+            &["integrator=\"explicit-euler\"", "damping=0.2"],
+            200,
+            1e-6,
+        ),
+        ("cloth", still, &["stretch_limit=0.005"], 960, 1e-6),
+        ("cloth", still, &["gravity=-30"], 960, 1e-6),
+        ("cloth", &[], &["wind=\"0,0,8\"", "gust=4"], 120, 1e-6),
+        (
+            "drape",
+            &["sphere_radius=0.01"],
+            &["sphere_radius=0.5"],
+            320,
+            1e-5,
+        ),
+        (
+            "drape",
+            &["stretch_limit=0.1", "sphere_radius=0.01"],
+            &["sphere_radius=0.5"],
+            320,
+            1e-5,
+        ),
+        (
+            "sheet",
+            &["stretch_limit=1"],
+            &["stretch_limit=0.1"],
+            240,
+            1e-6,
+        ),
+        ("bench", &["width=40"], &["height=24"], 960, 1e-6),
     ];
-    for &(name, overrides, steps, bound) in cases {
-        let (mut fast, mut exact) = pair(name, overrides);
+    for &(name, base, feature, steps, bound) in cases {
+        let overrides: Vec<&str> = base.iter().chain(feature).copied().collect();
+        let (mut fast, mut exact) = pair(name, &overrides);
         let (d, moved) = compare(&mut fast, &mut exact, steps);
-        println!("{name} {overrides:?}: {d:.3e} m apart after {steps} steps, moved {moved:.3} m");
-        assert!(d < bound, "{name} {overrides:?}: {d:e} m apart (bound {bound:e})");
-        assert!(moved > 1000.0 * bound, "{name} {overrides:?}: moved only {moved} m");
-        assert!(d > 0.0, "identical results would mean the fast engine did not run");
+        // What the feature changes, so that agreeing means something.
+        let mut without = build(name, base);
+        without.run(steps).unwrap();
+        let effect = max_distance(without.positions(), exact.positions());
+        println!(
+            "{name} {overrides:?}: {d:.3e} m apart after {steps} steps; moved {moved:.3} m, \
+             the feature changed it by {effect:.3e} m"
+        );
+        assert!(
+            d < bound,
+            "{name} {overrides:?}: {d:e} m apart (bound {bound:e})"
+        );
+        assert!(
+            moved > 1000.0 * bound,
+            "{name} {overrides:?}: moved only {moved} m"
+        );
+        assert!(
+            effect > 100.0 * bound,
+            "{name} {overrides:?}: the feature did nothing"
+        );
+        assert!(
+            d > 0.0,
+            "identical results would mean the fast engine did not run"
+        );
     }
 }
 
@@ -123,15 +181,54 @@ fn stiff_energies(stiffness: f64, mass: f64, steps: u64) -> (f64, f64, f64) {
 #[test]
 fn stiff_cloth_does_not_heat_up_on_the_fast_engine() {
     // Float32 positions lose `x += h v` below 6e-8 m; times k that is force noise
-    // that heated a k = 1e7 cloth to 0.15 J. With double-float positions the kinetic
-    // energy must follow the f64 engine's: within 1% of the energy of lowering the
-    // whole cloth by one spacing (its scale here), at every stiffness the panel allows.
+    // that heated a k = 1e7 cloth to 0.15 J. The engine keeps positions in two parts
+    // and computes in float64 where float32 lengths are too coarse for k
+    // (`Precision::needed`), so its kinetic energy must follow the f64 engine's to
+    // 1% at every stiffness the panel allows, down to the 1e-15 J of a cloth at rest.
     for (k, m) in [(1e3, 1e-3), (1e5, 1e-3), (1e7, 1e-3), (1e9, 1e-6)] {
         let (fast, exact, scale) = stiff_energies(k, m, 2000);
-        println!("k = {k:e}, m = {m:e}: kinetic {fast:.3e} J (fast) vs {exact:.3e} J (f64), scale {scale:.3e} J");
+        println!(
+            "k = {k:e}, m = {m:e}: kinetic {fast:.3e} J (fast) vs {exact:.3e} J (f64), \
+             scale {scale:.3e} J"
+        );
         assert!(
-            (fast - exact).abs() < 0.01 * scale,
+            (fast - exact).abs() <= 0.01 * exact + 1e-12 * scale,
             "k = {k:e}: kinetic energy {fast:e} J against {exact:e} J"
         );
     }
+}
+
+#[test]
+fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
+    // The peers' cloth made stiff (k = 1e7 N/m, 1 g particles), stepped at half its
+    // critical step from rest in both precisions: float32 spring lengths feed it
+    // noise that float64 does not.
+    let kinetic = |precision: Precision| {
+        let mut spec = GridSpec::peer_bench(32, false);
+        let kind = SpringCoefficients { k: 1e7, b: 0.0 };
+        (spec.structural, spec.shear, spec.bend) = (kind, kind, kind);
+        spec.gravity = [0.0; 3];
+        spec.precision = precision;
+        let m = spec.particle_mass;
+        // Gershgorin: omega² <= 2 * 12 k / m.
+        let dt = 0.5 * 2.0 / (24.0 * 1e7 / m).sqrt();
+        let mut cloth = GridCloth::new(spec);
+        cloth.steps(dt, 3000);
+        let mut v = vec![DVec3::ZERO; cloth.len()];
+        cloth.velocities_into(&mut v);
+        v.iter().map(|v| 0.5 * m * v.length_squared()).sum::<f64>()
+    };
+    let (single, double) = (kinetic(Precision::Single), kinetic(Precision::Double));
+    println!("kinetic energy from rest: {single:.3e} J (float32), {double:.3e} J (float64)");
+    assert!(
+        single > 1e3 * double.max(1e-30),
+        "{single:e} J vs {double:e} J"
+    );
+    let mut spec = GridSpec::peer_bench(32, false);
+    spec.structural.k = 1e7;
+    assert_eq!(Precision::needed(&spec), Precision::Double);
+    assert_eq!(
+        Precision::needed(&GridSpec::peer_bench(32, false)),
+        Precision::Single
+    );
 }

@@ -3,6 +3,7 @@
 //! the kernel does not model, and honours pins and grabs made between runs.
 
 use cloth_sandbox::scene::Scene;
+use cloth_sandbox::sim::grid_kernel::Precision;
 use cloth_sandbox::sim::{Engine, System};
 use glam::DVec3;
 
@@ -24,7 +25,7 @@ fn fast_and_exact(name: &str, overrides: &[&str], steps: u64) -> (System, System
     fast.set_fast_path(true);
     assert_eq!(
         fast.engine(),
-        Engine::Grid,
+        Engine::Grid(Precision::Single),
         "{name} {overrides:?} should take the grid kernel"
     );
     let mut exact = build(name, overrides);
@@ -92,12 +93,9 @@ fn windy_cloths_agree_particle_by_particle_early_and_on_average_later() {
 #[test]
 fn what_the_kernel_does_not_model_runs_on_the_general_path() {
     for (name, overrides) in [
-        ("cloth", &["integrator=\"verlet\""][..]),
-        ("cloth", &["stretch_limit=0.1"][..]),
-        ("cloth", &["air_damping=0.1"][..]),
-        ("cloth", &["ground_height=-1"][..]),
-        ("sheet", &[][..]),
-        ("drape", &[][..]),
+        ("cloth", &["integrator=\"rk4\""][..]),
+        ("cloth", &["integrator=\"rk2\""][..]),
+        ("cloth", &["integrator=\"implicit-euler\""][..]),
         ("chain", &[][..]),
         ("jelly", &[][..]),
         ("rope", &[][..]),
@@ -107,11 +105,25 @@ fn what_the_kernel_does_not_model_runs_on_the_general_path() {
         assert_eq!(system.engine(), Engine::General, "{name} {overrides:?}");
         system.run(10).unwrap();
     }
+    // What the kernel models since the engine took in the panel's controls.
+    for (name, overrides) in [
+        ("cloth", &["integrator=\"verlet\""][..]),
+        ("cloth", &["integrator=\"explicit-euler\""][..]),
+        ("cloth", &["stretch_limit=0.1"][..]),
+        ("cloth", &["air_damping=0.1"][..]),
+        ("cloth", &["ground_height=-1"][..]),
+        ("sheet", &[][..]),
+        ("drape", &[][..]),
+    ] {
+        let mut system = build(name, overrides);
+        system.set_fast_path(true);
+        assert!(system.engine().is_grid(), "{name} {overrides:?}");
+    }
     // A spring whose stiffness differs from its kind's breaks uniformity.
     let mut system = build("bench", &[]);
     system.set_fast_path(true);
     system.set_spring_stiffness(cloth_sandbox::sim::SpringKind::Shear, 1.0);
-    assert_eq!(system.engine(), Engine::Grid, "a whole kind may change");
+    assert!(system.engine().is_grid(), "a whole kind may change");
 }
 
 #[test]
@@ -142,7 +154,11 @@ fn pins_and_grabs_between_runs_reach_the_kernel() {
 fn a_divergence_on_the_kernel_is_caught() {
     let mut system = build("cloth", &["stiffness=100000", "gust=0"]);
     system.set_fast_path(true);
-    assert_eq!(system.engine(), Engine::Grid);
+    assert_eq!(
+        system.engine(),
+        Engine::Grid(Precision::Double),
+        "k = 1e5 N/m needs float64"
+    );
     let err = system.run(2_000).unwrap_err();
     assert!(err.time() < 2.0, "{err}");
 }

@@ -169,7 +169,7 @@ fn a_rest_length_jump_scales_the_cloth_and_keeps_its_strains() {
 fn the_default_cloth_needs_no_limit_and_runs_on_the_grid_kernel() {
     let s = Session::load_with("cloth", &[]).unwrap();
     assert_eq!(s.step_choice().unwrap().stretch_limit, None);
-    assert_eq!(s.system().engine(), cloth_sandbox::sim::Engine::Grid);
+    assert!(s.system().engine().is_grid());
 }
 
 #[test]

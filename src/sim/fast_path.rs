@@ -12,7 +12,7 @@
 
 use glam::DVec3;
 
-use super::grid_kernel::{GridCloth, GridSpec, SpringCoefficients};
+use super::grid_kernel::{GridCloth, GridSpec, Precision, SpringCoefficients};
 use super::{Integrator, SpringKind, System};
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
@@ -23,8 +23,8 @@ const CHUNK: u64 = 32;
 pub enum Engine {
     /// The general f64 path: any topology, force term, integrator or constraint.
     General,
-    /// The f32 grid stencil kernel (symplectic Euler on plain grid cloths).
-    Grid,
+    /// The grid stencil kernel, in the precision the system needs.
+    Grid(Precision),
 }
 
 impl Engine {
@@ -32,8 +32,14 @@ impl Engine {
     pub fn name(self) -> &'static str {
         match self {
             Self::General => "general-f64",
-            Self::Grid => "grid-f32",
+            Self::Grid(Precision::Single) => "grid-f32",
+            Self::Grid(Precision::Double) => "grid-f64",
         }
+    }
+
+    /// Whether this is the fast grid kernel (in either precision).
+    pub fn is_grid(self) -> bool {
+        matches!(self, Self::Grid(_))
     }
 }
 
@@ -147,10 +153,9 @@ impl System {
 
     /// The engine [`System::run`] would use now.
     pub fn engine(&self) -> Engine {
-        if self.fast_path_allowed && self.grid_spec().is_some() {
-            Engine::Grid
-        } else {
-            Engine::General
+        match self.grid_spec() {
+            Some(spec) if self.fast_path_allowed => Engine::Grid(spec.precision),
+            _ => Engine::General,
         }
     }
 
@@ -171,7 +176,7 @@ impl System {
             ground,
             sphere,
             integrator,
-            dt: _, // given to each run
+            dt: _,             // given to each run
             bar_iterations: _, // bars are refused below
             stretch_limit,
             seed: _, // only the gusts use it
@@ -183,7 +188,9 @@ impl System {
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
         } = model.terms;
-        if !GridCloth::supports(integrator) || (!model.bars.is_empty() && model.params.bar_iterations > 0) {
+        if !GridCloth::supports(integrator)
+            || (!model.bars.is_empty() && model.params.bar_iterations > 0)
+        {
             return None;
         }
         let (air_density, drag_coefficient) = if aero {
@@ -192,7 +199,7 @@ impl System {
             (0.0, 0.0)
         };
         let [structural, shear, bend] = springs.coefficients;
-        Some(GridSpec {
+        let mut spec = GridSpec {
             width: shape.width,
             height: shape.height,
             spacing: springs.spacing,
@@ -212,7 +219,10 @@ impl System {
             stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
             integrator,
             present: springs.present,
-        })
+            precision: Precision::Single,
+        };
+        spec.precision = Precision::needed(&spec);
+        Some(spec)
     }
 
     /// Runs `n` steps on the kernel if allowed and possible; `None` when the general
@@ -340,22 +350,7 @@ impl System {
     /// speed above [`super::RUNAWAY_SPEED`], nothing beyond the runaway distance.
     fn kernel_state_plausible(&self, kernel: &GridCloth) -> bool {
         let far = self.runaway_distance();
-        let c = self.start_center.as_vec3();
-        let ([x, y, z], [vx, vy, vz]) = (kernel.raw_positions(), kernel.raw_velocities());
-        let (mut speed2, mut dist2) = (0.0f32, 0.0f32);
-        for i in 0..x.len() {
-            let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-            let (dx, dy, dz) = (x[i] - c.x, y[i] - c.y, z[i] - c.z);
-            // NaN fails every comparison: max() would drop it, so test it here.
-            speed2 = if v2.is_nan() {
-                f32::INFINITY
-            } else {
-                speed2.max(v2)
-            };
-            dist2 = dist2.max(dx * dx + dy * dy + dz * dz);
-        }
-        dist2.is_finite()
-            && (speed2 as f64) <= super::RUNAWAY_SPEED.powi(2)
-            && (dist2 as f64) <= far * far
+        let (speed2, dist2) = kernel.extremes(self.start_center);
+        speed2 <= super::RUNAWAY_SPEED.powi(2) && dist2 <= far * far
     }
 }

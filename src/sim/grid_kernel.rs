@@ -44,7 +44,7 @@
 
 use std::sync::OnceLock;
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Pod;
 use glam::DVec3;
 
 use super::constraints;
@@ -116,6 +116,59 @@ pub struct GridSpec {
     /// Which kinds of spring exist (structural, shear, bend); an absent kind has
     /// `k = b = 0` and no stretch limit.
     pub present: [bool; 3],
+    /// The float type of the arithmetic (see [`Precision::needed`]).
+    pub precision: Precision,
+}
+
+/// The float type a [`GridCloth`] computes in.
+///
+/// Positions are double-float in both (a high and a low part, so `x += h v` keeps
+/// every bit whatever the step), but in `Single` a spring's length is computed in
+/// float32, which resolves its stretch only to about `2^-23 L`. Times `k`, that is
+/// force noise: harmless while it is small against the forces that move the cloth,
+/// heating where it is not (a k = 1e9 N/m cloth of 1 mg particles). `Double` is the
+/// same code in float64, at about half the speed (half as many lanes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Precision {
+    /// Float32 arithmetic.
+    #[default]
+    Single,
+    /// Float64 arithmetic.
+    Double,
+}
+
+impl Precision {
+    /// Largest acceleration noise (m/s²) float32 may add to a particle: 1% of
+    /// standard gravity.
+    pub const NOISE_LIMIT: f64 = 0.0981;
+
+    /// The precision a grid cloth needs: `Single` when the acceleration noise of
+    /// float32 spring lengths, `sum_kinds k 2^-23 L / m`, stays below
+    /// [`Self::NOISE_LIMIT`], else `Double`.
+    pub fn needed(spec: &GridSpec) -> Self {
+        if Self::float32_noise(spec) <= Self::NOISE_LIMIT {
+            Self::Single
+        } else {
+            Self::Double
+        }
+    }
+
+    /// The acceleration noise (m/s²) of float32 spring lengths on `spec`'s cloth.
+    pub fn float32_noise(spec: &GridSpec) -> f64 {
+        let h = spec.spacing.abs();
+        let ulp = f32::EPSILON as f64;
+        let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
+        let kinds = [spec.structural, spec.shear, spec.bend];
+        // Each particle has up to 4 springs of each kind.
+        let noise: f64 = (kinds.iter().zip(rests))
+            .map(|(kind, rest)| 4.0 * kind.k.abs() * ulp * rest)
+            .sum();
+        if spec.particle_mass > 0.0 {
+            noise / spec.particle_mass
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 impl GridSpec {
@@ -150,6 +203,7 @@ impl GridSpec {
             stretch_limit: None,
             integrator: Integrator::SymplecticEuler,
             present: [true; 3],
+            precision: Precision::Single,
         }
     }
 
@@ -206,24 +260,143 @@ impl SimdLevel {
 /// Rows are padded to a multiple of this many floats (the widest SIMD block).
 const BLOCK: usize = 16;
 
-/// 64 bytes of floats, so that buffers and padded rows start on a cache line.
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+/// The float type a kernel computes in: `f32`, or `f64` where float32 cannot
+/// resolve the springs (see [`Precision`]).
+trait Real:
+    Copy
+    + Default
+    + PartialOrd
+    + Pod
+    + Send
+    + Sync
+    + std::fmt::Debug
+    + std::ops::Add<Output = Self>
+    + std::ops::Sub<Output = Self>
+    + std::ops::Mul<Output = Self>
+    + std::ops::Div<Output = Self>
+    + std::ops::Neg<Output = Self>
+    + std::ops::AddAssign
+    + 'static
+{
+    const ZERO: Self;
+    const ONE: Self;
+    /// Below any height: the ground height when there is no ground.
+    const LOWEST: Self;
+    /// Squared spring length (m²) under which a spring is degenerate (no force).
+    const EPS2: Self;
+    /// `|v_rel|² |2A|²` (m⁶/s²) under which a triangle gives no drag.
+    const TINY: Self;
+    fn of(x: f64) -> Self;
+    fn f64(self) -> f64;
+    fn sqrt(self) -> Self;
+    /// `self * a + b`, fused where the build target has FMA (aarch64 always does).
+    fn mul_add(self, a: Self, b: Self) -> Self;
+    /// Runs one band of a step, with the best code this CPU has for this type.
+    fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
+}
+
+impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const LOWEST: Self = f32::MIN;
+    const EPS2: Self = EPS2;
+    const TINY: Self = TINY;
+    fn of(x: f64) -> Self {
+        x as f32
+    }
+    fn f64(self) -> f64 {
+        self as f64
+    }
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        if cfg!(any(target_arch = "aarch64", target_feature = "fma")) {
+            f32::mul_add(self, a, b)
+        } else {
+            self * a + b
+        }
+    }
+    fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
+        match ctx.simd {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+            SimdLevel::Avx512 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                x86::row_avx512(ctx, band, row, out, lo, own)
+            }),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
+            SimdLevel::Avx2 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                x86::row_avx2(ctx, band, row, out, lo, own)
+            }),
+            _ => band_rows(ctx, band, out, row_portable::<f32>),
+        }
+    }
+}
+
+impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
+    const LOWEST: Self = f64::MIN;
+    const EPS2: Self = 1e-24;
+    const TINY: Self = 1e-30;
+    fn of(x: f64) -> Self {
+        x
+    }
+    fn f64(self) -> f64 {
+        self
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        if cfg!(any(target_arch = "aarch64", target_feature = "fma")) {
+            f64::mul_add(self, a, b)
+        } else {
+            self * a + b
+        }
+    }
+    fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
+        match ctx.simd {
+            // The portable lanes, compiled for the CPU's vector width.
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+            SimdLevel::Avx512 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                x86::row_avx512_f64(ctx, band, row, out, lo, own)
+            }),
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
+            SimdLevel::Avx2 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                x86::row_avx2_f64(ctx, band, row, out, lo, own)
+            }),
+            _ => band_rows(ctx, band, out, row_portable::<f64>),
+        }
+    }
+}
+
+/// 16 floats, so that buffers and padded rows start on a cache line.
+#[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-struct Line([f32; BLOCK]);
+struct Line<E>([E; BLOCK]);
 
 /// A zero-initialised, 64-byte aligned float buffer.
 #[derive(Clone, Debug, Default)]
-struct Buf(Vec<Line>);
+struct Buf<E>(Vec<Line<E>>);
 
-impl Buf {
+impl<E: Real> Buf<E> {
     fn zeros(n: usize) -> Self {
-        Buf(vec![Line([0.0; BLOCK]); n.div_ceil(BLOCK)])
+        Buf(vec![Line([E::ZERO; BLOCK]); n.div_ceil(BLOCK)])
     }
-    fn as_slice(&self) -> &[f32] {
-        bytemuck::cast_slice(&self.0)
+    fn as_slice(&self) -> &[E] {
+        // SAFETY: `Line<E>` is `repr(C)` around `[E; BLOCK]`, 64 or 128 bytes: a
+        // multiple of its alignment, so there is no padding between lines.
+        unsafe { std::slice::from_raw_parts(self.0.as_ptr().cast(), self.0.len() * BLOCK) }
     }
-    fn as_mut_slice(&mut self) -> &mut [f32] {
-        bytemuck::cast_slice_mut(&mut self.0)
+    fn as_mut_slice(&mut self) -> &mut [E] {
+        // SAFETY: as in `as_slice`.
+        unsafe { std::slice::from_raw_parts_mut(self.0.as_mut_ptr().cast(), self.0.len() * BLOCK) }
     }
 }
 
@@ -261,65 +434,68 @@ impl Grid {
 
 /// Per-step constants shared by all bands (f32, as the kernel uses them).
 #[derive(Clone, Copy, Debug)]
-struct Params {
+struct Params<E> {
     /// Per spring kind (0 structural, 1 bend, 2 shear): `k`, `k L`, `b`.
-    ks: [f32; 3],
-    kls: [f32; 3],
-    bs: [f32; 3],
-    gravity: [f32; 3],
-    wind: [f32; 3],
+    ks: [E; 3],
+    kls: [E; 3],
+    bs: [E; 3],
+    gravity: [E; 3],
+    wind: [E; 3],
     /// `ρ C_d / 12`: a third of the drag force with `A = |m| / 2`.
-    drag: f32,
-    dt: f32,
+    drag: E,
+    dt: E,
     /// `-c` of the air damping `-c v`.
-    neg_air: f32,
+    neg_air: E,
     /// Ground height, penalty stiffness and damping (height `f32::MIN`: no ground).
-    ground: [f32; 3],
+    ground: [E; 3],
     /// 1 for explicit Euler (positions move with the old velocity), else 0.
-    explicit: f32,
+    explicit: E,
     /// `h/2` for position Verlet's velocity estimate `u + h/2 a`, else 0.
-    verlet_half_dt: f32,
+    verlet_half_dt: E,
     /// Whether the velocity of the last position update `u` is its own array (Verlet).
     verlet: bool,
     /// Sphere centre, radius and squared radius, projected onto inside the fused step.
-    sphere: Option<([f32; 3], f32, f32)>,
+    sphere: Option<([E; 3], E, E)>,
 }
 
-impl Params {
+impl<E: Real> Params<E> {
     /// The constants of `spec` (the step `dt` is set by each run).
     fn of(spec: &GridSpec) -> Self {
-    let hs = spec.spacing;
-    // Index 0: structural (rest h), 1: bend (2h), 2: shear (h√2).
-    let kinds = [
-        (spec.structural, hs),
-        (spec.bend, 2.0 * hs),
-        (spec.shear, hs * std::f64::consts::SQRT_2),
-    ];
-    Params {
-        ks: kinds.map(|(kind, _)| kind.k as f32),
-        kls: kinds.map(|(kind, rest)| (kind.k * rest) as f32),
-        bs: kinds.map(|(kind, _)| kind.b as f32),
-        gravity: spec.gravity.map(|g| g as f32),
-        wind: spec.wind.map(|g| g as f32),
-        drag: (spec.air_density * spec.drag_coefficient / 12.0) as f32,
-        dt: 0.0,
-        neg_air: -spec.air_damping as f32,
-        ground: spec.ground.map_or([f32::MIN, 0.0, 0.0], |g| {
-            [g.height as f32, g.stiffness as f32, g.damping as f32]
-        }),
-        explicit: if spec.integrator == Integrator::ExplicitEuler {
-            1.0
-        } else {
-            0.0
-        },
-        verlet_half_dt: 0.0,
-        verlet: spec.integrator == Integrator::Verlet,
-        // With a stretch limit the sphere comes after it, in the constraint pass.
-        sphere: spec.sphere.filter(|_| spec.stretch_limit.is_none()).map(|s| {
-            let r = s.radius as f32;
-            (s.center.as_vec3().to_array(), r, r * r)
-        }),
-    }
+        let hs = spec.spacing;
+        // Index 0: structural (rest h), 1: bend (2h), 2: shear (h√2).
+        let kinds = [
+            (spec.structural, hs),
+            (spec.bend, 2.0 * hs),
+            (spec.shear, hs * std::f64::consts::SQRT_2),
+        ];
+        Params {
+            ks: kinds.map(|(kind, _)| E::of(kind.k)),
+            kls: kinds.map(|(kind, rest)| E::of(kind.k * rest)),
+            bs: kinds.map(|(kind, _)| E::of(kind.b)),
+            gravity: spec.gravity.map(E::of),
+            wind: spec.wind.map(E::of),
+            drag: E::of(spec.air_density * spec.drag_coefficient / 12.0),
+            dt: E::ZERO,
+            neg_air: E::of(-spec.air_damping),
+            ground: spec.ground.map_or([E::LOWEST, E::ZERO, E::ZERO], |g| {
+                [g.height, g.stiffness, g.damping].map(E::of)
+            }),
+            explicit: if spec.integrator == Integrator::ExplicitEuler {
+                E::ONE
+            } else {
+                E::ZERO
+            },
+            verlet_half_dt: E::ZERO,
+            verlet: spec.integrator == Integrator::Verlet,
+            // With a stretch limit the sphere comes after it, in the constraint pass.
+            sphere: spec
+                .sphere
+                .filter(|_| spec.stretch_limit.is_none())
+                .map(|s| {
+                    let r = E::of(s.radius);
+                    (s.center.to_array().map(E::of), r, r * r)
+                }),
+        }
     }
 }
 
@@ -328,16 +504,16 @@ const SLOTS: usize = 3;
 
 /// Scratch of one row band: a ring of three rows of force accumulators (x, y, z).
 #[derive(Clone, Debug)]
-struct Band {
+struct Band<E> {
     /// First row of the band.
     r0: usize,
     /// One past the last row.
     r1: usize,
     /// `SLOTS` x 3 components x `nv` floats.
-    acc: Buf,
+    acc: Buf<E>,
 }
 
-impl Band {
+impl<E: Real> Band<E> {
     fn new(r0: usize, r1: usize, grid: &Grid) -> Self {
         Band {
             r0,
@@ -348,7 +524,7 @@ impl Band {
 }
 
 /// Split the rows into `n` bands of nearly equal size.
-fn make_bands(grid: &Grid, n: usize) -> Vec<Band> {
+fn make_bands<E: Real>(grid: &Grid, n: usize) -> Vec<Band<E>> {
     let n = n.clamp(1, grid.h);
     (0..n)
         .map(|i| Band::new(i * grid.h / n, (i + 1) * grid.h / n, grid))
@@ -359,25 +535,25 @@ fn make_bands(grid: &Grid, n: usize) -> Vec<Band> {
 /// sum `x + xl` of two floats (a "double-float"), so that `x += h v` loses nothing
 /// to round-off (see the module doc, "Precision").
 #[derive(Clone, Debug)]
-struct State {
-    x: [Buf; 3],
+struct State<E> {
+    x: [Buf<E>; 3],
     /// Low parts of the positions.
-    xl: [Buf; 3],
-    v: [Buf; 3],
+    xl: [Buf<E>; 3],
+    v: [Buf<E>; 3],
     /// Position Verlet's velocity of the last position update, `(x - x_prev) / h`
     /// (empty for the Euler methods, whose positions move with `v`).
-    u: [Buf; 3],
+    u: [Buf<E>; 3],
 }
 
 /// Output rows of a band (or of several consecutive bands): `x`, `y`, `z`, their
 /// low parts, `vx`, `vy`, `vz`, and (Verlet only, else empty) `ux`, `uy`, `uz`, each
 /// starting at the band's first row.
-struct Out<'a>([&'a mut [f32]; 12]);
+struct Out<'a, E>([&'a mut [E]; 12]);
 
-impl<'a> Out<'a> {
-    fn split_at(self, at: usize) -> (Out<'a>, Out<'a>) {
-        let mut lo: [&'a mut [f32]; 12] = Default::default();
-        let mut hi: [&'a mut [f32]; 12] = Default::default();
+impl<'a, E> Out<'a, E> {
+    fn split_at(self, at: usize) -> (Out<'a, E>, Out<'a, E>) {
+        let mut lo: [&'a mut [E]; 12] = Default::default();
+        let mut hi: [&'a mut [E]; 12] = Default::default();
         for (i, a) in self.0.into_iter().enumerate() {
             let at = at.min(a.len());
             (lo[i], hi[i]) = a.split_at_mut(at);
@@ -386,37 +562,28 @@ impl<'a> Out<'a> {
     }
 }
 
-/// A regular grid cloth stepped by the fast f32 stencil kernel.
-///
-/// ```
-/// use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};
-/// let mut cloth = GridCloth::new(GridSpec::peer_bench(32, false));
-/// cloth.steps(1.0 / 960.0, 960);
-/// let mut p = vec![glam::DVec3::ZERO; cloth.len()];
-/// cloth.positions_into(&mut p);
-/// assert!(p[1008].y < -0.6);
-/// ```
-pub struct GridCloth {
+/// The stencil kernel in one precision (see [`GridCloth`], which holds one).
+struct Kernel<E: Real> {
     spec: GridSpec,
     grid: Grid,
-    params: Params,
-    cur: State,
-    next: State,
-    inv_mass: Buf,
+    params: Params<E>,
+    cur: State<E>,
+    next: State<E>,
+    inv_mass: Buf<E>,
     /// Two rows: 1 for columns `c < w - 1` (springs to `c + 1` exist), then 1 for
     /// `c < w - 2`; 0 elsewhere.
-    col_mask: Buf,
+    col_mask: Buf<E>,
     drag_on: bool,
     threads: usize,
     pool: Option<rayon::ThreadPool>,
     /// One band: the sequential path.
-    seq_band: Vec<Band>,
+    seq_band: Vec<Band<E>>,
     /// One band per thread.
-    par_bands: Vec<Band>,
+    par_bands: Vec<Band<E>>,
     simd: SimdLevel,
 }
 
-impl std::fmt::Debug for GridCloth {
+impl<E: Real> std::fmt::Debug for Kernel<E> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GridCloth")
             .field("width", &self.grid.w)
@@ -427,7 +594,7 @@ impl std::fmt::Debug for GridCloth {
     }
 }
 
-impl GridCloth {
+impl<E: Real> Kernel<E> {
     /// Build the cloth at rest, flat in the x-y plane (see [`GridSpec`]). Runs on one
     /// thread until [`GridCloth::set_threads`] is called. A width or height of 0 is
     /// taken as 1; pinned indices out of range are ignored.
@@ -436,7 +603,7 @@ impl GridCloth {
     /// If the spec's integrator is not one the kernel has ([`GridCloth::supports`]).
     pub fn new(mut spec: GridSpec) -> Self {
         assert!(
-            Self::supports(spec.integrator),
+            GridCloth::supports(spec.integrator),
             "the grid kernel has no {} step",
             spec.integrator
         );
@@ -459,33 +626,34 @@ impl GridCloth {
                 spec.origin[2],
             ];
             for a in 0..3 {
-                let hi = start[a] as f32;
+                let hi = E::of(start[a]);
                 cur.x[a].as_mut_slice()[i] = hi;
-                cur.xl[a].as_mut_slice()[i] = (start[a] - hi as f64) as f32;
+                cur.xl[a].as_mut_slice()[i] = E::of(start[a] - hi.f64());
             }
         }
         let mut inv_mass = Buf::zeros(grid.len());
         let inv_m = if spec.particle_mass > 0.0 {
-            (1.0 / spec.particle_mass) as f32
+            E::of(1.0 / spec.particle_mass)
         } else {
-            0.0
+            E::ZERO
         };
         for p in 0..grid.w * grid.h {
             inv_mass.as_mut_slice()[grid.index(p)] = inv_m;
         }
         for &p in &spec.pinned {
             if p < grid.w * grid.h {
-                inv_mass.as_mut_slice()[grid.index(p)] = 0.0;
+                inv_mass.as_mut_slice()[grid.index(p)] = E::ZERO;
             }
         }
         let mut col_mask = Buf::zeros(2 * grid.stride);
         for c in 0..grid.w {
-            col_mask.as_mut_slice()[c] = if c + 1 < grid.w { 1.0 } else { 0.0 };
-            col_mask.as_mut_slice()[grid.stride + c] = if c + 2 < grid.w { 1.0 } else { 0.0 };
+            col_mask.as_mut_slice()[c] = if c + 1 < grid.w { E::ONE } else { E::ZERO };
+            col_mask.as_mut_slice()[grid.stride + c] =
+                if c + 2 < grid.w { E::ONE } else { E::ZERO };
         }
         let params = Params::of(&spec);
-        let drag_on = params.drag != 0.0;
-        GridCloth {
+        let drag_on = params.drag != E::ZERO;
+        Kernel {
             params,
             next: cur.clone(),
             cur,
@@ -515,26 +683,17 @@ impl GridCloth {
         let dt = (self.params.dt, self.params.verlet_half_dt);
         self.params = Params::of(&spec);
         (self.params.dt, self.params.verlet_half_dt) = dt;
-        self.drag_on = self.params.drag != 0.0;
+        self.drag_on = self.params.drag != E::ZERO;
         let inv_m = if spec.particle_mass > 0.0 {
-            (1.0 / spec.particle_mass) as f32
+            E::of(1.0 / spec.particle_mass)
         } else {
-            0.0
+            E::ZERO
         };
         for p in 0..self.len() {
             self.inv_mass.as_mut_slice()[self.grid.index(p)] = inv_m;
         }
         self.spec = spec;
         true
-    }
-
-    /// Whether the kernel steps with `integrator`: symplectic Euler, explicit Euler
-    /// and position Verlet (the methods with one force evaluation per step).
-    pub fn supports(integrator: Integrator) -> bool {
-        matches!(
-            integrator,
-            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet
-        )
     }
 
     /// The spec the cloth was built from (with the current wind and gravity).
@@ -603,13 +762,13 @@ impl GridCloth {
     /// Change the wind (m/s), e.g. every step for gusts.
     pub fn set_wind(&mut self, wind: DVec3) {
         self.spec.wind = wind.to_array();
-        self.params.wind = self.spec.wind.map(|g| g as f32);
+        self.params.wind = self.spec.wind.map(E::of);
     }
 
     /// Change gravity (m/s²).
     pub fn set_gravity(&mut self, gravity: DVec3) {
         self.spec.gravity = gravity.to_array();
-        self.params.gravity = self.spec.gravity.map(|g| g as f32);
+        self.params.gravity = self.spec.gravity.map(E::of);
     }
 
     /// Advance by one semi-implicit Euler step of `dt` seconds.
@@ -620,9 +779,9 @@ impl GridCloth {
     /// Advance by `n` steps of `dt` seconds. On several threads the pool is entered
     /// once for all `n` steps, so prefer this to calling [`GridCloth::step`] in a loop.
     pub fn steps(&mut self, dt: f64, n: usize) {
-        self.params.dt = dt as f32;
+        self.params.dt = E::of(dt);
         if self.params.verlet {
-            self.params.verlet_half_dt = (0.5 * dt) as f32;
+            self.params.verlet_half_dt = E::of(0.5 * dt);
         }
         match self.pool.take() {
             Some(pool) => {
@@ -657,7 +816,7 @@ impl GridCloth {
             simd: self.simd,
         };
         let real = self.grid.h * self.grid.stride;
-        fn rows(arrays: &mut [Buf; 3], real: usize) -> [&mut [f32]; 3] {
+        fn rows<E: Real>(arrays: &mut [Buf<E>; 3], real: usize) -> [&mut [E]; 3] {
             arrays.each_mut().map(|b| {
                 let a = b.as_mut_slice();
                 let len = real.min(a.len());
@@ -718,7 +877,7 @@ impl GridCloth {
                     let (a, b) = (r * w + c, rb * w + cb as usize);
                     let (ia, ib) = (self.grid.index(a), self.grid.index(b));
                     let inv_mass = self.inv_mass.as_slice();
-                    let (wa, wb) = (inv_mass[ia] as f64, inv_mass[ib] as f64);
+                    let (wa, wb) = (inv_mass[ia].f64(), inv_mass[ib].f64());
                     let (xa, xb) = (self.position_at(ia), self.position_at(ib));
                     if let Some(fix) = constraints::length_correction(xa, xb, wa, wb, |l| {
                         (l > longest).then_some(longest)
@@ -732,7 +891,7 @@ impl GridCloth {
         if let Some(sphere) = self.spec.sphere {
             for p in 0..w * h {
                 let i = self.grid.index(p);
-                if self.inv_mass.as_slice()[i] > 0.0
+                if self.inv_mass.as_slice()[i] > E::ZERO
                     && let Some(outside) = constraints::out_of_sphere(self.position_at(i), &sphere)
                 {
                     self.move_particle(i, outside, dt);
@@ -743,7 +902,12 @@ impl GridCloth {
 
     /// Whether any spring starting on row `r` may be longer than `limit` times its
     /// rest length (a conservative float32 check: a margin of 1e-4 covers round-off).
-    fn row_over_limit(&self, r: usize, stencil: &[((usize, isize), f64, bool); 6], limit: f64) -> bool {
+    fn row_over_limit(
+        &self,
+        r: usize,
+        stencil: &[((usize, isize), f64, bool); 6],
+        limit: f64,
+    ) -> bool {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
         let [xl, yl, zl] = self.cur.xl.each_ref().map(Buf::as_slice);
@@ -752,7 +916,7 @@ impl GridCloth {
             if !present || r + dr >= h {
                 continue;
             }
-            let longest2 = ((limit * rest).powi(2) * (1.0 - 1e-4)) as f32;
+            let longest2 = E::of((limit * rest).powi(2) * (1.0 - 1e-4));
             let c0 = (-dc).max(0) as usize;
             let c1 = w.saturating_sub(dc.max(0) as usize);
             let (ia, ib) = (r * st, ((r + dr) * st) as isize + dc);
@@ -773,18 +937,41 @@ impl GridCloth {
         let dv = (to - self.position_at(i)) / dt;
         self.set_position_at(i, to);
         for a in 0..3 {
-            self.cur.v[a].as_mut_slice()[i] += dv[a] as f32;
+            self.cur.v[a].as_mut_slice()[i] += E::of(dv[a]);
             if self.params.verlet {
-                self.cur.u[a].as_mut_slice()[i] += dv[a] as f32;
+                self.cur.u[a].as_mut_slice()[i] += E::of(dv[a]);
             }
         }
     }
 
-    fn read_into(&self, arrays: &[Buf; 3], out: &mut [DVec3]) {
+    fn extremes(&self, center: DVec3) -> (f64, f64) {
+        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
+        let [vx, vy, vz] = self.cur.v.each_ref().map(Buf::as_slice);
+        let [cx, cy, cz] = center.to_array().map(E::of);
+        let (mut speed2, mut dist2) = (E::ZERO, E::ZERO);
+        for i in 0..x.len() {
+            let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+            let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            // NaN fails every comparison: test for it, or the maximum would drop it.
+            if v2.partial_cmp(&v2).is_none() || d2.partial_cmp(&d2).is_none() {
+                return (f64::INFINITY, f64::INFINITY);
+            }
+            if v2 > speed2 {
+                speed2 = v2;
+            }
+            if d2 > dist2 {
+                dist2 = d2;
+            }
+        }
+        (speed2.f64(), dist2.f64())
+    }
+
+    fn read_into(&self, arrays: &[Buf<E>; 3], out: &mut [DVec3]) {
         let [x, y, z] = arrays.each_ref().map(Buf::as_slice);
         for (p, o) in out.iter_mut().enumerate().take(self.len()) {
             let i = self.grid.index(p);
-            *o = DVec3::new(x[i] as f64, y[i] as f64, z[i] as f64);
+            *o = DVec3::new(x[i].f64(), y[i].f64(), z[i].f64());
         }
     }
 
@@ -792,16 +979,16 @@ impl GridCloth {
     fn position_at(&self, i: usize) -> DVec3 {
         let (x, xl) = (&self.cur.x, &self.cur.xl);
         DVec3::from_array(std::array::from_fn(|a| {
-            x[a].as_slice()[i] as f64 + xl[a].as_slice()[i] as f64
+            x[a].as_slice()[i].f64() + xl[a].as_slice()[i].f64()
         }))
     }
 
     /// Sets the position of array index `i` from f64, split into high and low parts.
     fn set_position_at(&mut self, i: usize, q: DVec3) {
         for a in 0..3 {
-            let hi = q[a] as f32;
+            let hi = E::of(q[a]);
             self.cur.x[a].as_mut_slice()[i] = hi;
-            self.cur.xl[a].as_mut_slice()[i] = (q[a] - hi as f64) as f32;
+            self.cur.xl[a].as_mut_slice()[i] = E::of(q[a] - hi.f64());
         }
     }
 
@@ -829,7 +1016,7 @@ impl GridCloth {
         for (p, q) in u.iter().enumerate().take(self.len()) {
             let j = self.grid.index(p);
             for a in 0..3 {
-                self.cur.u[a].as_mut_slice()[j] = q[a] as f32;
+                self.cur.u[a].as_mut_slice()[j] = E::of(q[a]);
             }
         }
     }
@@ -839,15 +1026,6 @@ impl GridCloth {
         self.read_into(&self.cur.v, out);
     }
 
-    /// Copy the positions (m) as f32 triples (e.g. straight into a vertex buffer).
-    pub fn positions_f32_into(&self, out: &mut [[f32; 3]]) {
-        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
-        for (p, o) in out.iter_mut().enumerate().take(self.len()) {
-            let i = self.grid.index(p);
-            *o = [x[i], y[i], z[i]];
-        }
-    }
-
     /// Floats per row in the arrays of [`GridCloth::raw_positions`] (width rounded up,
     /// plus ghost columns): particle `(r, c)` is at `r * row_stride() + c`.
     pub fn row_stride(&self) -> usize {
@@ -855,13 +1033,19 @@ impl GridCloth {
     }
 
     /// The padded position arrays `[x, y, z]` in m (see [`GridCloth::row_stride`]).
-    pub fn raw_positions(&self) -> [&[f32]; 3] {
-        self.cur.x.each_ref().map(Buf::as_slice)
+    pub fn raw_positions(&self) -> [Vec<f64>; 3] {
+        self.cur
+            .x
+            .each_ref()
+            .map(|b| b.as_slice().iter().map(|x| x.f64()).collect())
     }
 
     /// The padded velocity arrays `[vx, vy, vz]` in m/s.
-    pub fn raw_velocities(&self) -> [&[f32]; 3] {
-        self.cur.v.each_ref().map(Buf::as_slice)
+    pub fn raw_velocities(&self) -> [Vec<f64>; 3] {
+        self.cur
+            .v
+            .each_ref()
+            .map(|b| b.as_slice().iter().map(|x| x.f64()).collect())
     }
 
     /// Overwrite the state of particle `i` (ignored if out of range), e.g. for
@@ -871,9 +1055,9 @@ impl GridCloth {
             let j = self.grid.index(i);
             self.set_position_at(j, position);
             for a in 0..3 {
-                self.cur.v[a].as_mut_slice()[j] = velocity[a] as f32;
+                self.cur.v[a].as_mut_slice()[j] = E::of(velocity[a]);
                 if self.params.verlet {
-                    self.cur.u[a].as_mut_slice()[j] = velocity[a] as f32;
+                    self.cur.u[a].as_mut_slice()[j] = E::of(velocity[a]);
                 }
             }
         }
@@ -888,7 +1072,7 @@ impl GridCloth {
         for (p, q) in velocities.iter().enumerate().take(self.len()) {
             let j = self.grid.index(p);
             for a in 0..3 {
-                self.cur.v[a].as_mut_slice()[j] = q[a] as f32;
+                self.cur.v[a].as_mut_slice()[j] = E::of(q[a]);
             }
         }
         // Verlet's update velocities start equal to the velocities (call
@@ -903,40 +1087,231 @@ impl GridCloth {
         if i < self.len() {
             let j = self.grid.index(i);
             if pinned {
-                self.inv_mass.as_mut_slice()[j] = 0.0;
+                self.inv_mass.as_mut_slice()[j] = E::ZERO;
                 for a in 0..3 {
-                    self.cur.v[a].as_mut_slice()[j] = 0.0;
+                    self.cur.v[a].as_mut_slice()[j] = E::ZERO;
                     if self.params.verlet {
-                        self.cur.u[a].as_mut_slice()[j] = 0.0;
+                        self.cur.u[a].as_mut_slice()[j] = E::ZERO;
                     }
                 }
             } else if self.spec.particle_mass > 0.0 {
-                self.inv_mass.as_mut_slice()[j] = (1.0 / self.spec.particle_mass) as f32;
+                self.inv_mass.as_mut_slice()[j] = E::of(1.0 / self.spec.particle_mass);
             }
         }
     }
 }
 
+/// A regular grid cloth stepped by the fast stencil kernel, in float32 or float64
+/// arithmetic as its spec asks ([`Precision`]).
+///
+/// ```
+/// use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};
+/// let mut cloth = GridCloth::new(GridSpec::peer_bench(32, false));
+/// cloth.steps(1.0 / 960.0, 960);
+/// let mut p = vec![glam::DVec3::ZERO; cloth.len()];
+/// cloth.positions_into(&mut p);
+/// assert!(p[1008].y < -0.6);
+/// ```
+#[derive(Debug)]
+pub struct GridCloth(Kernels);
+
+/// The kernel of each precision.
+#[derive(Debug)]
+enum Kernels {
+    Single(Kernel<f32>),
+    Double(Kernel<f64>),
+}
+
+/// Calls the same method on the kernel, whichever precision it has.
+macro_rules! forward {
+    ($(#[$doc:meta])* fn $name:ident(&self $(, $arg:ident: $ty:ty)*) $(-> $ret:ty)?) => {
+        $(#[$doc])*
+        pub fn $name(&self $(, $arg: $ty)*) $(-> $ret)? {
+            match &self.0 {
+                Kernels::Single(k) => k.$name($($arg),*),
+                Kernels::Double(k) => k.$name($($arg),*),
+            }
+        }
+    };
+    ($(#[$doc:meta])* fn $name:ident(&mut self $(, $arg:ident: $ty:ty)*) $(-> $ret:ty)?) => {
+        $(#[$doc])*
+        pub fn $name(&mut self $(, $arg: $ty)*) $(-> $ret)? {
+            match &mut self.0 {
+                Kernels::Single(k) => k.$name($($arg),*),
+                Kernels::Double(k) => k.$name($($arg),*),
+            }
+        }
+    };
+}
+
+impl GridCloth {
+    /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the
+    /// spec's precision. Runs on one thread until [`GridCloth::set_threads`] is
+    /// called. A width or height of 0 is taken as 1; pinned indices out of range are
+    /// ignored.
+    ///
+    /// # Panics
+    /// If the spec's integrator is not one the kernel has ([`GridCloth::supports`]).
+    pub fn new(spec: GridSpec) -> Self {
+        Self(match spec.precision {
+            Precision::Single => Kernels::Single(Kernel::new(spec)),
+            Precision::Double => Kernels::Double(Kernel::new(spec)),
+        })
+    }
+
+    /// Whether the kernel steps with `integrator`: symplectic Euler, explicit Euler
+    /// and position Verlet (the methods with one force evaluation per step).
+    pub fn supports(integrator: Integrator) -> bool {
+        matches!(
+            integrator,
+            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet
+        )
+    }
+
+    /// Changes coefficients in place (stiffness, damping, mass, rest length, wind,
+    /// gravity, drag, air damping, colliders, stretch limit) without rebuilding the
+    /// arrays or the thread pool. Returns `false`, changing nothing, when `spec` has
+    /// another shape, integrator or precision: then build a new cloth. The particles'
+    /// inverse masses are reset to the new mass (pins included: pin them again).
+    pub fn respec(&mut self, spec: GridSpec) -> bool {
+        if spec.precision != self.spec().precision {
+            return false;
+        }
+        match &mut self.0 {
+            Kernels::Single(k) => k.respec(spec),
+            Kernels::Double(k) => k.respec(spec),
+        }
+    }
+
+    forward!(
+        /// The spec the cloth was built from (with the current wind and gravity).
+        fn spec(&self) -> &GridSpec
+    );
+    forward!(
+        /// Number of particles.
+        fn len(&self) -> usize
+    );
+    forward!(
+        /// True if the cloth has no particles (never: a grid has at least one).
+        fn is_empty(&self) -> bool
+    );
+    forward!(
+        /// Use `n` threads (at least 1) for grids of [`PARALLEL_MIN_PARTICLES`]
+        /// particles or more; smaller grids always run on the calling thread. Builds
+        /// a rayon pool of `n` threads (this allocates; the steps do not).
+        fn set_threads(&mut self, n: usize)
+    );
+    forward!(
+        /// Threads asked for with [`GridCloth::set_threads`].
+        fn threads(&self) -> usize
+    );
+    forward!(
+        /// True if steps run on several threads (enough threads and a large grid).
+        fn is_parallel(&self) -> bool
+    );
+    forward!(
+        /// The SIMD level the loops run with.
+        fn simd_level(&self) -> SimdLevel
+    );
+    forward!(
+        /// Force a SIMD level (for tests and benches). A level this CPU lacks is
+        /// ignored.
+        fn set_simd_level(&mut self, level: SimdLevel)
+    );
+    forward!(
+        /// Change the wind (m/s), e.g. every step for gusts.
+        fn set_wind(&mut self, wind: DVec3)
+    );
+    forward!(
+        /// Change gravity (m/s²).
+        fn set_gravity(&mut self, gravity: DVec3)
+    );
+    forward!(
+        /// Advance by one step of `dt` seconds.
+        fn step(&mut self, dt: f64)
+    );
+    forward!(
+        /// Advance by `n` steps of `dt` seconds. On several threads the pool is
+        /// entered once for all `n` steps, so prefer this to calling
+        /// [`GridCloth::step`] in a loop.
+        fn steps(&mut self, dt: f64, n: usize)
+    );
+    forward!(
+        /// Copy the positions (m) of particles `0..out.len()` into `out`.
+        fn positions_into(&self, out: &mut [DVec3])
+    );
+    forward!(
+        /// Copy the velocities (m/s) of particles `0..out.len()` into `out`.
+        fn velocities_into(&self, out: &mut [DVec3])
+    );
+    forward!(
+        /// Position Verlet's velocities of the last position update,
+        /// `(x - x_prev) / h` (m/s), of particles `0..out.len()`; nothing for the
+        /// other integrators.
+        fn update_velocities_into(&self, out: &mut [DVec3])
+    );
+    forward!(
+        /// Sets position Verlet's velocities of the last position update (m/s);
+        /// ignored for the other integrators.
+        fn set_update_velocities(&mut self, u: &[DVec3])
+    );
+    forward!(
+        /// Floats per row in the arrays of [`GridCloth::raw_positions`] (width
+        /// rounded up, plus ghost columns): particle `(r, c)` is at
+        /// `r * row_stride() + c`.
+        fn row_stride(&self) -> usize
+    );
+    forward!(
+        /// The padded arrays of the positions' high parts `[x, y, z]` in m, copied
+        /// to f64 (exactly) for inspection (see [`GridCloth::row_stride`]).
+        fn raw_positions(&self) -> [Vec<f64>; 3]
+    );
+    forward!(
+        /// The padded velocity arrays `[vx, vy, vz]` in m/s, copied to f64.
+        fn raw_velocities(&self) -> [Vec<f64>; 3]
+    );
+    forward!(
+        /// The largest squared speed (m²/s²) and squared distance from `center`
+        /// (m²) of any particle, infinite if anything is NaN: a cheap scan for the
+        /// divergence check.
+        fn extremes(&self, center: DVec3) -> (f64, f64)
+    );
+    forward!(
+        /// Overwrite the state of particle `i` (ignored if out of range), e.g. for
+        /// dragging it with the mouse.
+        fn set_particle(&mut self, i: usize, position: DVec3, velocity: DVec3)
+    );
+    forward!(
+        /// Overwrite positions and velocities of particles `0..len` from f64 vectors
+        /// (extra entries are ignored, missing ones left unchanged).
+        fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3])
+    );
+    forward!(
+        /// Pin (`true`: inverse mass 0, velocity 0) or free particle `i`.
+        fn set_pinned(&mut self, i: usize, pinned: bool)
+    );
+}
+
 /// Read-only inputs of a step.
-struct Ctx<'a> {
+struct Ctx<'a, E> {
     grid: Grid,
-    p: Params,
-    x: [&'a [f32]; 3],
-    xl: [&'a [f32]; 3],
-    v: [&'a [f32]; 3],
+    p: Params<E>,
+    x: [&'a [E]; 3],
+    xl: [&'a [E]; 3],
+    v: [&'a [E]; 3],
     /// Verlet's update velocities (empty for the Euler methods).
-    u: [&'a [f32]; 3],
-    inv_mass: &'a [f32],
-    col_mask: &'a [f32],
+    u: [&'a [E]; 3],
+    inv_mass: &'a [E],
+    col_mask: &'a [E],
     drag: bool,
     simd: SimdLevel,
 }
 
 /// Run the bands, splitting the output rows among them; in parallel with
 /// `rayon::join` (inside the caller's pool) when `parallel`.
-fn run_bands(ctx: &Ctx, bands: &mut [Band], out: Out, parallel: bool) {
+fn run_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, parallel: bool) {
     if bands.len() == 1 {
-        band_dispatch(ctx, &mut bands[0], out);
+        E::band_dispatch(ctx, &mut bands[0], out);
         return;
     }
     let mid = bands.len() / 2;
@@ -954,36 +1329,27 @@ fn run_bands(ctx: &Ctx, bands: &mut [Band], out: Out, parallel: bool) {
     }
 }
 
-fn band_dispatch(ctx: &Ctx, band: &mut Band, out: Out) {
-    match ctx.simd {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-        SimdLevel::Avx512 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
-            x86::row_avx512(ctx, band, row, out, lo, own)
-        }),
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
-            x86::row_avx2(ctx, band, row, out, lo, own)
-        }),
-        _ => band_rows(ctx, band, out, row_portable),
-    }
-}
-
 /// One row with the portable lanes.
 #[inline(never)]
-fn row_portable(ctx: &Ctx, band: &mut Band, row: usize, out: &mut Out, lo: usize, own: bool) {
-    row_variant(Portable, ctx, band, row, out, lo, own);
+fn row_portable<E: Real>(
+    ctx: &Ctx<E>,
+    band: &mut Band<E>,
+    row: usize,
+    out: &mut Out<E>,
+    lo: usize,
+    own: bool,
+) {
+    row_variant(Portable::<E>::default(), ctx, band, row, out, lo, own);
 }
 
 /// [`row_step`] for the scene's drag setting, integrating the row if `own`.
 #[inline(always)]
 fn row_variant<S: Simd>(
     s: S,
-    ctx: &Ctx,
-    band: &mut Band,
+    ctx: &Ctx<S::E>,
+    band: &mut Band<S::E>,
     row: usize,
-    out: &mut Out,
+    out: &mut Out<S::E>,
     lo: usize,
     own: bool,
 ) {
@@ -998,15 +1364,15 @@ fn row_variant<S: Simd>(
 /// The rows of one band: prime the accumulator ring with the two rows above the
 /// band, then compute and integrate the band's rows one by one. Each row is one
 /// call of `row`, compiled for the chosen SIMD level.
-fn band_rows(
-    ctx: &Ctx,
-    band: &mut Band,
-    mut out: Out,
-    row: impl Fn(&Ctx, &mut Band, usize, &mut Out, usize, bool),
+fn band_rows<E: Real>(
+    ctx: &Ctx<E>,
+    band: &mut Band<E>,
+    mut out: Out<E>,
+    row: impl Fn(&Ctx<E>, &mut Band<E>, usize, &mut Out<E>, usize, bool),
 ) {
     // Rows 0 and 1 get nothing from rows above the cloth.
     if band.r0 < 2 {
-        band.acc.as_mut_slice().fill(0.0);
+        band.acc.as_mut_slice().fill(E::ZERO);
     }
     for r in band.r0.saturating_sub(2)..band.r0 {
         row(ctx, band, r, &mut out, 0, false);
@@ -1020,16 +1386,18 @@ fn band_rows(
 /// The few vector operations the kernel needs. Implemented by zero-sized tokens that
 /// exist only where the CPU supports the instructions.
 trait Simd: Copy {
+    /// The float type of a lane.
+    type E: Real;
     /// A vector of `LANES` floats.
     type V: Copy;
     const LANES: usize;
-    fn splat(self, a: f32) -> Self::V;
+    fn splat(self, a: Self::E) -> Self::V;
     /// # Safety
     /// `p .. p + LANES` must be readable.
-    unsafe fn load(self, p: *const f32) -> Self::V;
+    unsafe fn load(self, p: *const Self::E) -> Self::V;
     /// # Safety
     /// `p .. p + LANES` must be writable.
-    unsafe fn store(self, p: *mut f32, v: Self::V);
+    unsafe fn store(self, p: *mut Self::E, v: Self::V);
     fn add(self, a: Self::V, b: Self::V) -> Self::V;
     fn sub(self, a: Self::V, b: Self::V) -> Self::V;
     fn mul(self, a: Self::V, b: Self::V) -> Self::V;
@@ -1038,7 +1406,7 @@ trait Simd: Copy {
     /// `a * b - c` (fused where the ISA has FMA).
     fn mul_sub(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V;
     /// `1 / sqrt(x)` where `x > eps`, else 0.
-    fn rsqrt_or_zero(self, x: Self::V, eps: f32) -> Self::V;
+    fn rsqrt_or_zero(self, x: Self::V, eps: Self::E) -> Self::V;
     /// `a` where `m > 0`, else 0.
     fn keep_if_positive(self, m: Self::V, a: Self::V) -> Self::V;
     /// Lanes moved up by one: `[prev[LANES-1], cur[0], .., cur[LANES-2]]`.
@@ -1047,29 +1415,31 @@ trait Simd: Copy {
     fn shift2(self, prev: Self::V, cur: Self::V) -> Self::V;
 }
 
-/// Portable lanes: plain arrays, vectorised by the compiler for the build target.
-#[derive(Clone, Copy)]
-struct Portable;
+/// Portable lanes: plain arrays, vectorised by the compiler for the build target
+/// (or for the target features of the function they are inlined into).
+#[derive(Clone, Copy, Default)]
+struct Portable<E>(std::marker::PhantomData<E>);
 
 /// Lanes of the portable path.
 const PL: usize = 8;
 
-impl Simd for Portable {
-    type V = [f32; PL];
+impl<E: Real> Simd for Portable<E> {
+    type E = E;
+    type V = [E; PL];
     const LANES: usize = PL;
     #[inline(always)]
-    fn splat(self, a: f32) -> Self::V {
+    fn splat(self, a: E) -> Self::V {
         [a; PL]
     }
     #[inline(always)]
-    unsafe fn load(self, p: *const f32) -> Self::V {
+    unsafe fn load(self, p: *const E) -> Self::V {
         // SAFETY: the caller guarantees PL readable floats.
-        unsafe { p.cast::<[f32; PL]>().read_unaligned() }
+        unsafe { p.cast::<[E; PL]>().read_unaligned() }
     }
     #[inline(always)]
-    unsafe fn store(self, p: *mut f32, v: Self::V) {
+    unsafe fn store(self, p: *mut E, v: Self::V) {
         // SAFETY: the caller guarantees PL writable floats.
-        unsafe { p.cast::<[f32; PL]>().write_unaligned(v) }
+        unsafe { p.cast::<[E; PL]>().write_unaligned(v) }
     }
     #[inline(always)]
     fn add(self, a: Self::V, b: Self::V) -> Self::V {
@@ -1085,19 +1455,25 @@ impl Simd for Portable {
     }
     #[inline(always)]
     fn mul_add(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V {
-        std::array::from_fn(|i| fma(a[i], b[i], c[i]))
+        std::array::from_fn(|i| a[i].mul_add(b[i], c[i]))
     }
     #[inline(always)]
     fn mul_sub(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V {
-        std::array::from_fn(|i| fma(a[i], b[i], -c[i]))
+        std::array::from_fn(|i| a[i].mul_add(b[i], E::ZERO - c[i]))
     }
     #[inline(always)]
-    fn rsqrt_or_zero(self, x: Self::V, eps: f32) -> Self::V {
-        std::array::from_fn(|i| if x[i] > eps { 1.0 / x[i].sqrt() } else { 0.0 })
+    fn rsqrt_or_zero(self, x: Self::V, eps: E) -> Self::V {
+        std::array::from_fn(|i| {
+            if x[i] > eps {
+                E::ONE / x[i].sqrt()
+            } else {
+                E::ZERO
+            }
+        })
     }
     #[inline(always)]
     fn keep_if_positive(self, m: Self::V, a: Self::V) -> Self::V {
-        std::array::from_fn(|i| if m[i] > 0.0 { a[i] } else { 0.0 })
+        std::array::from_fn(|i| if m[i] > E::ZERO { a[i] } else { E::ZERO })
     }
     #[inline(always)]
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V {
@@ -1109,22 +1485,12 @@ impl Simd for Portable {
     }
 }
 
-/// `a * b + c`, fused where the build target has FMA (aarch64 always does).
-#[inline(always)]
-fn fma(a: f32, b: f32, c: f32) -> f32 {
-    if cfg!(any(target_arch = "aarch64", target_feature = "fma")) {
-        a.mul_add(b, c)
-    } else {
-        a * b + c
-    }
-}
-
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     //! AVX2 and AVX-512 versions of [`Simd`], and the entry points compiled for them.
     use std::arch::x86_64::*;
 
-    use super::{Band, Ctx, Out, Simd, row_variant};
+    use super::{Band, Ctx, Out, Portable, Simd, row_variant};
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
     #[derive(Clone, Copy)]
@@ -1141,14 +1507,32 @@ mod x86 {
     #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
     #[inline(never)]
     pub(super) unsafe fn row_avx512(
-        ctx: &Ctx,
-        band: &mut Band,
+        ctx: &Ctx<f32>,
+        band: &mut Band<f32>,
         row: usize,
-        out: &mut Out,
+        out: &mut Out<f32>,
         lo: usize,
         own: bool,
     ) {
         row_variant(Avx512(()), ctx, band, row, out, lo, own);
+    }
+
+    /// One row in float64 with the portable lanes, compiled for the same features
+    /// (see `row_step`).
+    ///
+    /// # Safety
+    /// As for `row_avx512`.
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn row_avx512_f64(
+        ctx: &Ctx<f64>,
+        band: &mut Band<f64>,
+        row: usize,
+        out: &mut Out<f64>,
+        lo: usize,
+        own: bool,
+    ) {
+        row_variant(Portable::<f64>::default(), ctx, band, row, out, lo, own);
     }
 
     /// One row with AVX2 (see `row_step`).
@@ -1158,19 +1542,38 @@ mod x86 {
     #[target_feature(enable = "avx2,fma")]
     #[inline(never)]
     pub(super) unsafe fn row_avx2(
-        ctx: &Ctx,
-        band: &mut Band,
+        ctx: &Ctx<f32>,
+        band: &mut Band<f32>,
         row: usize,
-        out: &mut Out,
+        out: &mut Out<f32>,
         lo: usize,
         own: bool,
     ) {
         row_variant(Avx2(()), ctx, band, row, out, lo, own);
     }
 
+    /// One row in float64 with the portable lanes, compiled for the same features
+    /// (see `row_step`).
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn row_avx2_f64(
+        ctx: &Ctx<f64>,
+        band: &mut Band<f64>,
+        row: usize,
+        out: &mut Out<f64>,
+        lo: usize,
+        own: bool,
+    ) {
+        row_variant(Portable::<f64>::default(), ctx, band, row, out, lo, own);
+    }
+
     // SAFETY (all intrinsics below): an `Avx512` / `Avx2` value exists only inside
     // the entry points above, which run only on CPUs with those features.
     impl Simd for Avx512 {
+        type E = f32;
         type V = __m512;
         const LANES: usize = 16;
         #[inline(always)]
@@ -1245,6 +1648,7 @@ mod x86 {
     }
 
     impl Simd for Avx2 {
+        type E = f32;
         type V = __m256;
         const LANES: usize = 8;
         #[inline(always)]
@@ -1338,8 +1742,7 @@ fn spring<S: Simd>(
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
 ) -> [S::V; 3] {
-    let d: [S::V; 3] =
-        std::array::from_fn(|a| s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a])));
+    let d: [S::V; 3] = std::array::from_fn(|a| s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a])));
     let u = [
         s.sub(vi[0], vj[0]),
         s.sub(vi[1], vj[1]),
@@ -1347,7 +1750,7 @@ fn spring<S: Simd>(
     ];
     let l2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
     let dd = s.mul_add(d[2], u[2], s.mul_add(d[1], u[1], s.mul(d[0], u[0])));
-    let inv = s.rsqrt_or_zero(l2, EPS2);
+    let inv = s.rsqrt_or_zero(l2, S::E::EPS2);
     let a = s.mul_add(s.mul_add(s.mul(nb, dd), inv, kl), inv, nk);
     let a = match mask {
         Some(m) => s.mul(a, m),
@@ -1377,7 +1780,7 @@ fn triangle<S: Simd>(
     let m2 = s.mul_add(m[2], m[2], s.mul_add(m[1], m[1], s.mul(m[0], m[0])));
     let vr2 = s.mul_add(vr[2], vr[2], s.mul_add(vr[1], vr[1], s.mul(vr[0], vr[0])));
     let vm = s.mul_add(vr[2], m[2], s.mul_add(vr[1], m[1], s.mul(vr[0], m[0])));
-    let ratio = s.mul(vr2, s.rsqrt_or_zero(s.mul(vr2, m2), TINY));
+    let ratio = s.mul(vr2, s.rsqrt_or_zero(s.mul(vr2, m2), S::E::TINY));
     let a = s.mul(s.mul(neg_drag, vm), ratio);
     let a = match mask {
         Some(m) => s.mul(a, m),
@@ -1408,14 +1811,14 @@ struct RowKernel<S: Simd> {
     /// Sphere centre, radius and squared radius (when the step projects onto it).
     sphere: Option<([S::V; 3], S::V, S::V)>,
     verlet: bool,
-    x: [*const f32; 3],
-    xl: [*const f32; 3],
-    v: [*const f32; 3],
-    u: [*const f32; 3],
-    inv_mass: *const f32,
-    col_mask: *const f32,
-    acc: *mut f32,
-    out: [*mut f32; 12],
+    x: [*const S::E; 3],
+    xl: [*const S::E; 3],
+    v: [*const S::E; 3],
+    u: [*const S::E; 3],
+    inv_mass: *const S::E,
+    col_mask: *const S::E,
+    acc: *mut S::E,
+    out: [*mut S::E; 12],
     /// Array offsets of the rows `row`, `row + 1`, `row + 2`.
     b: [usize; 3],
     /// Accumulator offsets of the rows `row`, `row + 1`, `row + 2`.
@@ -1440,10 +1843,10 @@ struct RowKernel<S: Simd> {
 #[inline(always)]
 fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
     s: S,
-    ctx: &Ctx,
-    band: &mut Band,
+    ctx: &Ctx<S::E>,
+    band: &mut Band<S::E>,
     row: usize,
-    out: &mut Out,
+    out: &mut Out<S::E>,
     lo: usize,
 ) {
     let g = ctx.grid;
@@ -1476,27 +1879,27 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
         kinds: [kind(0), kind(1), kind(2)],
         neg_wind: p.wind.map(|w| s.splat(-w)),
         gravity: p.gravity.map(|w| s.splat(w)),
-        third: s.splat(1.0 / 3.0),
+        third: s.splat(S::E::of(1.0 / 3.0)),
         neg_drag: s.splat(-p.drag),
         dt: s.splat(p.dt),
         neg_air: s.splat(p.neg_air),
         ground: p.ground.map(|g| s.splat(g)),
         explicit: s.splat(p.explicit),
         verlet_half_dt: s.splat(p.verlet_half_dt),
-        inv_dt: s.splat(1.0 / p.dt),
-        one: s.splat(1.0),
+        inv_dt: s.splat(S::E::ONE / p.dt),
+        one: s.splat(S::E::ONE),
         sphere: p
             .sphere
             .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
         verlet,
-        zero: s.splat(0.0),
-        down: s.splat(if row + 1 < g.h { 1.0 } else { 0.0 }),
-        down2: s.splat(if row + 2 < g.h { 1.0 } else { 0.0 }),
-        x: ctx.x.map(<[f32]>::as_ptr),
-        xl: ctx.xl.map(<[f32]>::as_ptr),
-        v: ctx.v.map(<[f32]>::as_ptr),
+        zero: s.splat(S::E::ZERO),
+        down: s.splat(if row + 1 < g.h { S::E::ONE } else { S::E::ZERO }),
+        down2: s.splat(if row + 2 < g.h { S::E::ONE } else { S::E::ZERO }),
+        x: ctx.x.map(<[S::E]>::as_ptr),
+        xl: ctx.xl.map(<[S::E]>::as_ptr),
+        v: ctx.v.map(<[S::E]>::as_ptr),
         // Without Verlet's own array the update velocity is the velocity.
-        u: if verlet { ctx.u } else { ctx.v }.map(<[f32]>::as_ptr),
+        u: if verlet { ctx.u } else { ctx.v }.map(<[S::E]>::as_ptr),
         inv_mass: ctx.inv_mass.as_ptr(),
         col_mask: ctx.col_mask.as_ptr(),
         acc: acc.as_mut_ptr(),
@@ -1542,7 +1945,7 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
     let s = k.s;
     let zero = k.zero;
     // SAFETY: offsets are inside the arrays (caller's contract).
-    let ld = |ptr: [*const f32; 3], i: usize| unsafe {
+    let ld = |ptr: [*const S::E; 3], i: usize| unsafe {
         [
             s.load(ptr[0].add(i)),
             s.load(ptr[1].add(i)),
@@ -1551,10 +1954,22 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
     };
     let [b0, b1, b2] = k.b;
     let p00 = (&ld(k.x, b0 + c), &ld(k.xl, b0 + c), &ld(k.v, b0 + c));
-    let p01 = (&ld(k.x, b0 + c + 1), &ld(k.xl, b0 + c + 1), &ld(k.v, b0 + c + 1));
-    let p02 = (&ld(k.x, b0 + c + 2), &ld(k.xl, b0 + c + 2), &ld(k.v, b0 + c + 2));
+    let p01 = (
+        &ld(k.x, b0 + c + 1),
+        &ld(k.xl, b0 + c + 1),
+        &ld(k.v, b0 + c + 1),
+    );
+    let p02 = (
+        &ld(k.x, b0 + c + 2),
+        &ld(k.xl, b0 + c + 2),
+        &ld(k.v, b0 + c + 2),
+    );
     let p10 = (&ld(k.x, b1 + c), &ld(k.xl, b1 + c), &ld(k.v, b1 + c));
-    let p11 = (&ld(k.x, b1 + c + 1), &ld(k.xl, b1 + c + 1), &ld(k.v, b1 + c + 1));
+    let p11 = (
+        &ld(k.x, b1 + c + 1),
+        &ld(k.xl, b1 + c + 1),
+        &ld(k.v, b1 + c + 1),
+    );
     let p20 = (&ld(k.x, b2 + c), &ld(k.xl, b2 + c), &ld(k.v, b2 + c));
     let (m1, m2, m1d, down, down2) = if MASK {
         // SAFETY: as above.
@@ -1689,7 +2104,7 @@ unsafe fn integrate<S: Simd>(
         let d: [S::V; 3] = std::array::from_fn(|i| s.sub(xn[i], center[i]));
         let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
         let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
-        let scale = s.mul(radius, s.rsqrt_or_zero(d2, EPS2));
+        let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
         for i in 0..3 {
             let onto = s.mul_add(d[i], scale, center[i]);
             let dx = s.mul(inside, s.sub(onto, xn[i]));
