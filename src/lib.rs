@@ -5,6 +5,7 @@
 //! accuracy and stability study ([`report`]). The `cloth` binary adds the command
 //! line, the window, the renderer and the panel on top.
 
+#[cfg(feature = "report")]
 pub mod report;
 pub mod scene;
 pub mod session;
