@@ -2,9 +2,36 @@
 //! the simulation core ([`sim`]) and scene files ([`scene`]), plus what an
 //! interactive front end needs without any GPU or window: the camera and picking
 //! maths ([`view`]) and a running scene with live edits ([`session`]), and the
-//! accuracy and stability study ([`report`]). The `cloth` binary adds the command
+//! accuracy and stability study (`report`). The `cloth` binary adds the command
 //! line, the window, the renderer and the panel on top.
+//!
+//! Features: `app` (default) builds the `cloth` binary with its command line,
+//! window, renderer and panel; `report` (default, and enabled by `app`) adds the
+//! `report` module and its plotting. With `default-features = false` the library
+//! depends on no window, GPU, command-line or plotting crate.
+//!
+//! Building a built-in scene, stepping it and reading the positions:
+//!
+//! ```rust
+//! use cloth_sandbox::scene::Scene;
+//!
+//! let mut scene = Scene::load("cloth")?; // a name from `builtin_scenes()`, or a path
+//! scene.set("width", "8")?; // as `--set width=8` does
+//! scene.set("height", "8")?;
+//! let mut system = scene.build()?;
+//!
+//! let dt = system.params().dt;
+//! let steps = (0.5 / dt).round() as u64; // half a second
+//! system.run(steps).expect("the default cloth stays stable");
+//!
+//! let positions = system.positions(); // one `glam::DVec3` per particle, in m
+//! assert_eq!(positions.len(), 64);
+//! let lowest = positions.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+//! println!("after {:.2} s the lowest particle is at y = {lowest:.3} m", system.time());
+//! # Ok::<(), cloth_sandbox::scene::SceneError>(())
+//! ```
 
+#[cfg(feature = "report")]
 pub mod report;
 pub mod scene;
 pub mod session;
