@@ -459,6 +459,15 @@ struct Params<E> {
 }
 
 impl<E: Real> Params<E> {
+    /// Symplectic Euler with no air damping, ground or sphere in the step.
+    fn is_plain(&self) -> bool {
+        !self.verlet
+            && self.explicit == E::ZERO
+            && self.neg_air == E::ZERO
+            && self.ground[0] == E::LOWEST
+            && self.sphere.is_none()
+    }
+
     /// The constants of `spec` (the step `dt` is set by each run).
     fn of(spec: &GridSpec) -> Self {
         let hs = spec.spacing;
@@ -1353,11 +1362,16 @@ fn row_variant<S: Simd>(
     lo: usize,
     own: bool,
 ) {
-    match (ctx.drag, own) {
-        (true, true) => row_step::<S, true, true>(s, ctx, band, row, out, lo),
-        (true, false) => row_step::<S, true, false>(s, ctx, band, row, out, lo),
-        (false, true) => row_step::<S, false, true>(s, ctx, band, row, out, lo),
-        (false, false) => row_step::<S, false, false>(s, ctx, band, row, out, lo),
+    // A plain cloth (symplectic Euler, no air damping, ground or sphere) gets a
+    // version of the step without them.
+    let plain = ctx.p.is_plain();
+    match (ctx.drag, own, plain) {
+        (true, true, true) => row_step::<S, true, true, true>(s, ctx, band, row, out, lo),
+        (true, true, false) => row_step::<S, true, true, false>(s, ctx, band, row, out, lo),
+        (false, true, true) => row_step::<S, false, true, true>(s, ctx, band, row, out, lo),
+        (false, true, false) => row_step::<S, false, true, false>(s, ctx, band, row, out, lo),
+        (true, false, _) => row_step::<S, true, false, true>(s, ctx, band, row, out, lo),
+        (false, false, _) => row_step::<S, false, false, true>(s, ctx, band, row, out, lo),
     }
 }
 
@@ -1841,7 +1855,7 @@ struct RowKernel<S: Simd> {
 /// the last two columns, and the last two rows, mask the springs and triangles
 /// that reach ghost particles.
 #[inline(always)]
-fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
+fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool>(
     s: S,
     ctx: &Ctx<S::E>,
     band: &mut Band<S::E>,
@@ -1921,12 +1935,12 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
     let mut c = 0;
     while c < c_mask {
         // SAFETY: c < nv, a multiple of LANES; bounds asserted above.
-        unsafe { block::<S, DRAG, OWN, false>(&k, c, &mut carry) };
+        unsafe { block::<S, DRAG, OWN, false, PLAIN>(&k, c, &mut carry) };
         c += S::LANES;
     }
     while c < nv {
         // SAFETY: as above.
-        unsafe { block::<S, DRAG, OWN, true>(&k, c, &mut carry) };
+        unsafe { block::<S, DRAG, OWN, true, PLAIN>(&k, c, &mut carry) };
         c += S::LANES;
     }
 }
@@ -1937,7 +1951,7 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool>(
 /// `c + LANES <= nv`, and the pointers and offsets of `k` are valid as asserted in
 /// [`row_step`].
 #[inline(always)]
-unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
+unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, const PLAIN: bool>(
     k: &RowKernel<S>,
     c: usize,
     carry: &mut [[S::V; 3]; 3],
@@ -2005,7 +2019,12 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
         ([zero; 3], [zero; 3])
     };
     let nv = k.nv;
-    let mut force = [zero; 3];
+    // SAFETY: as above.
+    let w = if OWN {
+        unsafe { s.load(k.inv_mass.add(b0 + c)) }
+    } else {
+        zero
+    };
     for i in 0..3 {
         // Terms for the lane to the right (column c+1), two to the right (c+2) and,
         // on the next row, one to the right.
@@ -2036,108 +2055,134 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool>(
                 own,
                 s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
             );
-            // SAFETY: as above.
-            force[i] = s.add(unsafe { s.load(k.acc.add(k.a[0] + i * nv + c)) }, own);
+            // SAFETY: as above; outputs hold `lo + nv` floats.
+            unsafe {
+                let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
+                integrate::<S, PLAIN>(k, c, i, w, p00, force);
+            }
         }
         carry[0][i] = l;
         carry[1][i] = q;
         carry[2][i] = m;
     }
-    if OWN {
-        // SAFETY: as above; outputs hold `lo + nv` floats.
-        unsafe { integrate(k, c, p00, force) };
+    if OWN && !PLAIN && k.sphere.is_some() {
+        // SAFETY: as above.
+        unsafe { project_out_of_sphere(k, c, w) };
     }
 }
 
-/// Integrates the particles `(row, c .. c + LANES)` under `force` (springs and drag):
-/// adds air damping and the ground penalty, then steps them (see [`GridCloth`]'s
-/// integrators), projects them out of the sphere when the step does that, and writes
-/// the new state to the outputs.
+/// Integrates component `i` of the particles `(row, c .. c + LANES)` (inverse
+/// masses `w`) under `force` (springs and drag): adds air damping and, for `y`, the
+/// ground penalty, then steps them (symplectic Euler, explicit Euler or position
+/// Verlet) and writes the new state to the outputs.
 ///
 /// # Safety
 /// As for [`block`], with `OWN`.
+///
+/// `PLAIN`: symplectic Euler with no air damping or ground (see `Params::is_plain`).
 #[inline(always)]
-unsafe fn integrate<S: Simd>(
+unsafe fn integrate<S: Simd, const PLAIN: bool>(
     k: &RowKernel<S>,
     c: usize,
+    i: usize,
+    w: S::V,
     (x, xl, v): Particle<S::V>,
-    mut force: [S::V; 3],
+    force: S::V,
 ) {
     let s = k.s;
+    if PLAIN {
+        let a = s.mul_add(force, w, k.gravity[i]);
+        let vn = s.keep_if_positive(w, s.mul_add(k.dt, a, v[i]));
+        let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, vn));
+        // SAFETY: outputs hold `lo + nv` floats.
+        unsafe {
+            let o = k.lo + c;
+            s.store(k.out[i].add(o), xn);
+            s.store(k.out[3 + i].add(o), xnl);
+            s.store(k.out[6 + i].add(o), vn);
+        }
+        return;
+    }
     let at = k.b[0] + c;
     // SAFETY: inside the arrays (caller's contract).
-    let (w, u) = unsafe {
-        let u = if k.verlet {
-            [
-                s.load(k.u[0].add(at)),
-                s.load(k.u[1].add(at)),
-                s.load(k.u[2].add(at)),
-            ]
-        } else {
-            *v
-        };
-        (s.load(k.inv_mass.add(at)), u)
+    let u = if k.verlet {
+        unsafe { s.load(k.u[i].add(at)) }
+    } else {
+        v[i]
     };
-    for i in 0..3 {
-        force[i] = s.mul_add(k.neg_air, v[i], force[i]);
+    let mut force = s.mul_add(k.neg_air, v[i], force);
+    if i == 1 {
+        // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
+        let [height, kc, cg] = k.ground;
+        let depth = s.sub(height, x[1]);
+        let push = s.mul_sub(kc, depth, s.mul(cg, v[1]));
+        force = s.add(force, s.keep_if_positive(depth, push));
     }
-    // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
-    let [height, kc, cg] = k.ground;
-    let depth = s.sub(height, x[1]);
-    let push = s.mul_sub(kc, depth, s.mul(cg, v[1]));
-    force[1] = s.add(force[1], s.keep_if_positive(depth, push));
-    let mut xn = [k.zero; 3];
-    let mut xnl = [k.zero; 3];
-    let mut un = [k.zero; 3];
-    let mut vn = [k.zero; 3];
-    for i in 0..3 {
-        let a = s.mul_add(force[i], w, k.gravity[i]);
-        un[i] = s.keep_if_positive(w, s.mul_add(k.dt, a, u[i]));
-        // Explicit Euler moves with the old velocity, the others with the new one.
-        let moving = s.mul_add(k.explicit, s.sub(u[i], un[i]), un[i]);
-        (xn[i], xnl[i]) = add_double(s, (x[i], xl[i]), s.mul(k.dt, moving));
-        vn[i] = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un[i]));
-    }
-    if let Some((center, radius, radius2)) = k.sphere {
-        // Inside (and free): moved to `center + radius d / |d|`; the move `δ` also
-        // changes the velocities by `δ / h`.
-        let d: [S::V; 3] = std::array::from_fn(|i| s.sub(xn[i], center[i]));
-        let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
-        let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
-        let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
-        for i in 0..3 {
-            let onto = s.mul_add(d[i], scale, center[i]);
-            let dx = s.mul(inside, s.sub(onto, xn[i]));
-            let dl = s.mul(inside, xnl[i]);
-            let dv = s.mul(s.sub(dx, dl), k.inv_dt);
-            xn[i] = s.add(xn[i], dx);
-            xnl[i] = s.sub(xnl[i], dl);
-            un[i] = s.add(un[i], dv);
-            vn[i] = s.add(vn[i], dv);
-        }
-    }
+    let a = s.mul_add(force, w, k.gravity[i]);
+    let un = s.keep_if_positive(w, s.mul_add(k.dt, a, u));
+    // Explicit Euler moves with the old velocity, the others with the new one.
+    let moving = s.mul_add(k.explicit, s.sub(u, un), un);
+    let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, moving));
+    let vn = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un));
     // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
     unsafe {
         let o = k.lo + c;
-        for i in 0..3 {
-            s.store(k.out[i].add(o), xn[i]);
-            s.store(k.out[3 + i].add(o), xnl[i]);
-            s.store(k.out[6 + i].add(o), vn[i]);
+        s.store(k.out[i].add(o), xn);
+        s.store(k.out[3 + i].add(o), xnl);
+        s.store(k.out[6 + i].add(o), vn);
+        if k.verlet {
+            s.store(k.out[9 + i].add(o), un);
+        }
+    }
+}
+
+/// Projects the just integrated particles `(row, c .. c + LANES)` that are inside
+/// the sphere (and free) onto its surface, `center + radius d / |d|`; the move `δ`
+/// also changes their velocities by `δ / h`.
+///
+/// # Safety
+/// As for [`integrate`], after it ran for all three components.
+#[inline(always)]
+unsafe fn project_out_of_sphere<S: Simd>(k: &RowKernel<S>, c: usize, w: S::V) {
+    let s = k.s;
+    let Some((center, radius, radius2)) = k.sphere else {
+        return;
+    };
+    let o = k.lo + c;
+    // SAFETY: the outputs just written (caller's contract).
+    let out = |j: usize| unsafe { s.load(k.out[j].add(o)) };
+    let xn: [S::V; 3] = std::array::from_fn(out);
+    let d: [S::V; 3] = std::array::from_fn(|i| s.sub(xn[i], center[i]));
+    let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
+    let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
+    let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
+    for i in 0..3 {
+        let onto = s.mul_add(d[i], scale, center[i]);
+        let dx = s.mul(inside, s.sub(onto, xn[i]));
+        let xnl = out(3 + i);
+        let dl = s.mul(inside, xnl);
+        let dv = s.mul(s.sub(dx, dl), k.inv_dt);
+        // SAFETY: as above.
+        unsafe {
+            s.store(k.out[i].add(o), s.add(xn[i], dx));
+            s.store(k.out[3 + i].add(o), s.sub(xnl, dl));
+            s.store(k.out[6 + i].add(o), s.add(out(6 + i), dv));
             if k.verlet {
-                s.store(k.out[9 + i].add(o), un[i]);
+                s.store(k.out[9 + i].add(o), s.add(out(9 + i), dv));
             }
         }
     }
 }
 
 /// `(hi, lo) + t` as a new double-float `(hi', lo')` with `|lo'| <= ulp(hi') / 2`:
-/// Knuth's two-sum of `hi + t` (exact whatever the magnitudes), its error added to
-/// `lo`, then renormalised.
+/// Dekker's fast two-sum of `hi + t` (exact when `|t| <= |hi|`, a step's move
+/// against a position; otherwise `hi` is within a step of the origin and float
+/// round-off there is already below `ulp(t)`), its error added to `lo`, then
+/// renormalised.
 #[inline(always)]
 fn add_double<S: Simd>(s: S, (hi, lo): (S::V, S::V), t: S::V) -> (S::V, S::V) {
     let sum = s.add(hi, t);
-    let t_part = s.sub(sum, hi);
-    let error = s.add(s.sub(hi, s.sub(sum, t_part)), s.sub(t, t_part));
+    let error = s.sub(t, s.sub(sum, hi));
     let lo = s.add(lo, error);
     let hi = s.add(sum, lo);
     (hi, s.sub(lo, s.sub(hi, sum)))
