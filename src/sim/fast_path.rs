@@ -281,11 +281,8 @@ impl System {
         while done < n && result.is_ok() {
             let chunk = CHUNK.min(n - done);
             if gusty {
-                for i in 0..chunk {
-                    let t = self.state.time + (i as f64) * dt;
-                    fast.kernel.set_wind(self.model.wind.at(t));
-                    fast.kernel.step(dt);
-                }
+                let wind = &self.model.wind;
+                (fast.kernel).steps_in_wind(dt, chunk as usize, self.state.time, wind);
             } else {
                 fast.kernel.steps(dt, chunk as usize);
             }

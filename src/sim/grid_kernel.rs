@@ -48,7 +48,7 @@ use bytemuck::Pod;
 use glam::DVec3;
 
 use super::constraints;
-use super::{Ground, Integrator, Sphere};
+use super::{Ground, Integrator, Sphere, Wind};
 
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
@@ -634,10 +634,10 @@ impl<E: Real> Kernel<E> {
                 spec.origin[1] - r as f64 * spec.spacing,
                 spec.origin[2],
             ];
-            for a in 0..3 {
-                let hi = E::of(start[a]);
+            for (a, q) in start.into_iter().enumerate() {
+                let hi = E::of(q);
                 cur.x[a].as_mut_slice()[i] = hi;
-                cur.xl[a].as_mut_slice()[i] = E::of(start[a] - hi.f64());
+                cur.xl[a].as_mut_slice()[i] = E::of(q - hi.f64());
             }
         }
         let mut inv_mass = Buf::zeros(grid.len());
@@ -788,27 +788,32 @@ impl<E: Real> Kernel<E> {
     /// Advance by `n` steps of `dt` seconds. On several threads the pool is entered
     /// once for all `n` steps, so prefer this to calling [`GridCloth::step`] in a loop.
     pub fn steps(&mut self, dt: f64, n: usize) {
+        self.steps_in_wind(dt, n, None);
+    }
+
+    /// `n` steps of `dt`; with `wind = Some((t0, wind))` step `i` blows
+    /// `wind.at(t0 + i dt)` (gusts), all inside one entry into the thread pool.
+    fn steps_in_wind(&mut self, dt: f64, n: usize, wind: Option<(f64, &Wind)>) {
         self.params.dt = E::of(dt);
         if self.params.verlet {
             self.params.verlet_half_dt = E::of(0.5 * dt);
         }
-        match self.pool.take() {
-            Some(pool) => {
-                pool.install(|| {
-                    for _ in 0..n {
-                        self.one_step(true);
-                        self.constrain(dt);
-                    }
-                });
-                self.pool = Some(pool);
-            }
-            None => {
-                for _ in 0..n {
-                    self.one_step(false);
-                    self.constrain(dt);
+        let pool = self.pool.take();
+        let parallel = pool.is_some();
+        let mut run = || {
+            for i in 0..n {
+                if let Some((t0, wind)) = wind {
+                    self.set_wind(wind.at(t0 + i as f64 * dt));
                 }
+                self.one_step(parallel);
+                self.constrain(dt);
             }
+        };
+        match &pool {
+            Some(pool) => pool.install(run),
+            None => run(),
         }
+        self.pool = pool;
     }
 
     fn one_step(&mut self, parallel: bool) {
@@ -885,6 +890,9 @@ impl<E: Real> Kernel<E> {
                     let longest = limit * rest;
                     let (a, b) = (r * w + c, rb * w + cb as usize);
                     let (ia, ib) = (self.grid.index(a), self.grid.index(b));
+                    if !self.may_be_longer(ia, ib, longest) {
+                        continue;
+                    }
                     let inv_mass = self.inv_mass.as_slice();
                     let (wa, wb) = (inv_mass[ia].f64(), inv_mass[ib].f64());
                     let (xa, xb) = (self.position_at(ia), self.position_at(ib));
@@ -922,22 +930,41 @@ impl<E: Real> Kernel<E> {
         let [xl, yl, zl] = self.cur.xl.each_ref().map(Buf::as_slice);
         let mut over = 0u32;
         for &((dr, dc), rest, present) in stencil {
-            if !present || r + dr >= h {
+            // Columns c with both ends on the cloth: 0 <= c + dc < w.
+            let c0 = (-dc).max(0) as usize;
+            let c1 = w.saturating_sub(dc.max(0) as usize);
+            if !present || r + dr >= h || c1 <= c0 {
                 continue;
             }
             let longest2 = E::of((limit * rest).powi(2) * (1.0 - 1e-4));
-            let c0 = (-dc).max(0) as usize;
-            let c1 = w.saturating_sub(dc.max(0) as usize);
-            let (ia, ib) = (r * st, ((r + dr) * st) as isize + dc);
-            for c in c0..c1 {
-                let (i, j) = (ia + c, (ib + c as isize) as usize);
-                let dx = (x[i] - x[j]) + (xl[i] - xl[j]);
-                let dy = (y[i] - y[j]) + (yl[i] - yl[j]);
-                let dz = (z[i] - z[j]) + (zl[i] - zl[j]);
+            let (a, len) = (r * st + c0, c1 - c0);
+            let b = ((r + dr) * st + c0).wrapping_add_signed(dc);
+            fn ends<E>(p: &[E], a: usize, b: usize, len: usize) -> (&[E], &[E]) {
+                (&p[a..a + len], &p[b..b + len])
+            }
+            let ends = |p| ends(p, a, b, len);
+            let ((xa, xb), (ya, yb), (za, zb)) = (ends(x), ends(y), ends(z));
+            let ((la, lb), (ma, mb), (na, nb)) = (ends(xl), ends(yl), ends(zl));
+            for j in 0..len {
+                let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
+                let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
+                let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
                 over += u32::from(dx * dx + dy * dy + dz * dz > longest2);
             }
         }
         over > 0
+    }
+
+    /// Whether particles at array indices `i` and `j` may be farther apart than
+    /// `longest` (m): the conservative check of [`Self::row_over_limit`] for one pair.
+    fn may_be_longer(&self, i: usize, j: usize, longest: f64) -> bool {
+        let (x, xl) = (&self.cur.x, &self.cur.xl);
+        let d = |a: usize| {
+            let (p, l) = (x[a].as_slice(), xl[a].as_slice());
+            (p[i] - p[j]) + (l[i] - l[j])
+        };
+        let (dx, dy, dz) = (d(0), d(1), d(2));
+        dx * dx + dy * dy + dz * dz > E::of(longest * longest * (1.0 - 1e-4))
     }
 
     /// Moves the particle at array index `i` to `to` (m) after a step of `dt`,
@@ -1245,6 +1272,14 @@ impl GridCloth {
         /// [`GridCloth::step`] in a loop.
         fn steps(&mut self, dt: f64, n: usize)
     );
+    /// Advance by `n` steps of `dt` seconds in a gusty wind: step `i` blows
+    /// `wind.at(start_time + i dt)`.
+    pub fn steps_in_wind(&mut self, dt: f64, n: usize, start_time: f64, wind: &Wind) {
+        match &mut self.0 {
+            Kernels::Single(k) => k.steps_in_wind(dt, n, Some((start_time, wind))),
+            Kernels::Double(k) => k.steps_in_wind(dt, n, Some((start_time, wind))),
+        }
+    }
     forward!(
         /// Copy the positions (m) of particles `0..out.len()` into `out`.
         fn positions_into(&self, out: &mut [DVec3])
@@ -1823,7 +1858,7 @@ struct RowKernel<S: Simd> {
     inv_dt: S::V,
     one: S::V,
     /// Sphere centre, radius and squared radius (when the step projects onto it).
-    sphere: Option<([S::V; 3], S::V, S::V)>,
+    sphere: Option<SphereLanes<S::V>>,
     verlet: bool,
     x: [*const S::E; 3],
     xl: [*const S::E; 3],
@@ -1841,6 +1876,9 @@ struct RowKernel<S: Simd> {
     stride: usize,
     lo: usize,
 }
+
+/// A sphere collider's centre, radius and squared radius, splatted.
+type SphereLanes<V> = ([V; 3], V, V);
 
 /// One row `row` of the cloth, in SIMD blocks of columns: evaluate the six springs
 /// that start on each particle of the row, `(row, c)` to `(row, c+1)`, `(row, c+2)`,
