@@ -235,3 +235,57 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
         Precision::Single
     );
 }
+
+#[test]
+fn a_grid_whose_springs_are_not_the_stencil_is_not_taken_for_one() {
+    // A 6 x 5 grid with its structural springs, declared a grid; then the same with
+    // one spring moved onto a diagonal (same count, same rest length and kind).
+    use cloth_sandbox::sim::{GridShape, Params, Spring, SpringKind, Topology};
+    let (w, h, spacing) = (6usize, 5usize, 0.1);
+    let at = |r: usize, c: usize| (r * w + c) as u32;
+    let build = |rewire: bool| {
+        let mut springs = Vec::new();
+        for r in 0..h {
+            for c in 0..w {
+                for (dr, dc) in [(0, 1), (1, 0)] {
+                    if r + dr < h && c + dc < w {
+                        let (a, b) = (at(r, c), at(r + dr, c + dc));
+                        springs.push(Spring {
+                            a,
+                            b,
+                            rest: spacing,
+                            stiffness: 10.0,
+                            damping: 0.0,
+                            kind: SpringKind::Structural,
+                        });
+                    }
+                }
+            }
+        }
+        if rewire {
+            springs[0].b = at(1, 1);
+        }
+        let positions = (0..w * h)
+            .map(|p| DVec3::new((p % w) as f64 * spacing, -((p / w) as f64) * spacing, 0.0))
+            .collect();
+        let topology = Topology {
+            springs,
+            grid: Some(GridShape {
+                width: w,
+                height: h,
+            }),
+            ..Topology::default()
+        };
+        let mut system = System::new(
+            vec![0.01; w * h],
+            positions,
+            &[0],
+            topology,
+            Params::default(),
+        );
+        system.set_fast_path(true);
+        system.engine()
+    };
+    assert!(build(false).is_grid());
+    assert_eq!(build(true), Engine::General);
+}

@@ -1,14 +1,18 @@
-//! The grid fast path: [`System::run`] hands a regular grid cloth stepped by
-//! symplectic Euler to the f32 stencil kernel of [`super::grid_kernel`] when the
-//! caller allows it ([`System::set_fast_path`]) and the system is one the kernel
-//! models exactly: a grid topology with uniform mass, one stiffness, damping and rest
-//! length per spring kind (rest `h`, `h√2`, `2h`), and no constraint, ground or air
-//! damping. Results then agree with the f64 general path to float32 round-off
-//! (about 1e-6 relative; `tests/fast_path.rs`).
+//! The fast engine's hook into [`System::run`]: a regular grid cloth goes to the
+//! stencil kernel of [`super::grid_kernel`] when the caller allows it
+//! ([`System::set_fast_path`]) and the kernel models the system exactly: a grid
+//! topology whose springs really are the 12-neighbour stencil (checked spring by
+//! spring, not trusted from the scene), uniform mass, one stiffness, damping and
+//! rest length per spring kind (rest `h`, `h√2`, `2h`), symplectic Euler, explicit
+//! Euler or Verlet, and no bars. Every parameter is named in `grid_spec`,
+//! so a new one fails to compile until the kernel models it or refuses it. Results
+//! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
 //!
 //! The f64 state stays the system's state: it is copied into the kernel when
 //! something outside changed it, and back after every chunk of steps, where the
-//! divergence check runs.
+//! divergence check runs. A live edit of a coefficient (stiffness, damping, mass,
+//! wind...) updates the kernel in place ([`GridCloth::respec`]); only a new shape,
+//! integrator or precision builds a new one.
 
 use glam::DVec3;
 
@@ -106,6 +110,21 @@ impl GridSprings {
                 SpringKind::Bend => 2,
                 SpringKind::Other => return None,
             };
+            // The scene says this is a grid: check that the spring is a stencil
+            // spring of its kind (with the counts below and canonical springs being
+            // unique, the springs are then exactly the stencil).
+            let (a, b) = (s.a as usize, s.b as usize);
+            let (ra, ca) = (a / shape.width, a % shape.width);
+            let (rb, cb) = (b / shape.width, b % shape.width);
+            let offset = (rb as isize - ra as isize, cb as isize - ca as isize);
+            let in_stencil = match slot {
+                0 => offset == (0, 1) || offset == (1, 0),
+                1 => offset == (1, 1) || offset == (1, -1),
+                _ => offset == (0, 2) || offset == (2, 0),
+            };
+            if !in_stencil || b >= shape.width * shape.height {
+                return None;
+            }
             let coefficients = (s.stiffness, s.damping, s.rest);
             match kinds[slot] {
                 None => kinds[slot] = Some(coefficients),
