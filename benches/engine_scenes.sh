@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# Cost per particle-step of each kind of scene on the fast engine against the plain
+# `bench` cloth, in one run: `cloth run --json` (960 steps after 16 warm-up steps,
+# best of RUNS runs), at each size. Usage: bash benches/engine_scenes.sh [SIZES] [RUNS]
+# e.g. bash benches/engine_scenes.sh "128 256" 3
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SIZES=${1:-"128 256"}
+RUNS=${2:-3}
+cargo build --release --quiet
+CLOTH=target/release/cloth
+
+# name | scene and settings (the grid size is added)
+CASES=(
+  "bench (plain)|--scene bench"
+  "drape (sphere, ground)|--scene drape --set gust=0"
+  "sheet (Verlet, stretch limit)|--scene sheet"
+  "sheet without its stretch limit|--scene sheet --set stretch_limit=100"
+  "50 pins at random places|--scene bench --set pins=RANDOM50"
+  "air damping|--scene bench --set air_damping=0.0001"
+  "bench-wind (drag)|--scene bench-wind"
+  "cloth (drag, gusts)|--scene cloth"
+)
+
+simd=$(grep -qw avx512f /proc/cpuinfo && echo AVX-512 || (grep -qw avx2 /proc/cpuinfo && echo AVX2 || echo baseline))
+echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of 960 steps"
+for n in $SIZES; do
+  echo
+  echo "N = $n"
+  printf '%-34s %-10s %14s %10s\n' "case" "engine" "M p-steps/s" "cost/bench"
+  base=""
+  for case in "${CASES[@]}"; do
+    name=${case%%|*}
+    args=${case#*|}
+    if [[ $args == *RANDOM50* ]]; then
+      pins=$(python3 -c "import random; r=random.Random(7); print('[' + ','.join(str(i) for i in sorted(r.sample(range($n*$n), 50))) + ']')")
+      args=${args/RANDOM50/$pins}
+    fi
+    best=0
+    engine=""
+    for _ in $(seq "$RUNS"); do
+      # shellcheck disable=SC2086
+      out=$($CLOTH run $args --set width="$n" --set height="$n" --steps 960 --warmup 16 --json)
+      read -r rate engine < <(python3 -c "import json,sys; d=json.loads(sys.argv[1]); print(d['particle_steps_per_second'], d['engine'])" "$out")
+      best=$(python3 -c "print(max($best, $rate))")
+    done
+    [ -z "$base" ] && base=$best
+    printf '%-34s %-10s %14.1f %10.2f\n' "$name" "$engine" "$(python3 -c "print($best/1e6)")" "$(python3 -c "print($base/$best)")"
+  done
+done
