@@ -4,8 +4,9 @@
 
 use glam::{DMat3, DVec2, DVec3};
 
+use super::edit::EDIT_ORIGIN;
 use super::values::{PinPreset, Pins};
-use super::{Layout, Orientation, SceneError, SceneSpec};
+use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
 use crate::sim::GridShape;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 
@@ -559,6 +560,43 @@ impl Resolved {
             (Layout::Grid, SpringKind::Bend) => self.bend_scale,
             _ => 1.0,
         }
+    }
+
+    /// Brings these settings, resolved from `scene` before `edit`, in step with
+    /// `scene` after [`Scene::apply`] recorded `edit`, without resolving the whole
+    /// scene again: the edited value, and the stiffness and damping where the scene
+    /// gives them per kg or as a ratio of critical damping (so that they follow a
+    /// mass or stiffness edit as a full resolve would). A layout edit (see
+    /// [`Edit::rebuilds`]) changes pins, spacing and masses given in total, and
+    /// resolves the scene. On error the settings are unchanged.
+    pub fn follow(&mut self, edit: Edit, scene: &Scene) -> Result<(), SceneError> {
+        let (spec, o) = (&scene.spec, EDIT_ORIGIN);
+        let p = &mut self.params;
+        match edit {
+            Edit::Stiffness(_) | Edit::Damping(_) => {
+                (self.stiffness, self.damping) = spring_constants(spec, o, self.particle_mass)?;
+            }
+            Edit::ParticleMass(m) => {
+                (self.stiffness, self.damping) = spring_constants(spec, o, m)?;
+                self.particle_mass = m;
+            }
+            Edit::RestLength(l) => {
+                // A grid's default anchor depends on its spacing.
+                self.origin = anchor(spec, o, [self.width, self.height], l)?;
+                self.rest_length = l;
+            }
+            Edit::Gravity(g) => p.gravity = g,
+            Edit::Wind(w) => p.wind = w,
+            Edit::Gust(g) => p.gust = g,
+            Edit::AirDamping(c) => p.air_damping = c,
+            Edit::Dt(dt) => p.dt = dt,
+            Edit::Substeps(n) => self.substeps = n,
+            Edit::Integrator(i) => p.integrator = i,
+            Edit::BarIterations(n) => p.bar_iterations = n,
+            Edit::StretchLimit(t) => p.stretch_limit = Some(t),
+            Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) => *self = scene.resolve()?,
+        }
+        Ok(())
     }
 
     /// Number of particles.
