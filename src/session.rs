@@ -4,12 +4,18 @@
 //! pause / single step / reset, divergence, live parameter edits, and safe stepping
 //! (on by default): the step is kept below half the integrator's critical step, with
 //! more substeps so that each frame still covers the same simulated time.
+//!
+//! Live edits are typed ([`Edit`]): [`Session::apply`] records one in the scene spec
+//! and changes the running system in place through its setters, so that a slider
+//! dragged every frame costs no parsing, no resolving of the scene and no new system;
+//! only layout edits (width, height, depth) rebuild it.
 
 use std::time::Instant;
 
-use crate::scene::{Scene, SceneError};
+pub use crate::scene::Edit;
+use crate::scene::{Resolved, Scene, SceneError};
 use crate::sim::safe::{self, DEFAULT_SAFETY};
-use crate::sim::{Clock, SpringKind, System};
+use crate::sim::{Clock, Params, SpringKind, System};
 
 /// Most substeps per frame safe stepping may choose; past it the simulation runs
 /// slower than real time rather than with an unsafe step.
@@ -30,7 +36,7 @@ pub const WIND_LOAD_NEEDING_A_LIMIT: f64 = 0.5;
 /// Drag on one particle's rest area in the strongest wind, `1/2 rho C_d (|wind| +
 /// gust)² L²`, as a fraction of the force `k L` that stretches a spring to twice its
 /// rest length. The default cloth: 0.003.
-pub fn wind_load_ratio(resolved: &crate::scene::Resolved) -> f64 {
+pub fn wind_load_ratio(resolved: &Resolved) -> f64 {
     let p = &resolved.params;
     let l = resolved.rest_length;
     let wind = p.wind.length() + p.gust;
@@ -94,8 +100,12 @@ pub struct FrameReport {
 /// A scene running interactively.
 pub struct Session {
     scene: Scene,
+    /// The scene's settings in effect, kept in step with `scene` by every edit.
+    settings: Resolved,
     name: String,
     system: System,
+    /// The kinds of spring the system has, so an edit of k or b touches only those.
+    spring_kinds: Vec<SpringKind>,
     clock: Clock,
     paused: bool,
     divergence: Option<DivergenceReport>,
@@ -135,28 +145,44 @@ impl Session {
 
     /// Starts `scene`, named `name` in the UI.
     pub fn new(scene: Scene, name: &str) -> Result<Self, SceneError> {
-        let resolved = scene.resolve()?;
-        let mut system = resolved.build();
-        system.set_fast_path(true);
-        Ok(Self {
+        let settings = scene.resolve()?;
+        let mut session = Self {
             scene,
             name: name.to_string(),
-            system,
+            system: settings.build(),
+            settings,
+            spring_kinds: Vec::new(),
             clock: Clock::default(),
             paused: false,
             divergence: None,
-            rest_length: resolved.rest_length,
-            substeps: resolved.substeps,
+            rest_length: 0.0,
+            substeps: 1,
             ms_per_step: 0.0,
             safe_stepping: true,
             step_choice: None,
-        }
-        .with_step_choice())
+        };
+        session.built();
+        Ok(session)
     }
 
-    fn with_step_choice(mut self) -> Self {
+    /// Builds the system anew from the settings; pins made by clicking are dropped.
+    fn rebuild(&mut self) {
+        self.system = self.settings.build();
+        self.built();
+    }
+
+    /// Starts a system just built from the settings.
+    fn built(&mut self) {
+        self.system.set_fast_path(true);
+        self.spring_kinds = SpringKind::ALL
+            .into_iter()
+            .filter(|&kind| self.system.springs().iter().any(|s| s.kind == kind))
+            .collect();
+        self.rest_length = self.settings.rest_length;
+        self.substeps = self.settings.substeps;
+        self.clock.reset();
+        self.divergence = None;
         self.choose_step();
-        self
     }
 
     /// Applies the scene's dt and substeps, or, with safe stepping on, a step no
@@ -164,13 +190,21 @@ impl Session {
     /// simulated time per frame (`substeps * dt` of the scene) the same, up to
     /// [`MAX_SAFE_SUBSTEPS`] (beyond that the simulation runs slower, never unsafe).
     fn choose_step(&mut self) {
-        let Ok(resolved) = self.scene.resolve() else {
-            return;
+        let user = self.settings.params;
+        // The stability estimate reads the integrator, the air damping and the
+        // ground from the running model: bring them up to date first, keeping the
+        // step and stretch limit it runs with until they are chosen below.
+        let running = *self.system.params();
+        let live = Params {
+            dt: running.dt,
+            stretch_limit: running.stretch_limit,
+            ..user
         };
-        let (user_dt, user_substeps) = (resolved.params.dt, resolved.substeps);
-        let mut params = *self.system.params();
-        params.dt = user_dt;
-        params.stretch_limit = resolved.params.stretch_limit;
+        if running != live {
+            self.system.set_params(live);
+        }
+        let (user_dt, user_substeps) = (user.dt, self.settings.substeps);
+        let mut params = user;
         let mut substeps = user_substeps;
         self.step_choice = None;
         if self.safe_stepping {
@@ -188,7 +222,7 @@ impl Session {
             }
             let needs_limit = self.system.force_terms().aero
                 && params.stretch_limit.is_none()
-                && wind_load_ratio(&resolved) > WIND_LOAD_NEEDING_A_LIMIT;
+                && wind_load_ratio(&self.settings) > WIND_LOAD_NEEDING_A_LIMIT;
             let added_limit = needs_limit.then_some(SAFE_STRETCH_LIMIT);
             params.stretch_limit = params.stretch_limit.or(added_limit);
             self.step_choice = Some(StepChoice {
@@ -240,6 +274,13 @@ impl Session {
         &self.scene
     }
 
+    /// The scene's settings in effect (defaults filled in, the user's edits
+    /// included): what the panel shows. Safe stepping may run a smaller step than
+    /// `params.dt`; [`Self::system`] has the parameters that run.
+    pub fn settings(&self) -> &Resolved {
+        &self.settings
+    }
+
     /// The running system.
     pub fn system(&self) -> &System {
         &self.system
@@ -281,14 +322,8 @@ impl Session {
     /// Rebuilds the system from the scene with the user's edits (R, "Reset").
     /// Pins made by clicking are dropped; the pause state is kept.
     pub fn reset(&mut self) -> Result<(), SceneError> {
-        let resolved = self.scene.resolve()?;
-        self.system = resolved.build();
-        self.system.set_fast_path(true);
-        self.rest_length = resolved.rest_length;
-        self.substeps = resolved.substeps;
-        self.clock.reset();
-        self.divergence = None;
-        self.choose_step();
+        self.settings = self.scene.resolve()?;
+        self.rebuild();
         Ok(())
     }
 
@@ -297,40 +332,68 @@ impl Session {
         REBUILD_KEYS.contains(&key)
     }
 
-    /// Sets a scene key from text (as `--set key=value`). Layout keys (width,
-    /// height, ...) rebuild the system with every other setting kept; the rest
-    /// (stiffness, damping, rest length, wind, mass, gravity, dt, integrator, ...)
-    /// apply to the running system without disturbing its state. On error
-    /// nothing changes.
+    /// Applies a typed edit (a panel slider): records it in the scene spec, so that
+    /// a reset or a rebuild keeps it, and changes the running system in place
+    /// through its setters without disturbing its state (positions, velocities,
+    /// time). Width, height and depth rebuild the system with every other setting
+    /// kept. A value out of range (or not finite) is refused with an error naming
+    /// the field and the allowed range, and nothing changes.
+    pub fn apply(&mut self, edit: Edit) -> Result<(), SceneError> {
+        let mut scene = self.scene.clone();
+        scene.apply(edit)?;
+        let mut settings = self.settings.clone();
+        settings.follow(edit, &scene)?;
+        self.commit(scene, settings, edit.rebuilds());
+        Ok(())
+    }
+
+    /// Sets a scene key from text, as `--set key=value` does (the panel sends typed
+    /// [`Edit`]s instead; this takes any key). Layout keys (width, height, pins, ...)
+    /// rebuild the system with every other setting kept; the rest apply to the
+    /// running system as [`Self::apply`] does. On error nothing changes.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
         let mut scene = self.scene.clone();
         scene.set(key, value)?;
-        let resolved = scene.resolve()?;
+        let settings = scene.resolve()?;
+        self.commit(scene, settings, self.needs_rebuild(key));
+        Ok(())
+    }
+
+    /// Takes an edited scene and its settings: rebuilds the system, or brings the
+    /// running one in step with the settings that changed.
+    fn commit(&mut self, scene: Scene, settings: Resolved, rebuild: bool) {
         self.scene = scene;
-        if self.needs_rebuild(key) {
-            return self.reset();
+        let old = std::mem::replace(&mut self.settings, settings);
+        if rebuild {
+            self.rebuild();
+            return;
         }
-        // Spring constants per kind, taken from a system freshly built with the
-        // new values so that the builder's per-kind scales stay in one place.
-        let fresh = resolved.build();
-        for kind in SpringKind::ALL {
-            if let Some(s) = fresh.springs().iter().find(|s| s.kind == kind) {
-                self.system.set_spring_stiffness(kind, s.stiffness);
-                self.system.set_spring_damping(kind, s.damping);
+        let new = &self.settings;
+        // Per-kind constants are multiples of k and b (shear and bend scales on a grid).
+        if new.stiffness != old.stiffness {
+            for &kind in &self.spring_kinds {
+                self.system
+                    .set_spring_stiffness(kind, new.stiffness * new.spring_scale(kind));
+            }
+        }
+        if new.damping != old.damping {
+            for &kind in &self.spring_kinds {
+                self.system
+                    .set_spring_damping(kind, new.damping * new.spring_scale(kind));
             }
         }
         // The cloth grows or shrinks with its rest length (positions too, about the
         // pins), so strains are kept: changing the rest length of springs pinned in
         // place would store the energy of a huge compression and release it at once.
-        if resolved.rest_length != self.rest_length && self.rest_length > 0.0 {
-            self.system.rescale(resolved.rest_length / self.rest_length);
-            self.rest_length = resolved.rest_length;
+        if new.rest_length != self.rest_length && self.rest_length > 0.0 {
+            self.system.rescale(new.rest_length / self.rest_length);
+            self.rest_length = new.rest_length;
         }
-        self.system.set_particle_mass(resolved.particle_mass);
-        self.system.set_params(resolved.params);
-        self.substeps = resolved.substeps;
+        if new.particle_mass != old.particle_mass {
+            self.system.set_particle_mass(new.particle_mass);
+        }
+        // Parameters (with dt and the stretch limit safe stepping picks) and substeps.
         self.choose_step();
-        Ok(())
     }
 
     /// Advances by `elapsed` wall-clock seconds at the scene's speed, unless

@@ -160,7 +160,6 @@ impl App {
         self.view.mesh = has_surface;
         self.view.particles = !has_surface;
         self.view.springs = !has_surface;
-        self.panel.scene_changed(&self.session);
     }
 
     /// "Reset view": the default orientation, framed on the scene.
@@ -292,22 +291,20 @@ impl App {
                 if let Err(e) = self.session.reset() {
                     self.panel.error = Some(e.to_string());
                 }
-                self.panel.scene_changed(&self.session);
             }
-            Action::Set(key, value) => {
-                let rebuild = self.session.needs_rebuild(&key);
-                match self.session.set(&key, &value) {
-                    Ok(()) => {
-                        self.panel.error = None;
-                        if rebuild {
-                            self.mouse.cancel();
-                            self.frame_camera();
-                        }
+            Action::Edit(edit) => match self.session.apply(edit) {
+                Ok(()) => {
+                    self.panel.error = None;
+                    if edit.rebuilds() {
+                        self.mouse.cancel();
+                        self.frame_camera();
                     }
-                    Err(e) => self.panel.error = Some(e.to_string()),
                 }
-                self.panel.scene_changed(&self.session);
-            }
+                Err(e) => {
+                    log::warn!("{e}");
+                    self.panel.error = Some(e.to_string());
+                }
+            },
             Action::TogglePause => self.session.set_paused(!self.session.paused()),
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::Step => {

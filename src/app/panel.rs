@@ -1,12 +1,13 @@
 //! The egui side panel: scene and integrator, parameter sliders (only those the
 //! scene uses), play/pause/step/reset and speed, display toggles, live stats and
 //! the divergence notice. It edits view options directly and returns every
-//! change to the simulation as an `Action` for the app to apply.
+//! change to the simulation as an `Action` for the app to apply; parameter changes
+//! are typed [`Edit`]s.
 
 use std::time::Instant;
 
-use cloth_sandbox::scene::{Layout, Resolved, builtin_scenes};
-use cloth_sandbox::session::{FrameReport, Session};
+use cloth_sandbox::scene::{Layout, builtin_scenes};
+use cloth_sandbox::session::{Edit, FrameReport, Session};
 use cloth_sandbox::sim::Integrator;
 use egui::{Color32, RichText, Ui};
 
@@ -23,8 +24,8 @@ pub enum Action {
     LoadScene(String),
     /// Rebuild the scene with the current settings (R).
     Reset,
-    /// Set a scene key (`--set` syntax).
-    Set(String, String),
+    /// Change a setting (a slider or dropdown).
+    Edit(Edit),
     /// Pause or resume (Space).
     TogglePause,
     /// Run one step.
@@ -36,8 +37,6 @@ pub enum Action {
 /// Panel state that lives between frames.
 #[derive(Default)]
 pub struct PanelState {
-    /// The scene's settings, refreshed whenever they change.
-    resolved: Option<Resolved>,
     /// Colour springs by strain instead of kind.
     pub strain_colors: bool,
     /// Last error from a scene change, shown until the next success.
@@ -51,14 +50,6 @@ pub struct PanelState {
 }
 
 impl PanelState {
-    /// Re-reads the scene's settings after a load, reset or edit.
-    pub fn scene_changed(&mut self, session: &Session) {
-        match session.scene().resolve() {
-            Ok(r) => self.resolved = Some(r),
-            Err(e) => self.error = Some(e.to_string()),
-        }
-    }
-
     /// Folds one frame's timings into the stats.
     pub fn record(&mut self, report: &FrameReport, frame_time: f64) {
         self.sim_ms = 0.9 * self.sim_ms + 0.1 * report.sim_ms;
@@ -108,10 +99,6 @@ fn int_slider(
     .changed()
 }
 
-fn vec3(v: glam::DVec3) -> String {
-    format!("{},{},{}", v.x, v.y, v.z)
-}
-
 /// Draws the panel; returns what the user asked for and the rectangle (points)
 /// left for the scene.
 pub fn show(
@@ -157,9 +144,7 @@ fn contents(
     if scene != session.name() {
         actions.push(Action::LoadScene(scene));
     }
-    let Some(r) = state.resolved.clone() else {
-        return;
-    };
+    let r = session.settings();
     let p = r.params;
     let mut integrator = p.integrator;
     egui::ComboBox::from_label("Integrator")
@@ -170,7 +155,7 @@ fn contents(
             }
         });
     if integrator != p.integrator {
-        actions.push(Action::Set("integrator".into(), integrator.name().into()));
+        actions.push(Action::Edit(Edit::Integrator(integrator)));
     }
 
     // Run controls.
@@ -200,7 +185,7 @@ fn contents(
         )
         .changed()
     {
-        actions.push(Action::Set("substeps".into(), substeps.to_string()));
+        actions.push(Action::Edit(Edit::Substeps(substeps)));
     }
     let mut safe = session.safe_stepping();
     if ui
@@ -277,8 +262,7 @@ fn contents(
     let system = session.system();
     let has_springs = !system.springs().is_empty();
     let has_surface = !system.triangles().is_empty();
-    let set =
-        |actions: &mut Vec<Action>, k: &str, v: String| actions.push(Action::Set(k.into(), v));
+    let mut edit = |e: Edit| actions.push(Action::Edit(e));
     ui.separator();
     egui::CollapsingHeader::new("Parameters")
         .default_open(true)
@@ -286,16 +270,16 @@ fn contents(
             if has_springs {
                 let mut k = r.stiffness;
                 if slider(ui, &mut k, 0.01..=100_000.0, "stiffness k (N/m)", true) {
-                    set(actions, "stiffness", k.to_string());
+                    edit(Edit::Stiffness(k));
                 }
                 let mut b = r.damping;
                 if slider(ui, &mut b, 0.0..=100.0, "damping b (N·s/m)", true) {
-                    set(actions, "damping", b.to_string());
+                    edit(Edit::Damping(b));
                 }
             }
             let mut rest = r.rest_length;
             if slider(ui, &mut rest, 0.001..=5.0, "rest length (m)", true) {
-                set(actions, "rest_length", rest.to_string());
+                edit(Edit::RestLength(rest));
             }
             match r.layout {
                 Layout::Grid | Layout::Lattice => {
@@ -308,34 +292,34 @@ fn contents(
                     };
                     let mut w = r.width;
                     if int_slider(ui, &mut w, side.clone(), "width (particles)") {
-                        set(actions, "width", w.to_string());
+                        edit(Edit::Width(w));
                     }
                     let mut h = r.height;
                     if int_slider(ui, &mut h, side, "height (particles)") {
-                        set(actions, "height", h.to_string());
+                        edit(Edit::Height(h));
                     }
                     if r.layout == Layout::Lattice {
                         let mut d = r.depth;
                         if int_slider(ui, &mut d, 2..=32, "depth (particles)") {
-                            set(actions, "depth", d.to_string());
+                            edit(Edit::Depth(d));
                         }
                     }
                 }
                 Layout::Chain | Layout::Rope => {
                     let mut w = r.width;
                     if int_slider(ui, &mut w, 2..=200, "length (particles)") {
-                        set(actions, "width", w.to_string());
+                        edit(Edit::Width(w));
                     }
                 }
                 Layout::Spring => {}
             }
             let mut m = r.particle_mass;
             if slider(ui, &mut m, 0.000_001..=10.0, "particle mass (kg)", true) {
-                set(actions, "particle_mass", m.to_string());
+                edit(Edit::ParticleMass(m));
             }
             let mut g = p.gravity;
             if slider(ui, &mut g.y, -30.0..=10.0, "gravity y (m/s²)", false) {
-                set(actions, "gravity", vec3(g));
+                edit(Edit::Gravity(g));
             }
             if has_surface {
                 ui.label("Wind (m/s)");
@@ -344,27 +328,27 @@ fn contents(
                 changed |= slider(ui, &mut w.y, -20.0..=20.0, "y", false);
                 changed |= slider(ui, &mut w.z, -20.0..=20.0, "z", false);
                 if changed {
-                    set(actions, "wind", vec3(w));
+                    edit(Edit::Wind(w));
                 }
                 let mut gust = p.gust;
                 if slider(ui, &mut gust, 0.0..=10.0, "gust (m/s)", false) {
-                    set(actions, "gust", gust.to_string());
+                    edit(Edit::Gust(gust));
                 }
             }
             let mut dt = p.dt;
             if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true) {
-                set(actions, "dt", dt.to_string());
+                edit(Edit::Dt(dt));
             }
             if !system.bars().is_empty() {
                 let mut it = p.bar_iterations;
                 if int_slider(ui, &mut it, 0..=64, "bar relaxation iterations") {
-                    set(actions, "bar_iterations", it.to_string());
+                    edit(Edit::BarIterations(it));
                 }
             }
             if let Some(limit) = p.stretch_limit {
                 let mut l = limit;
                 if slider(ui, &mut l, 0.0..=1.0, "stretch limit", false) {
-                    set(actions, "stretch_limit", l.to_string());
+                    edit(Edit::StretchLimit(l));
                 }
             }
         });

@@ -4,8 +4,9 @@
 
 use glam::{DMat3, DVec2, DVec3};
 
+use super::edit::EDIT_ORIGIN;
 use super::values::{PinPreset, Pins};
-use super::{Layout, Orientation, SceneError, SceneSpec};
+use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
 use crate::sim::GridShape;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 
@@ -63,6 +64,145 @@ fn invalid(origin: &str, field: &str, message: String) -> SceneError {
     }
 }
 
+/// The allowed values of a number field: finite and in `[lo, hi]`, or `(lo, hi]`
+/// when `lo_open`. One constant per field that a live edit can change, so that a
+/// scene file, `--set` and the panel check it against the same range.
+#[derive(Clone, Copy, Debug)]
+pub struct NumberRange<'a> {
+    /// The scene key.
+    pub field: &'a str,
+    /// Lowest value.
+    pub lo: f64,
+    /// Whether `lo` itself is excluded.
+    pub lo_open: bool,
+    /// Highest value.
+    pub hi: f64,
+}
+
+impl NumberRange<'_> {
+    /// `value` if it is in range, else an error naming the field and the range.
+    pub fn check(&self, origin: &str, value: f64) -> Result<f64, SceneError> {
+        let Self {
+            field,
+            lo,
+            lo_open,
+            hi,
+        } = *self;
+        let low_ok = if lo_open { value > lo } else { value >= lo };
+        if value.is_finite() && low_ok && value <= hi {
+            return Ok(value);
+        }
+        let bracket = if lo_open { "(" } else { "[" };
+        Err(invalid(
+            origin,
+            field,
+            format!("= {value} is out of range: must be a finite number in {bracket}{lo}, {hi}]"),
+        ))
+    }
+}
+
+/// The allowed values of an integer field: `[lo, hi]`.
+#[derive(Clone, Copy, Debug)]
+pub struct CountRange {
+    /// The scene key.
+    pub field: &'static str,
+    /// Lowest value.
+    pub lo: u32,
+    /// Highest value.
+    pub hi: u32,
+}
+
+impl CountRange {
+    /// `value` if it is in range, else an error naming the field and the range.
+    pub fn check(&self, origin: &str, value: u32) -> Result<u32, SceneError> {
+        count(origin, self.field, value, self.lo, self.hi)
+    }
+}
+
+/// The allowed values of a vector field: finite components, length at most `max_norm`.
+#[derive(Clone, Copy, Debug)]
+pub struct VectorRange {
+    /// The scene key.
+    pub field: &'static str,
+    /// Longest allowed vector.
+    pub max_norm: f64,
+}
+
+impl VectorRange {
+    /// `value` if it is in range, else an error naming the field and the range.
+    pub fn check(&self, origin: &str, value: DVec3) -> Result<DVec3, SceneError> {
+        vector(origin, self.field, value, self.max_norm)
+    }
+}
+
+const fn number(field: &'static str, lo: f64, lo_open: bool, hi: f64) -> NumberRange<'static> {
+    NumberRange {
+        field,
+        lo,
+        lo_open,
+        hi,
+    }
+}
+
+/// `rest_length` in m.
+pub const REST_LENGTH: NumberRange<'static> = number("rest_length", 0.0, false, 1e3);
+/// `particle_mass` in kg.
+pub const PARTICLE_MASS: NumberRange<'static> = number("particle_mass", 0.0, true, 1e6);
+/// `stiffness` in N/m.
+pub const STIFFNESS: NumberRange<'static> = number("stiffness", 0.0, false, 1e9);
+/// `damping` in N·s/m.
+pub const DAMPING: NumberRange<'static> = number("damping", 0.0, false, 1e9);
+/// `gust` in m/s.
+pub const GUST: NumberRange<'static> = number("gust", 0.0, false, 1e4);
+/// `air_damping` in N·s/m.
+pub const AIR_DAMPING: NumberRange<'static> = number("air_damping", 0.0, false, 1e9);
+/// `dt` in s.
+pub const DT: NumberRange<'static> = number("dt", 0.0, true, 1.0);
+/// `stretch_limit` (a fraction of the rest length).
+pub const STRETCH_LIMIT: NumberRange<'static> = number("stretch_limit", 0.0, false, 100.0);
+/// `gravity` in m/s².
+pub const GRAVITY: VectorRange = VectorRange {
+    field: "gravity",
+    max_norm: 1e4,
+};
+/// `wind` in m/s.
+pub const WIND: VectorRange = VectorRange {
+    field: "wind",
+    max_norm: 1e4,
+};
+/// `substeps` per frame.
+pub const SUBSTEPS: CountRange = CountRange {
+    field: "substeps",
+    lo: 1,
+    hi: 100_000,
+};
+/// `bar_iterations` per step.
+pub const BAR_ITERATIONS: CountRange = CountRange {
+    field: "bar_iterations",
+    lo: 0,
+    hi: 10_000,
+};
+
+/// The allowed `width`, `height` and `depth` of a layout; `None` where the layout
+/// ignores the key (a spring has two particles; lines have no height or depth).
+pub fn side_ranges(layout: Layout) -> [Option<CountRange>; 3] {
+    let side = |field, hi| Some(CountRange { field, lo: 1, hi });
+    match layout {
+        Layout::Grid => [
+            side("width", GRID_MAX_SIDE),
+            side("height", GRID_MAX_SIDE),
+            None,
+        ],
+        Layout::Lattice => [
+            side("width", LATTICE_MAX_SIDE),
+            side("height", LATTICE_MAX_SIDE),
+            side("depth", LATTICE_MAX_SIDE),
+        ],
+        Layout::Chain | Layout::Rope => [side("width", LINE_MAX), None, None],
+        Layout::Spring => [None, None, None],
+    }
+}
+
 /// Checks `value` is finite and in `[lo, hi]` (`lo_open`: strictly above `lo`).
 fn ranged(
     origin: &str,
@@ -72,16 +212,13 @@ fn ranged(
     lo_open: bool,
     hi: f64,
 ) -> Result<f64, SceneError> {
-    let low_ok = if lo_open { value > lo } else { value >= lo };
-    if value.is_finite() && low_ok && value <= hi {
-        return Ok(value);
-    }
-    let bracket = if lo_open { "(" } else { "[" };
-    Err(invalid(
-        origin,
+    NumberRange {
         field,
-        format!("= {value} is out of range: must be a finite number in {bracket}{lo}, {hi}]"),
-    ))
+        lo,
+        lo_open,
+        hi,
+    }
+    .check(origin, value)
 }
 
 fn count(origin: &str, field: &str, value: u32, lo: u32, hi: u32) -> Result<u32, SceneError> {
@@ -133,50 +270,15 @@ fn one_of<T: Copy>(
     Ok(given.into_iter().next())
 }
 
-/// Fills in defaults and checks ranges.
-pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
+/// Spring stiffness (N/m) and damping (N·s/m) for particles of `particle_mass` kg,
+/// from whichever of the spec's alternative keys give them (`stiffness` or
+/// `stiffness_per_mass`; `damping`, `damping_ratio` or `damping_per_mass`).
+pub fn spring_constants(
+    spec: &SceneSpec,
+    origin: &str,
+    particle_mass: f64,
+) -> Result<(f64, f64), SceneError> {
     let o = origin;
-    let layout = spec.layout;
-    let (width, height, depth) = match layout {
-        Layout::Grid => (
-            count(o, "width", spec.width.unwrap_or(32), 1, GRID_MAX_SIDE)?,
-            count(o, "height", spec.height.unwrap_or(32), 1, GRID_MAX_SIDE)?,
-            1,
-        ),
-        Layout::Lattice => (
-            count(o, "width", spec.width.unwrap_or(7), 1, LATTICE_MAX_SIDE)?,
-            count(o, "height", spec.height.unwrap_or(4), 1, LATTICE_MAX_SIDE)?,
-            count(o, "depth", spec.depth.unwrap_or(4), 1, LATTICE_MAX_SIDE)?,
-        ),
-        Layout::Chain | Layout::Rope => (
-            count(o, "width", spec.width.unwrap_or(11), 1, LINE_MAX)?,
-            1,
-            1,
-        ),
-        Layout::Spring => (2, 1, 1),
-    };
-    let particles = (width as usize) * (height as usize) * (depth as usize);
-
-    let rest_length = match one_of(o, &[("rest_length", spec.rest_length), ("size", spec.size)])? {
-        Some((k, v)) if k == "size" => {
-            ranged(o, "size", v, 0.0, false, 1e4)? / (width.max(2) - 1) as f64
-        }
-        Some((_, v)) => ranged(o, "rest_length", v, 0.0, false, 1e3)?,
-        None => 0.1,
-    };
-    let particle_mass = match one_of(
-        o,
-        &[
-            ("particle_mass", spec.particle_mass),
-            ("total_mass", spec.total_mass),
-        ],
-    )? {
-        Some((k, v)) if k == "total_mass" => {
-            ranged(o, "total_mass", v, 0.0, true, 1e9)? / particles as f64
-        }
-        Some((_, v)) => ranged(o, "particle_mass", v, 0.0, true, 1e6)?,
-        None => 0.01,
-    };
     let stiffness = match one_of(
         o,
         &[
@@ -187,7 +289,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         Some((k, v)) if k == "stiffness_per_mass" => {
             ranged(o, "stiffness_per_mass", v, 0.0, false, 1e12)? * particle_mass
         }
-        Some((_, v)) => ranged(o, "stiffness", v, 0.0, false, 1e9)?,
+        Some((_, v)) => STIFFNESS.check(o, v)?,
         None => 100.0,
     };
     let damping_options = [
@@ -204,9 +306,52 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         Some((k, v)) if k == "damping_per_mass" => {
             ranged(o, "damping_per_mass", v, 0.0, false, 1e9)? * particle_mass
         }
-        Some((_, v)) => ranged(o, "damping", v, 0.0, false, 1e9)?,
+        Some((_, v)) => DAMPING.check(o, v)?,
         None => 0.0,
     };
+    Ok((stiffness, damping))
+}
+
+/// Fills in defaults and checks ranges.
+pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
+    let o = origin;
+    let layout = spec.layout;
+    let mut sides = match layout {
+        Layout::Grid => [32, 32, 1],
+        Layout::Lattice => [7, 4, 4],
+        Layout::Chain | Layout::Rope => [11, 1, 1],
+        Layout::Spring => [2, 1, 1],
+    };
+    let given = [spec.width, spec.height, spec.depth];
+    for ((side, range), value) in sides.iter_mut().zip(side_ranges(layout)).zip(given) {
+        if let Some(range) = range {
+            *side = range.check(o, value.unwrap_or(*side))?;
+        }
+    }
+    let [width, height, depth] = sides;
+    let particles = (width as usize) * (height as usize) * (depth as usize);
+
+    let rest_length = match one_of(o, &[("rest_length", spec.rest_length), ("size", spec.size)])? {
+        Some((k, v)) if k == "size" => {
+            ranged(o, "size", v, 0.0, false, 1e4)? / (width.max(2) - 1) as f64
+        }
+        Some((_, v)) => REST_LENGTH.check(o, v)?,
+        None => 0.1,
+    };
+    let particle_mass = match one_of(
+        o,
+        &[
+            ("particle_mass", spec.particle_mass),
+            ("total_mass", spec.total_mass),
+        ],
+    )? {
+        Some((k, v)) if k == "total_mass" => {
+            ranged(o, "total_mass", v, 0.0, true, 1e9)? / particles as f64
+        }
+        Some((_, v)) => PARTICLE_MASS.check(o, v)?,
+        None => 0.01,
+    };
+    let (stiffness, damping) = spring_constants(spec, o, particle_mass)?;
     let shear_scale = ranged(
         o,
         "shear_scale",
@@ -276,17 +421,12 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
     };
     let stretch_limit = match spec.stretch_limit {
         None => None,
-        Some(t) => Some(ranged(o, "stretch_limit", t, 0.0, false, 100.0)?),
+        Some(t) => Some(STRETCH_LIMIT.check(o, t)?),
     };
     let params = Params {
-        gravity: vector(
-            o,
-            "gravity",
-            spec.gravity.map_or(DVec3::new(0.0, -9.81, 0.0), |v| v.0),
-            1e4,
-        )?,
-        wind: vector(o, "wind", spec.wind.map_or(DVec3::ZERO, |v| v.0), 1e4)?,
-        gust: ranged(o, "gust", spec.gust.unwrap_or(0.0), 0.0, false, 1e4)?,
+        gravity: GRAVITY.check(o, spec.gravity.map_or(DVec3::new(0.0, -9.81, 0.0), |v| v.0))?,
+        wind: WIND.check(o, spec.wind.map_or(DVec3::ZERO, |v| v.0))?,
+        gust: GUST.check(o, spec.gust.unwrap_or(0.0))?,
         air_density: ranged(
             o,
             "air_density",
@@ -303,29 +443,16 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
             false,
             1e3,
         )?,
-        air_damping: ranged(
-            o,
-            "air_damping",
-            spec.air_damping.unwrap_or(0.0),
-            0.0,
-            false,
-            1e9,
-        )?,
+        air_damping: AIR_DAMPING.check(o, spec.air_damping.unwrap_or(0.0))?,
         ground,
         sphere,
         integrator,
-        dt: ranged(o, "dt", spec.dt.unwrap_or(1.0 / 960.0), 0.0, true, 1.0)?,
-        bar_iterations: count(
-            o,
-            "bar_iterations",
-            spec.bar_iterations.unwrap_or(0),
-            0,
-            10_000,
-        )?,
+        dt: DT.check(o, spec.dt.unwrap_or(1.0 / 960.0))?,
+        bar_iterations: BAR_ITERATIONS.check(o, spec.bar_iterations.unwrap_or(0))?,
         stretch_limit,
         seed: spec.seed.unwrap_or(1),
     };
-    let substeps = count(o, "substeps", spec.substeps.unwrap_or(16), 1, 100_000)?;
+    let substeps = SUBSTEPS.check(o, spec.substeps.unwrap_or(16))?;
 
     let pins = match spec.pins.clone().unwrap_or(Pins::Preset(match layout {
         Layout::Grid => PinPreset::TopCorners,
@@ -347,19 +474,6 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         }
         Pins::Preset(p) => preset_pins(p, layout, width as usize, height as usize, particles),
     };
-    let default_origin = match (layout, spec.orientation.unwrap_or_default()) {
-        (Layout::Grid, Orientation::Vertical) => DVec3::new(
-            -0.5 * (width - 1) as f64 * rest_length,
-            (height - 1) as f64 * rest_length,
-            0.0,
-        ),
-        (Layout::Grid, Orientation::Horizontal) => DVec3::new(
-            -0.5 * (width - 1) as f64 * rest_length,
-            1.0,
-            -0.5 * (height - 1) as f64 * rest_length,
-        ),
-        _ => DVec3::ZERO,
-    };
     Ok(Resolved {
         layout,
         orientation: spec.orientation.unwrap_or_default(),
@@ -374,12 +488,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         bend_scale,
         pins,
         substeps,
-        origin: vector(
-            o,
-            "origin",
-            spec.origin.map_or(default_origin, |v| v.0),
-            1e6,
-        )?,
+        origin: anchor(spec, o, [width, height], rest_length)?,
         rotation: vector(
             o,
             "rotation",
@@ -389,6 +498,36 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         stretch: ranged(o, "stretch", spec.stretch.unwrap_or(1.0), -1e3, false, 1e3)?,
         params,
     })
+}
+
+/// Position of the layout's anchor in m: the spec's `origin`, or by default a
+/// vertical grid's top-left corner such that it hangs centred above y = 0 (a
+/// horizontal grid centred at y = 1), which moves with the grid's size.
+fn anchor(
+    spec: &SceneSpec,
+    o: &str,
+    [width, height]: [u32; 2],
+    rest_length: f64,
+) -> Result<DVec3, SceneError> {
+    let default_origin = match (spec.layout, spec.orientation.unwrap_or_default()) {
+        (Layout::Grid, Orientation::Vertical) => DVec3::new(
+            -0.5 * (width - 1) as f64 * rest_length,
+            (height - 1) as f64 * rest_length,
+            0.0,
+        ),
+        (Layout::Grid, Orientation::Horizontal) => DVec3::new(
+            -0.5 * (width - 1) as f64 * rest_length,
+            1.0,
+            -0.5 * (height - 1) as f64 * rest_length,
+        ),
+        _ => DVec3::ZERO,
+    };
+    vector(
+        o,
+        "origin",
+        spec.origin.map_or(default_origin, |v| v.0),
+        1e6,
+    )
 }
 
 fn preset_pins(preset: PinPreset, layout: Layout, w: usize, h: usize, n: usize) -> Vec<usize> {
@@ -412,6 +551,54 @@ fn preset_pins(preset: PinPreset, layout: Layout, w: usize, h: usize, n: usize) 
 }
 
 impl Resolved {
+    /// Stiffness and damping of springs of `kind` as multiples of `stiffness` and
+    /// `damping`: on a grid, shear and bend springs take `shear_scale` and
+    /// `bend_scale`; every other spring takes 1.
+    pub fn spring_scale(&self, kind: SpringKind) -> f64 {
+        match (self.layout, kind) {
+            (Layout::Grid, SpringKind::Shear) => self.shear_scale,
+            (Layout::Grid, SpringKind::Bend) => self.bend_scale,
+            _ => 1.0,
+        }
+    }
+
+    /// Brings these settings, resolved from `scene` before `edit`, in step with
+    /// `scene` after [`Scene::apply`] recorded `edit`, without resolving the whole
+    /// scene again: the edited value, and the stiffness and damping where the scene
+    /// gives them per kg or as a ratio of critical damping (so that they follow a
+    /// mass or stiffness edit as a full resolve would). A layout edit (see
+    /// [`Edit::rebuilds`]) changes pins, spacing and masses given in total, and
+    /// resolves the scene. On error the settings are unchanged.
+    pub fn follow(&mut self, edit: Edit, scene: &Scene) -> Result<(), SceneError> {
+        let (spec, o) = (&scene.spec, EDIT_ORIGIN);
+        let p = &mut self.params;
+        match edit {
+            Edit::Stiffness(_) | Edit::Damping(_) => {
+                (self.stiffness, self.damping) = spring_constants(spec, o, self.particle_mass)?;
+            }
+            Edit::ParticleMass(m) => {
+                (self.stiffness, self.damping) = spring_constants(spec, o, m)?;
+                self.particle_mass = m;
+            }
+            Edit::RestLength(l) => {
+                // A grid's default anchor depends on its spacing.
+                self.origin = anchor(spec, o, [self.width, self.height], l)?;
+                self.rest_length = l;
+            }
+            Edit::Gravity(g) => p.gravity = g,
+            Edit::Wind(w) => p.wind = w,
+            Edit::Gust(g) => p.gust = g,
+            Edit::AirDamping(c) => p.air_damping = c,
+            Edit::Dt(dt) => p.dt = dt,
+            Edit::Substeps(n) => self.substeps = n,
+            Edit::Integrator(i) => p.integrator = i,
+            Edit::BarIterations(n) => p.bar_iterations = n,
+            Edit::StretchLimit(t) => p.stretch_limit = Some(t),
+            Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) => *self = scene.resolve()?,
+        }
+        Ok(())
+    }
+
     /// Number of particles.
     pub fn particle_count(&self) -> usize {
         (self.width * self.height * self.depth) as usize
@@ -421,12 +608,12 @@ impl Resolved {
     pub fn build(&self) -> System {
         let n = self.particle_count();
         let masses = vec![self.particle_mass; n];
-        let spring = |a: usize, b: usize, rest: f64, scale: f64, kind| Spring {
+        let spring = |a: usize, b: usize, rest: f64, kind| Spring {
             a: a as u32,
             b: b as u32,
             rest,
-            stiffness: self.stiffness * scale,
-            damping: self.damping * scale,
+            stiffness: self.stiffness * self.spring_scale(kind),
+            damping: self.damping * self.spring_scale(kind),
             kind,
         };
         let (mut positions, mut springs, mut bars, mut triangles, mut uvs) =
@@ -456,56 +643,30 @@ impl Resolved {
                 for r in 0..h {
                     for c in 0..w {
                         if c + 1 < w {
-                            springs.push(spring(
-                                p(r, c),
-                                p(r, c + 1),
-                                l,
-                                1.0,
-                                SpringKind::Structural,
-                            ));
+                            springs.push(spring(p(r, c), p(r, c + 1), l, SpringKind::Structural));
                         }
                         if r + 1 < h {
-                            springs.push(spring(
-                                p(r, c),
-                                p(r + 1, c),
-                                l,
-                                1.0,
-                                SpringKind::Structural,
-                            ));
+                            springs.push(spring(p(r, c), p(r + 1, c), l, SpringKind::Structural));
                         }
                         if self.shear_scale > 0.0 && r + 1 < h && c + 1 < w {
                             springs.push(spring(
                                 p(r, c),
                                 p(r + 1, c + 1),
                                 diagonal,
-                                self.shear_scale,
                                 SpringKind::Shear,
                             ));
                             springs.push(spring(
                                 p(r, c + 1),
                                 p(r + 1, c),
                                 diagonal,
-                                self.shear_scale,
                                 SpringKind::Shear,
                             ));
                         }
                         if self.bend_scale > 0.0 && c + 2 < w {
-                            springs.push(spring(
-                                p(r, c),
-                                p(r, c + 2),
-                                2.0 * l,
-                                self.bend_scale,
-                                SpringKind::Bend,
-                            ));
+                            springs.push(spring(p(r, c), p(r, c + 2), 2.0 * l, SpringKind::Bend));
                         }
                         if self.bend_scale > 0.0 && r + 2 < h {
-                            springs.push(spring(
-                                p(r, c),
-                                p(r + 2, c),
-                                2.0 * l,
-                                self.bend_scale,
-                                SpringKind::Bend,
-                            ));
+                            springs.push(spring(p(r, c), p(r + 2, c), 2.0 * l, SpringKind::Bend));
                         }
                         if r + 1 < h && c + 1 < w {
                             let (a, b, d, e) = (p(r, c), p(r, c + 1), p(r + 1, c), p(r + 1, c + 1));
@@ -518,14 +679,14 @@ impl Resolved {
             Layout::Spring => {
                 positions.push(self.origin);
                 positions.push(self.origin - DVec3::Y * (l + self.stretch));
-                springs.push(spring(0, 1, l, 1.0, SpringKind::Other));
+                springs.push(spring(0, 1, l, SpringKind::Other));
             }
             Layout::Chain | Layout::Rope => {
                 for i in 0..self.width as usize {
                     positions.push(self.origin + DVec3::X * (i as f64 * l));
                     if i > 0 {
                         if self.layout == Layout::Chain {
-                            springs.push(spring(i - 1, i, l, 1.0, SpringKind::Other));
+                            springs.push(spring(i - 1, i, l, SpringKind::Other));
                         } else {
                             bars.push(Bar {
                                 a: (i - 1) as u32,
@@ -588,7 +749,6 @@ impl Resolved {
                                             index(x, y, z),
                                             index(nx as usize, ny as usize, nz),
                                             rest,
-                                            1.0,
                                             kind,
                                         ));
                                     }

@@ -5,6 +5,7 @@
 //! Scene files and the command line's `--set key=value` share the same keys.
 
 mod build;
+mod edit;
 mod values;
 
 use std::path::Path;
@@ -12,6 +13,11 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 pub use build::GRID_MAX_SIDE;
+use build::{
+    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, GRAVITY, GUST, PARTICLE_MASS, REST_LENGTH, STIFFNESS,
+    STRETCH_LIMIT, SUBSTEPS, WIND, side_ranges,
+};
+pub use edit::Edit;
 pub use values::{Pins, Vector};
 
 use crate::sim::System;
@@ -31,6 +37,19 @@ pub enum Layout {
     Lattice,
     /// A line of `width` masses joined by rigid bars (seed 001's rope).
     Rope,
+}
+
+impl Layout {
+    /// The layout's name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Grid => "grid",
+            Self::Spring => "spring",
+            Self::Chain => "chain",
+            Self::Lattice => "lattice",
+            Self::Rope => "rope",
+        }
+    }
 }
 
 /// Orientation of a grid cloth.
@@ -340,6 +359,58 @@ impl Scene {
             other => other,
         })?;
         *self = candidate;
+        Ok(())
+    }
+
+    /// Records a typed edit in the spec, as `--set` would record the same value: it is
+    /// checked against the key's range (the same constants as scene files), and
+    /// setting one of a group of alternative keys clears the others (a stiffness in
+    /// N/m replaces a stiffness per kg, a damping in N·s/m a damping ratio). Nothing
+    /// is resolved or built. On error (the message names the field and the allowed
+    /// range) the scene is unchanged.
+    pub fn apply(&mut self, edit: Edit) -> Result<(), SceneError> {
+        let o = edit::EDIT_ORIGIN;
+        let layout = self.spec.layout;
+        let side = |axis: usize, n: u32| match side_ranges(layout)[axis] {
+            Some(range) => range.check(o, n),
+            None => Err(SceneError::Invalid {
+                origin: o.to_string(),
+                field: edit.key().to_string(),
+                message: format!("does not apply to a {} layout", layout.name()),
+            }),
+        };
+        let spec = &mut self.spec;
+        match edit {
+            Edit::Stiffness(k) => {
+                spec.stiffness = Some(STIFFNESS.check(o, k)?);
+                spec.stiffness_per_mass = None;
+            }
+            Edit::Damping(b) => {
+                spec.damping = Some(DAMPING.check(o, b)?);
+                spec.damping_ratio = None;
+                spec.damping_per_mass = None;
+            }
+            Edit::RestLength(l) => {
+                spec.rest_length = Some(REST_LENGTH.check(o, l)?);
+                spec.size = None;
+            }
+            Edit::ParticleMass(m) => {
+                spec.particle_mass = Some(PARTICLE_MASS.check(o, m)?);
+                spec.total_mass = None;
+            }
+            Edit::Gravity(g) => spec.gravity = Some(Vector(GRAVITY.check(o, g)?)),
+            Edit::Wind(w) => spec.wind = Some(Vector(WIND.check(o, w)?)),
+            Edit::Gust(g) => spec.gust = Some(GUST.check(o, g)?),
+            Edit::AirDamping(c) => spec.air_damping = Some(AIR_DAMPING.check(o, c)?),
+            Edit::Dt(dt) => spec.dt = Some(DT.check(o, dt)?),
+            Edit::Substeps(n) => spec.substeps = Some(SUBSTEPS.check(o, n)?),
+            Edit::Integrator(i) => spec.integrator = Some(i.name().to_string()),
+            Edit::BarIterations(n) => spec.bar_iterations = Some(BAR_ITERATIONS.check(o, n)?),
+            Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
+            Edit::Width(n) => spec.width = Some(side(0, n)?),
+            Edit::Height(n) => spec.height = Some(side(1, n)?),
+            Edit::Depth(n) => spec.depth = Some(side(2, n)?),
+        }
         Ok(())
     }
 
