@@ -94,6 +94,25 @@ pub(super) struct GridSprings {
 }
 
 impl GridSprings {
+    /// The summary after every spring of `kind` had its coefficients changed by
+    /// `edit` (a kind with no springs keeps `k = b = 0`).
+    pub(super) fn with_kind(
+        mut self,
+        kind: SpringKind,
+        edit: impl Fn(&mut SpringCoefficients),
+    ) -> Self {
+        let slot = match kind {
+            SpringKind::Structural => 0,
+            SpringKind::Shear => 1,
+            SpringKind::Bend => 2,
+            SpringKind::Other => return self,
+        };
+        if self.present[slot] {
+            edit(&mut self.coefficients[slot]);
+        }
+        self
+    }
+
     /// The summary of `model`, or `None` when the kernel cannot model it.
     pub(super) fn of(model: &super::Model) -> Option<Self> {
         let shape = model.grid?;
@@ -168,6 +187,13 @@ impl System {
         if !allowed {
             self.fast_path.0 = None;
         }
+    }
+
+    /// How many times a grid kernel was built for this system: once, unless its
+    /// shape, integrator or precision changed (live edits of coefficients update the
+    /// kernel in place).
+    pub fn kernel_builds(&self) -> u64 {
+        self.kernel_builds
     }
 
     /// The engine [`System::run`] would use now.
@@ -268,6 +294,7 @@ impl System {
         let mut fast = match reused {
             Some(fast) => fast,
             None => {
+                self.kernel_builds += 1;
                 let mut kernel = GridCloth::new(spec.clone());
                 kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
                 FastPath {

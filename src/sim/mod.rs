@@ -244,6 +244,8 @@ pub struct System {
     fast_path: fast_path::FastPathSlot,
     /// The springs and masses as the grid kernel sees them, summarised on each edit.
     grid_springs: Option<fast_path::GridSprings>,
+    /// How many times a grid kernel was built for this system.
+    kernel_builds: u64,
 }
 
 impl System {
@@ -306,6 +308,7 @@ impl System {
             fast_path_allowed: false,
             fast_path: fast_path::FastPathSlot::default(),
             grid_springs: None,
+            kernel_builds: 0,
         };
         system.grid_springs = fast_path::GridSprings::of(&system.model);
         system.prepare_integrator();
@@ -466,7 +469,11 @@ impl System {
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.stiffness = stiffness;
         }
-        self.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.grid_springs = match self.grid_springs {
+            // A whole kind changes together: the grid stays a grid, no rescan.
+            Some(grid) => Some(grid.with_kind(kind, |c| c.k = stiffness)),
+            None => fast_path::GridSprings::of(&self.model),
+        };
     }
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
@@ -474,7 +481,10 @@ impl System {
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.damping = damping;
         }
-        self.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.grid_springs = match self.grid_springs {
+            Some(grid) => Some(grid.with_kind(kind, |c| c.b = damping)),
+            None => fast_path::GridSprings::of(&self.model),
+        };
     }
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
