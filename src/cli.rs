@@ -9,7 +9,9 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
-use cloth_sandbox::sim::safe::{DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, safe_step};
+use cloth_sandbox::sim::safe::{
+    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, added_stretch_limit, safe_step,
+};
 use cloth_sandbox::sim::{Divergence, Engine, Integrator, SpringKind, System, bounding_sphere};
 use glam::DVec3;
 use serde_json::json;
@@ -221,7 +223,15 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         let choice = safe_step(system.model(), dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
         let mut params = *system.params();
         params.dt = choice.dt;
+        let added_limit = added_stretch_limit(system.model(), params.stretch_limit);
+        params.stretch_limit = params.stretch_limit.or(added_limit);
         system.set_params(params);
+        if let Some(tau) = added_limit {
+            eprintln!(
+                "safe stepping: the wind is strong for these springs, so a {:.0}% stretch limit is added (as in the app)",
+                100.0 * tau
+            );
+        }
         steps *= choice.substeps as u64;
         eprintln!(
             "safe stepping: {} substeps of {:.4e} s per step of {dt:.4e} s{}",

@@ -21,33 +21,7 @@ use crate::sim::{Clock, Params, SpringKind, System};
 /// slower than real time rather than with an unsafe step.
 pub const MAX_SAFE_SUBSTEPS: u32 = 100_000;
 
-/// Stretch limit (Provot's tau) that safe stepping adds to a cloth with aero drag,
-/// no limit of its own, and a wind strong for its springs (see [`wind_load_ratio`]).
-/// Drag grows with a triangle's stretched area (as L²) and a spring only as k L, so
-/// a soft enough cloth in a strong wind has no equilibrium and stretches without
-/// bound; the limit stops that.
-pub const SAFE_STRETCH_LIMIT: f64 = 0.5;
-
-/// Wind load ratio above which safe stepping adds [`SAFE_STRETCH_LIMIT`]. Measured
-/// on 10x10 and 16x16 cloths in the panel's strongest wind (35 m/s plus 10 m/s
-/// gusts): ratios up to 2 stayed bounded, 6 and more ran away.
-pub const WIND_LOAD_NEEDING_A_LIMIT: f64 = 0.5;
-
-/// Drag on one particle's rest area in the strongest wind, `1/2 rho C_d (|wind| +
-/// gust)² L²`, as a fraction of the force `k L` that stretches a spring to twice its
-/// rest length. The default cloth: 0.003.
-pub fn wind_load_ratio(resolved: &Resolved) -> f64 {
-    let p = &resolved.params;
-    let l = resolved.rest_length;
-    let wind = p.wind.length() + p.gust;
-    let drag = 0.5 * p.air_density * p.drag_coefficient * wind * wind * l * l;
-    let capacity = resolved.stiffness * l;
-    if capacity > 0.0 {
-        drag / capacity
-    } else {
-        f64::INFINITY
-    }
-}
+pub use crate::sim::safe::{SAFE_STRETCH_LIMIT, WIND_LOAD_NEEDING_A_LIMIT, wind_load_ratio};
 
 /// Wall-clock seconds that `substeps` steps stand for (one frame at 60 Hz).
 pub const FRAME_PERIOD: f64 = 1.0 / 60.0;
@@ -220,10 +194,7 @@ impl Session {
                 params.dt = limit.min(choice.dt);
                 substeps = ((frame_time / params.dt).ceil() as u32).clamp(1, MAX_SAFE_SUBSTEPS);
             }
-            let needs_limit = self.system.force_terms().aero
-                && params.stretch_limit.is_none()
-                && wind_load_ratio(&self.settings) > WIND_LOAD_NEEDING_A_LIMIT;
-            let added_limit = needs_limit.then_some(SAFE_STRETCH_LIMIT);
+            let added_limit = safe::added_stretch_limit(self.system.model(), params.stretch_limit);
             params.stretch_limit = params.stretch_limit.or(added_limit);
             self.step_choice = Some(StepChoice {
                 substeps,

@@ -242,3 +242,33 @@ fn the_app_refuses_bad_input_before_looking_for_a_display() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("width"));
 }
+
+#[test]
+fn safe_stepping_follows_the_apps_rule_in_a_gale() {
+    // A soft cloth in a gale gets the app's stretch limit from `cloth run --safe`
+    // too (one rule for both), and stays finite; a gentle wind gets none.
+    let gale = [
+        "run",
+        "--scene",
+        "cloth",
+        "--set",
+        "stiffness=1",
+        "--set",
+        "wind=20,20,20",
+        "--set",
+        "gust=10",
+        "--safe",
+        "--duration",
+        "0.5",
+    ];
+    let o = cloth(&gale);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("stretch limit is added"),
+        "{}",
+        stderr(&o)
+    );
+    let o = cloth(&["run", "--scene", "cloth", "--safe", "--steps", "10"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("stretch limit"), "{}", stderr(&o));
+}

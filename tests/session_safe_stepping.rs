@@ -175,8 +175,7 @@ fn the_default_cloth_needs_no_limit_and_runs_on_the_grid_kernel() {
 #[test]
 fn the_wind_load_ratio_separates_the_default_from_the_gale() {
     use cloth_sandbox::session::{WIND_LOAD_NEEDING_A_LIMIT, wind_load_ratio};
-    let ratio =
-        |settings: &[(&str, &str)]| wind_load_ratio(&session(settings).scene().resolve().unwrap());
+    let ratio = |settings: &[(&str, &str)]| wind_load_ratio(session(settings).system().model());
     assert!(ratio(&[]) < 0.01 * WIND_LOAD_NEEDING_A_LIMIT);
     let gale = ratio(&[("stiffness", "1"), ("wind", "20,20,20"), ("gust", "10")]);
     assert!(gale > 10.0 * WIND_LOAD_NEEDING_A_LIMIT, "{gale}");

@@ -386,7 +386,7 @@ fn safe_stepping_follows_typed_edits() {
     ] {
         s.apply(edit).unwrap();
     }
-    assert!(wind_load_ratio(s.settings()) > 1.0);
+    assert!(wind_load_ratio(s.system().model()) > 1.0);
     assert_eq!(
         s.step_choice().unwrap().stretch_limit,
         Some(SAFE_STRETCH_LIMIT)

@@ -78,6 +78,50 @@ pub fn safe_step(model: &Model, frame_time: f64, safety: f64, max_substeps: u32)
     }
 }
 
+/// Stretch limit (Provot's tau) that safe stepping adds to a cloth with aero drag,
+/// no limit of its own, and a wind strong for its springs (see [`wind_load_ratio`]).
+/// Drag grows with a triangle's stretched area (as L²) and a spring only as k L, so
+/// a soft enough cloth in a strong wind has no equilibrium and stretches without
+/// bound; the limit stops that.
+pub const SAFE_STRETCH_LIMIT: f64 = 0.5;
+
+/// Wind load ratio above which safe stepping adds [`SAFE_STRETCH_LIMIT`]. Measured
+/// on 10x10 and 16x16 cloths in the panel's strongest wind (35 m/s plus 10 m/s
+/// gusts): ratios up to 2 stayed bounded, 6 and more ran away.
+pub const WIND_LOAD_NEEDING_A_LIMIT: f64 = 0.5;
+
+/// Drag on one particle's rest area in the strongest wind, `1/2 rho C_d (|wind| +
+/// gust)² L²`, as a fraction of the force `k L` that stretches a spring to twice its
+/// rest length, for the spring with the smallest `k L` (a grid's structural ones).
+/// The default cloth: 0.003. Infinite when no spring holds anything.
+pub fn wind_load_ratio(model: &Model) -> f64 {
+    let weakest = (model.springs.iter())
+        .filter(|s| s.rest > 0.0)
+        .min_by(|a, b| (a.stiffness * a.rest).total_cmp(&(b.stiffness * b.rest)));
+    let Some(spring) = weakest else {
+        return f64::INFINITY;
+    };
+    let p = &model.params;
+    let (l, wind) = (spring.rest, p.wind.length() + p.gust);
+    let drag = 0.5 * p.air_density * p.drag_coefficient * wind * wind * l * l;
+    let capacity = spring.stiffness * l;
+    if capacity > 0.0 {
+        drag / capacity
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The stretch limit safe stepping adds to `model`, whose own limit is `own`:
+/// [`SAFE_STRETCH_LIMIT`] when it has none, aero drag runs and the wind load ratio
+/// passes [`WIND_LOAD_NEEDING_A_LIMIT`]; otherwise none. The app and `cloth run
+/// --safe` both follow this rule.
+pub fn added_stretch_limit(model: &Model, own: Option<f64>) -> Option<f64> {
+    let needed =
+        own.is_none() && model.terms.aero && wind_load_ratio(model) > WIND_LOAD_NEEDING_A_LIMIT;
+    needed.then_some(SAFE_STRETCH_LIMIT)
+}
+
 /// Substeps per frame of `frame_time` seconds for the model's integrator, keeping the
 /// step below `safety * dt_crit` (capped at [`DEFAULT_MAX_SUBSTEPS`]).
 pub fn safe_substeps(model: &Model, frame_time: f64, safety: f64) -> u32 {
