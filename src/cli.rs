@@ -429,7 +429,10 @@ impl Summary {
 fn info(args: InfoArgs) -> Result<ExitCode, String> {
     let scene = args.scene.load().map_err(|e| e.to_string())?;
     let resolved = scene.resolve().map_err(|e| e.to_string())?;
-    let system = resolved.build();
+    let mut system = resolved.build();
+    // The engine `cloth run` uses (without `--exact`).
+    system.set_fast_path(true);
+    let engine = system.engine().name();
     let p = system.params();
     let mut per_kind = serde_json::Map::new();
     for kind in SpringKind::ALL {
@@ -463,6 +466,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         "triangles": system.triangles().len(),
         "force_terms": system.force_terms().names(),
         "constraints": constraints,
+        "engine": engine,
         "parameters": {
             "layout": format!("{:?}", resolved.layout).to_lowercase(),
             "width": resolved.width,

@@ -170,6 +170,20 @@ fn info_reports_counts_terms_parameters_and_stability() {
     );
     assert!(v["stability"]["dt_over_dt_critical"].as_f64().unwrap() > 0.0);
     assert_eq!(v["parameters"]["integrator"], "symplectic-euler");
+    assert_eq!(v["engine"], "grid-f32");
+    let stiff = cloth(&[
+        "info",
+        "--scene",
+        "cloth",
+        "--set",
+        "stiffness=1e6",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(stdout(&stiff).trim()).unwrap();
+    assert_eq!(
+        v["engine"], "grid-f64",
+        "float32 cannot resolve k = 1e6 N/m springs"
+    );
 
     let chain = cloth(&["info", "--scene", "chain"]);
     let text = stdout(&chain);
