@@ -61,6 +61,14 @@ impl PanelState {
         let span = now.duration_since(start).as_secs_f64();
         if span >= 0.5 {
             self.steps_per_second = self.steps_in_window as f64 / span;
+            // For measuring the app from outside (benches/xvfb_slider_drag.sh).
+            log::debug!(
+                target: "cloth::frames",
+                "frame {:.2} ms, simulation {:.2} ms per frame, {:.0} steps/s",
+                1e3 * self.frame_time,
+                self.sim_ms,
+                self.steps_per_second
+            );
             self.steps_in_window = 0;
             self.window_start = Some(now);
         }
