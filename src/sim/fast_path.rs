@@ -16,7 +16,7 @@
 
 use glam::DVec3;
 
-use super::grid_kernel::{GridCloth, GridSpec, Precision, SpringCoefficients};
+use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
 use super::{Integrator, SpringKind, System};
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
@@ -154,11 +154,7 @@ impl GridSprings {
         }
         let h = kinds[0]?.2;
         let (w, r) = (shape.width, shape.height);
-        let stencil = [
-            w.saturating_sub(1) * r + w * r.saturating_sub(1),
-            2 * w.saturating_sub(1) * r.saturating_sub(1),
-            w.saturating_sub(2) * r + w * r.saturating_sub(2),
-        ];
+        let stencil = grid_kernel::stencil_counts(w, r);
         let rest_ratio = [1.0, std::f64::consts::SQRT_2, 2.0];
         let mut coefficients = [SpringCoefficients::default(); 3];
         for slot in 0..3 {

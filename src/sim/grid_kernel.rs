@@ -236,16 +236,23 @@ impl GridSpec {
     /// Number of springs of the 12-neighbour stencil on this grid.
     pub fn spring_count(&self) -> usize {
         let (w, h) = (self.width, self.height);
-        let s = w.saturating_sub(1) * h + w * h.saturating_sub(1);
-        let sh = 2 * w.saturating_sub(1) * h.saturating_sub(1);
-        let b = w.saturating_sub(2) * h + w * h.saturating_sub(2);
-        s + sh + b
+        stencil_counts(w, h).iter().sum()
     }
 
     /// Number of drag triangles (two per cell).
     pub fn triangle_count(&self) -> usize {
         2 * self.width.saturating_sub(1) * self.height.saturating_sub(1)
     }
+}
+
+/// Springs of each kind (structural, shear, bend) of the 12-neighbour stencil on a
+/// `w x h` grid.
+pub fn stencil_counts(w: usize, h: usize) -> [usize; 3] {
+    [
+        w.saturating_sub(1) * h + w * h.saturating_sub(1),
+        2 * w.saturating_sub(1) * h.saturating_sub(1),
+        w.saturating_sub(2) * h + w * h.saturating_sub(2),
+    ]
 }
 
 /// Which compiled version of the loops runs.
