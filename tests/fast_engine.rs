@@ -55,6 +55,9 @@ fn compare(fast: &mut System, exact: &mut System, steps: u64) -> (f64, f64) {
     (d, motion(&start, exact.positions()))
 }
 
+/// Scene, base overrides, the feature's overrides, steps, bound in m.
+type Case<'a> = (&'a str, &'a [&'a str], &'a [&'a str], u64, f64);
+
 #[test]
 fn each_feature_agrees_with_the_f64_engine() {
     // (scene, base overrides, the feature's overrides, steps, bound in m). Without
@@ -64,7 +67,7 @@ fn each_feature_agrees_with_the_f64_engine() {
     // cases are compared before the flapping sets in, and the drape before it
     // buckles over the sphere (about 0.35 s).
     let still = &["gust=0", "wind=\"0,0,0\""][..];
-    let cases: &[(&str, &[&str], &[&str], u64, f64)] = &[
+    let cases: &[Case] = &[
         ("cloth", still, &["air_damping=0.005"], 960, 1e-6),
         (
             "cloth",

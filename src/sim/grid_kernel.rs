@@ -634,10 +634,10 @@ impl<E: Real> Kernel<E> {
                 spec.origin[1] - r as f64 * spec.spacing,
                 spec.origin[2],
             ];
-            for a in 0..3 {
-                let hi = E::of(start[a]);
+            for (a, &start) in start.iter().enumerate() {
+                let hi = E::of(start);
                 cur.x[a].as_mut_slice()[i] = hi;
-                cur.xl[a].as_mut_slice()[i] = E::of(start[a] - hi.f64());
+                cur.xl[a].as_mut_slice()[i] = E::of(start - hi.f64());
             }
         }
         let mut inv_mass = Buf::zeros(grid.len());
@@ -1803,6 +1803,9 @@ fn triangle<S: Simd>(
     [s.mul(a, m[0]), s.mul(a, m[1]), s.mul(a, m[2])]
 }
 
+/// A sphere's centre, radius and squared radius, in lanes.
+type SphereLanes<V> = ([V; 3], V, V);
+
 /// Splatted constants and raw pointers of one row, shared by its blocks.
 struct RowKernel<S: Simd> {
     s: S,
@@ -1823,7 +1826,7 @@ struct RowKernel<S: Simd> {
     inv_dt: S::V,
     one: S::V,
     /// Sphere centre, radius and squared radius (when the step projects onto it).
-    sphere: Option<([S::V; 3], S::V, S::V)>,
+    sphere: Option<SphereLanes<S::V>>,
     verlet: bool,
     x: [*const S::E; 3],
     xl: [*const S::E; 3],
