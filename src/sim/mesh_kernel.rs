@@ -174,16 +174,14 @@ struct Out<'a> {
     u: [&'a mut [f64]; 3],
 }
 
-impl<'a> Out<'a> {
+impl Out<'_> {
     fn len(&self) -> usize {
         self.x[0].len()
     }
 
     fn split(self, mid: usize) -> (Self, Self) {
-        fn halves<'b>(
-            a: [&'b mut [f64]; 3],
-            mid: usize,
-        ) -> ([&'b mut [f64]; 3], [&'b mut [f64]; 3]) {
+        type Halves<'b> = ([&'b mut [f64]; 3], [&'b mut [f64]; 3]);
+        fn halves(a: [&mut [f64]; 3], mid: usize) -> Halves<'_> {
             let [a0, a1, a2] = a.map(|s| {
                 let mid = mid.min(s.len());
                 s.split_at_mut(mid)
