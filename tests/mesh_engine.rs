@@ -144,7 +144,8 @@ fn a_bigger_jelly_agrees_feature_by_feature() {
 
 #[test]
 fn a_jelly_big_enough_for_threads_agrees_with_the_f64_engine() {
-    // 16³ = 4096 particles: at the size from which `System::run` uses threads.
+    // 16³ = 4096 particles: past the size from which `System::run` uses threads
+    // (`mesh_kernel::PARALLEL_MIN_PARTICLES`; the 12³ jelly above is too).
     let (d, _) = mesh_and_exact("jelly", &["width=16", "height=16", "depth=16"], 100);
     println!("jelly 16³: {d:e} m");
 }

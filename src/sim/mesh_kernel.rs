@@ -2,24 +2,29 @@
 //! on structure-of-arrays state, each particle gathering its own forces.
 //!
 //! State is `x, y, z, vx, vy, vz` (m, m/s) and, for position Verlet, the velocity of
-//! the last position update `u = (x - x_prev) / h`. Springs are held per particle in
-//! a compressed adjacency (CSR): for particle `i`, each spring touching it as
-//! `(other end j, rest L, stiffness k, damping b)`, in the order of the model's
-//! canonical spring list. Each spring is evaluated from both ends with
-//! [`spring_force`] (`f_i = -(k (l - L) + b (v_i - v_j)·u) u`, `u = (x_i - x_j)/l`),
-//! which gives exactly the negation of the other end's force, so a particle's sum is
-//! bit for bit the f64 engine's. The force pass writes the new state into a second
-//! set of arrays (ping-pong): threads split the particles into ranges, no two write
-//! the same memory, and the result is the same for any number of threads.
+//! the last position update `u = (x - x_prev) / h`. A step is two passes:
+//! 1. each spring's force on its `a` end, `f_a = -(k (l - L) + b (v_a - v_b)·u) u`
+//!    with `u = (x_a - x_b)/l` ([`spring_force`]), into a per-spring array: the
+//!    springs' ends are gathered in batches of [`BATCH`] to the stack and evaluated
+//!    in a loop the compiler vectorizes (built for AVX2 when the CPU has it);
+//! 2. per particle, the sum over its springs from a compressed adjacency (CSR) in
+//!    the model's canonical spring order, `+f` at an `a` end and `-f` at a `b` end,
+//!    then air damping `-c v`, ground penalty `k_c d - c_g v_y` (at depth `d > 0`),
+//!    `a = F / m + g` (0 when pinned) and one step of symplectic Euler, explicit
+//!    Euler or position Verlet (`u += h a; x += h u; v = u + h/2 a`), written into
+//!    a second set of arrays (ping-pong).
 //!
-//! Per particle, in the order the f64 engine adds them: springs, air damping
-//! `-c v`, ground penalty `k_c d - c_g v_y` (at depth `d > 0`), then
-//! `a = F / m + g` (0 when pinned) and one step of symplectic Euler, explicit Euler
-//! or position Verlet (`u += h a; x += h u; v = u + h/2 a`). Constraints follow,
-//! on one thread, Gauss-Seidel in the f64 engine's order (bars `bar_iterations`
-//! times, stretch limit, sphere); a particle moved by `δ` gains `δ/h` in `v` (and
-//! in `u` for Verlet). Per-triangle aerodynamic drag is not modelled: systems with
-//! it run elsewhere (see `fast_path`).
+//! That is the f64 engine's arithmetic in its order, so symplectic and explicit
+//! Euler give bit for bit its results (Verlet rounds differently: it keeps `u`, not
+//! `x_prev`). Threads split the springs, then the particles, into ranges: no two
+//! write the same memory, and results are the same for any number of threads.
+//! (Evaluating each spring from both ends in the particle pass, which needs no
+//! per-spring array, measured 0.7x as fast: twice the square roots and divisions.)
+//!
+//! Constraints follow, on one thread, Gauss-Seidel in the f64 engine's order (bars
+//! `bar_iterations` times, stretch limit, sphere); a particle moved by `δ` gains
+//! `δ/h` in `v` (and in `u` for Verlet). Per-triangle aerodynamic drag is not
+//! modelled: systems with it run on the general engine (see `fast_path`).
 //!
 //! A step allocates nothing.
 
@@ -30,11 +35,19 @@ use super::forces::spring_force;
 use super::{Bar, Ground, Integrator, Model, Sphere, Spring};
 
 /// Models with fewer particles than this run on the calling thread even when
-/// several threads are allowed (threading costs more than it saves there).
-pub const PARALLEL_MIN_PARTICLES: usize = 4096;
+/// several threads are allowed. Measured on the jelly lattice (about 12 springs a
+/// particle), 2 threads against 1 on two busy cores: no gain at 512 particles,
+/// 1.1-1.65x at 1,000, 1.75-1.9x from 1,728 on.
+pub const PARALLEL_MIN_PARTICLES: usize = 1500;
 
-/// Smallest range of particles one task takes on when the pass is split.
+/// Smallest range of springs or particles one task takes on when a pass is split.
 const MIN_LEAF: usize = 512;
+
+/// Springs gathered to the stack and evaluated together.
+const BATCH: usize = 32;
+
+/// Marks a link at a spring's `b` end (the force there is minus the spring's).
+const B_END: u32 = 1 << 31;
 
 /// What the mesh engine needs of the parameters, already reduced to the terms that
 /// run (gravity zero when off, air damping 0 when off).
@@ -103,25 +116,6 @@ impl MeshParams {
     }
 }
 
-/// Each particle's springs, as seen from that particle (structure of arrays, so
-/// that the spring evaluations of one particle vectorize).
-#[derive(Clone, Debug, Default)]
-struct Links {
-    /// The other end.
-    other: Vec<u32>,
-    /// Rest length in m.
-    rest: Vec<f64>,
-    /// Stiffness in N/m.
-    stiffness: Vec<f64>,
-    /// Damping in N·s/m.
-    damping: Vec<f64>,
-}
-
-/// Springs evaluated together: a particle's springs are taken in batches of this
-/// many, gathered into stack arrays, evaluated in a loop the compiler vectorizes,
-/// then summed in order.
-const BATCH: usize = 32;
-
 /// The mesh engine's state and topology.
 pub struct MeshKernel {
     params: MeshParams,
@@ -137,25 +131,46 @@ pub struct MeshKernel {
     /// Positions before the constraints (empty without constraints).
     before: [Vec<f64>; 3],
     inv_mass: Vec<f64>,
-    /// `offsets[i]..offsets[i + 1]` indexes `links` and `link_spring`.
+    /// Each spring's force on its `a` end in N, this step.
+    spring_f: [Vec<f64>; 3],
+    /// `offsets[i]..offsets[i + 1]` indexes `links`.
     offsets: Vec<u32>,
-    links: Links,
-    /// The spring each link stands for (index into `springs`).
-    link_spring: Vec<u32>,
-    /// The model's springs, canonical (for the stretch limit and coefficient edits).
-    springs: Vec<Spring>,
+    /// Per particle, the springs touching it, with [`B_END`] set at a `b` end.
+    links: Vec<u32>,
+    /// The springs as the first pass reads them.
+    springs: SpringArrays,
+    /// The model's springs, canonical (for the stretch limit and to notice edits).
+    model_springs: Vec<Spring>,
     bars: Vec<Bar>,
     threads: usize,
     pool: Option<rayon::ThreadPool>,
-    /// Whether the force pass runs its AVX2 build.
+    /// Whether the passes run their AVX2 builds.
     avx2: bool,
+}
+
+/// Springs as structure of arrays.
+#[derive(Clone, Debug, Default)]
+struct SpringArrays {
+    /// Ends `[a, b]`.
+    ends: Vec<[u32; 2]>,
+    /// `[rest length (m), stiffness (N/m), damping (N·s/m)]`.
+    coefficients: [Vec<f64>; 3],
+}
+
+impl SpringArrays {
+    fn set_coefficients(&mut self, springs: &[Spring]) {
+        let [rest, k, b] = &mut self.coefficients;
+        for (i, s) in springs.iter().enumerate() {
+            (rest[i], k[i], b[i]) = (s.rest, s.stiffness, s.damping);
+        }
+    }
 }
 
 impl std::fmt::Debug for MeshKernel {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("MeshKernel")
             .field("particles", &self.len())
-            .field("springs", &self.springs.len())
+            .field("springs", &self.model_springs.len())
             .field("bars", &self.bars.len())
             .field("params", &self.params)
             .field("threads", &self.threads)
@@ -163,18 +178,110 @@ impl std::fmt::Debug for MeshKernel {
     }
 }
 
-/// What the force pass reads.
+type Halves<'b> = ([&'b mut [f64]; 3], [&'b mut [f64]; 3]);
+
+/// Three slices each split at `mid` (or at their end when shorter: empty ones).
+fn halves(a: [&mut [f64]; 3], mid: usize) -> Halves<'_> {
+    let [a0, a1, a2] = a.map(|s| {
+        let mid = mid.min(s.len());
+        s.split_at_mut(mid)
+    });
+    ([a0.0, a1.0, a2.0], [a0.1, a1.1, a2.1])
+}
+
+/// What the spring pass reads.
+struct SpringCtx<'a> {
+    springs: &'a SpringArrays,
+    x: [&'a [f64]; 3],
+    v: [&'a [f64]; 3],
+    avx2: bool,
+}
+
+/// Each spring's force on its `a` end, for springs `start..start + out[0].len()`.
+fn spring_pass(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx2 {
+        // SAFETY: `avx2` is set only when the CPU has AVX2.
+        unsafe { spring_pass_avx2(ctx, start, out) };
+        return;
+    }
+    spring_pass_body(ctx, start, out);
+}
+
+/// [`spring_pass`] compiled for AVX2: four springs per instruction (IEEE square
+/// roots and divisions and no fused multiply-add, so the same results as the
+/// baseline build).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn spring_pass_avx2(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
+    spring_pass_body(ctx, start, out);
+}
+
+#[inline(always)]
+fn spring_pass_body(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
+    let (x, v) = (ctx.x, ctx.v);
+    let [rest, k, b] = ctx.springs.coefficients.each_ref().map(Vec::as_slice);
+    let mut d = [[0.0; BATCH]; 3];
+    let mut dv = [[0.0; BATCH]; 3];
+    let [fx, fy, fz] = out;
+    let len = fx.len();
+    let mut lo = 0;
+    while lo < len {
+        let n = (len - lo).min(BATCH);
+        let first = start + lo;
+        for (e, &[a, b]) in ctx.springs.ends[first..first + n].iter().enumerate() {
+            let (a, b) = (a as usize, b as usize);
+            for k in 0..3 {
+                d[k][e] = x[k][a] - x[k][b];
+                dv[k][e] = v[k][a] - v[k][b];
+            }
+        }
+        let (rest, k, b) = (
+            &rest[first..first + n],
+            &k[first..first + n],
+            &b[first..first + n],
+        );
+        for e in 0..n {
+            let f = spring_force(
+                DVec3::new(d[0][e], d[1][e], d[2][e]),
+                DVec3::new(dv[0][e], dv[1][e], dv[2][e]),
+                rest[e],
+                k[e],
+                b[e],
+            );
+            (fx[lo + e], fy[lo + e], fz[lo + e]) = (f.x, f.y, f.z);
+        }
+        lo += n;
+    }
+}
+
+/// Splits the spring pass in halves down to `leaf` springs, run with `rayon::join`.
+fn spring_pass_parallel(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3], leaf: usize) {
+    let len = out[0].len();
+    if len <= leaf {
+        spring_pass(ctx, start, out);
+        return;
+    }
+    let mid = len / 2;
+    let (a, b) = halves(out, mid);
+    rayon::join(
+        || spring_pass_parallel(ctx, start, a, leaf),
+        || spring_pass_parallel(ctx, start + mid, b, leaf),
+    );
+}
+
+/// What the particle pass reads.
 struct Ctx<'a> {
     p: MeshParams,
     x: [&'a [f64]; 3],
     v: [&'a [f64]; 3],
     inv_mass: &'a [f64],
     offsets: &'a [u32],
-    links: &'a Links,
-    avx2: bool,
+    links: &'a [u32],
+    spring_f: [&'a [f64]; 3],
 }
 
-/// What the force pass writes, for particles `start..start + len`.
+/// What the particle pass writes, for particles `start..start + len`.
 struct Out<'a> {
     start: usize,
     x: [&'a mut [f64]; 3],
@@ -189,31 +296,22 @@ impl Out<'_> {
     }
 
     fn split(self, mid: usize) -> (Self, Self) {
-        type Halves<'b> = ([&'b mut [f64]; 3], [&'b mut [f64]; 3]);
-        fn halves(a: [&mut [f64]; 3], mid: usize) -> Halves<'_> {
-            let [a0, a1, a2] = a.map(|s| {
-                let mid = mid.min(s.len());
-                s.split_at_mut(mid)
-            });
-            ([a0.0, a1.0, a2.0], [a0.1, a1.1, a2.1])
-        }
         let (x0, x1) = halves(self.x, mid);
         let (v0, v1) = halves(self.v, mid);
         let (u0, u1) = halves(self.u, mid);
-        (
-            Self {
-                start: self.start,
-                x: x0,
-                v: v0,
-                u: u0,
-            },
-            Self {
-                start: self.start + mid,
-                x: x1,
-                v: v1,
-                u: u1,
-            },
-        )
+        let first = Self {
+            start: self.start,
+            x: x0,
+            v: v0,
+            u: u0,
+        };
+        let second = Self {
+            start: self.start + mid,
+            x: x1,
+            v: v1,
+            u: u1,
+        };
+        (first, second)
     }
 }
 
@@ -228,91 +326,22 @@ fn store(a: &mut [&mut [f64]; 3], i: usize, value: DVec3) {
 }
 
 /// Forces, accelerations and the integrator's update for the particles of `out`.
-fn advance(ctx: &Ctx, out: Out) {
-    #[cfg(target_arch = "x86_64")]
-    if ctx.avx2 {
-        // SAFETY: `avx2` is set only when the CPU has AVX2.
-        unsafe { advance_avx2(ctx, out) };
-        return;
-    }
-    advance_body(ctx, out);
-}
-
-/// [`advance`] compiled for AVX2: the batched spring evaluations take four
-/// springs per instruction (IEEE square roots and divisions, no fused multiply-add:
-/// the same results as the baseline build).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn advance_avx2(ctx: &Ctx, out: Out) {
-    advance_body(ctx, out);
-}
-
-/// Stack space for one batch of springs: differences of positions and velocities,
-/// and forces.
-struct Batch {
-    d: [[f64; BATCH]; 3],
-    dv: [[f64; BATCH]; 3],
-    fe: [[f64; BATCH]; 3],
-}
-
-/// Sum of the spring forces on particle `i` at `xi`, `vi`: each batch's
-/// differences gathered, evaluated by [`spring_force`], then added in the spring
-/// order (the f64 engine's).
-#[inline(always)]
-fn spring_sum(ctx: &Ctx, batch: &mut Batch, i: usize, xi: DVec3, vi: DVec3) -> DVec3 {
-    let links = ctx.links;
-    let mut f = DVec3::ZERO;
-    let Batch { d, dv, fe } = batch;
-    let (mut lo, hi) = (ctx.offsets[i] as usize, ctx.offsets[i + 1] as usize);
-    while lo < hi {
-        let n = (hi - lo).min(BATCH);
-        for (e, &j) in links.other[lo..lo + n].iter().enumerate() {
-            let j = j as usize;
-            for k in 0..3 {
-                d[k][e] = xi[k] - ctx.x[k][j];
-                dv[k][e] = vi[k] - ctx.v[k][j];
-            }
-        }
-        let (rest, stiffness, damping) = (
-            &links.rest[lo..lo + n],
-            &links.stiffness[lo..lo + n],
-            &links.damping[lo..lo + n],
-        );
-        for e in 0..n {
-            let force = spring_force(
-                DVec3::new(d[0][e], d[1][e], d[2][e]),
-                DVec3::new(dv[0][e], dv[1][e], dv[2][e]),
-                rest[e],
-                stiffness[e],
-                damping[e],
-            );
-            fe[0][e] = force.x;
-            fe[1][e] = force.y;
-            fe[2][e] = force.z;
-        }
-        for e in 0..n {
-            f += DVec3::new(fe[0][e], fe[1][e], fe[2][e]);
-        }
-        lo += n;
-    }
-    f
-}
-
-#[inline(always)]
-fn advance_body(ctx: &Ctx, mut out: Out) {
-    let mut batch = Batch {
-        d: [[0.0; BATCH]; 3],
-        dv: [[0.0; BATCH]; 3],
-        fe: [[0.0; BATCH]; 3],
-    };
+fn advance(ctx: &Ctx, mut out: Out) {
     let p = &ctx.p;
     let h = p.dt;
     let verlet = !out.u[0].is_empty();
+    let sf = ctx.spring_f;
     for local in 0..out.len() {
         let i = out.start + local;
         let xi = load(ctx.x, i);
         let vi = load(ctx.v, i);
-        let mut f = spring_sum(ctx, &mut batch, i, xi, vi);
+        // The f64 engine's gather: `f += sign * f_spring` in spring order.
+        let mut f = DVec3::ZERO;
+        for &e in &ctx.links[ctx.offsets[i] as usize..ctx.offsets[i + 1] as usize] {
+            let s = (e & !B_END) as usize;
+            let sign = if e & B_END == 0 { 1.0 } else { -1.0 };
+            f += sign * DVec3::new(sf[0][s], sf[1][s], sf[2][s]);
+        }
         if p.air_damping > 0.0 {
             f -= p.air_damping * vi;
         }
@@ -336,7 +365,7 @@ fn advance_body(ctx: &Ctx, mut out: Out) {
                     store(&mut out.u, local, DVec3::ZERO);
                     (xi, vi)
                 } else {
-                    let u = DVec3::new(out.u[0][local], out.u[1][local], out.u[2][local]) + h * a;
+                    let u = load(out.u.each_ref().map(|s| &**s), local) + h * a;
                     store(&mut out.u, local, u);
                     (xi + h * u, u + 0.5 * h * a)
                 }
@@ -351,7 +380,7 @@ fn advance_body(ctx: &Ctx, mut out: Out) {
     }
 }
 
-/// Splits `out` in halves down to `leaf` particles and runs them with `rayon::join`.
+/// Splits `out` in halves down to `leaf` particles, run with `rayon::join`.
 fn advance_parallel(ctx: &Ctx, out: Out, leaf: usize) {
     if out.len() <= leaf {
         advance(ctx, out);
@@ -388,14 +417,14 @@ fn restore_length(
 
 impl MeshKernel {
     /// Builds the engine for `model`'s particles, springs, bars and masses, with
-    /// `params` (see `System`'s fast path for how they are derived). The state starts
-    /// at rest at the origin: set it with [`Self::set_state`]. Runs on the calling
-    /// thread until [`Self::set_threads`] is called.
+    /// `params` ([`MeshParams::of`]). The state starts at rest at the origin: set it
+    /// with [`Self::set_state`]. Runs on the calling thread until
+    /// [`Self::set_threads`] is called.
     pub fn new(model: &Model, params: MeshParams) -> Self {
         let n = model.mass.len();
-        let springs = model.springs.clone();
+        let m = model.springs.len();
         let mut offsets = vec![0u32; n + 1];
-        for s in &springs {
+        for s in &model.springs {
             offsets[s.a as usize + 1] += 1;
             offsets[s.b as usize + 1] += 1;
         }
@@ -404,40 +433,35 @@ impl MeshKernel {
         }
         // Filled in spring order per particle: the f64 engine's gather order.
         let mut cursor = offsets.clone();
-        let count = springs.len() * 2;
-        let mut links = Links {
-            other: vec![0; count],
-            rest: vec![0.0; count],
-            stiffness: vec![0.0; count],
-            damping: vec![0.0; count],
-        };
-        let mut link_spring = vec![0u32; count];
-        for (index, s) in springs.iter().enumerate() {
-            for (end, other) in [(s.a, s.b), (s.b, s.a)] {
-                let slot = cursor[end as usize] as usize;
-                cursor[end as usize] += 1;
-                link_spring[slot] = index as u32;
-                links.other[slot] = other;
-                links.rest[slot] = s.rest;
-                links.stiffness[slot] = s.stiffness;
-                links.damping[slot] = s.damping;
+        let mut links = vec![0u32; 2 * m];
+        for (index, s) in model.springs.iter().enumerate() {
+            for (end, flag) in [(s.a, 0), (s.b, B_END)] {
+                let slot = &mut cursor[end as usize];
+                links[*slot as usize] = index as u32 | flag;
+                *slot += 1;
             }
         }
-        let zeros = || [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        let mut springs = SpringArrays {
+            ends: model.springs.iter().map(|s| [s.a, s.b]).collect(),
+            coefficients: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
+        };
+        springs.set_coefficients(&model.springs);
+        let zeros = |len| [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
         let verlet = params.integrator == Integrator::Verlet;
         let mut kernel = Self {
             params,
-            x: zeros(),
-            v: zeros(),
-            u: if verlet { zeros() } else { Default::default() },
-            x_next: zeros(),
-            v_next: zeros(),
+            x: zeros(n),
+            v: zeros(n),
+            u: zeros(if verlet { n } else { 0 }),
+            x_next: zeros(n),
+            v_next: zeros(n),
             before: Default::default(),
             inv_mass: model.inv_mass.clone(),
+            spring_f: zeros(m),
             offsets,
             links,
-            link_spring,
             springs,
+            model_springs: model.springs.clone(),
             bars: model.bars.clone(),
             threads: 1,
             pool: None,
@@ -482,12 +506,12 @@ impl MeshKernel {
         let same_bars = |a: &Bar, b: &Bar| (a.a, a.b) == (b.a, b.b);
         if params.integrator != self.params.integrator
             || model.inv_mass.len() != self.len()
-            || model.springs.len() != self.springs.len()
+            || model.springs.len() != self.model_springs.len()
             || model.bars.len() != self.bars.len()
             || !model
                 .springs
                 .iter()
-                .zip(&self.springs)
+                .zip(&self.model_springs)
                 .all(|(a, b)| same_ends(a, b))
             || !model
                 .bars
@@ -501,14 +525,9 @@ impl MeshKernel {
         self.size_before();
         self.inv_mass.copy_from_slice(&model.inv_mass);
         self.bars.copy_from_slice(&model.bars);
-        if model.springs != self.springs {
-            self.springs.copy_from_slice(&model.springs);
-            for (e, &s) in self.link_spring.iter().enumerate() {
-                let s = &self.springs[s as usize];
-                self.links.rest[e] = s.rest;
-                self.links.stiffness[e] = s.stiffness;
-                self.links.damping[e] = s.damping;
-            }
+        if model.springs != self.model_springs {
+            self.model_springs.copy_from_slice(&model.springs);
+            self.springs.set_coefficients(&model.springs);
         }
         true
     }
@@ -517,7 +536,7 @@ impl MeshKernel {
     fn has_constraints(&self) -> bool {
         let p = &self.params;
         (p.bar_iterations > 0 && !self.bars.is_empty())
-            || (p.stretch_limit.is_some() && !self.springs.is_empty())
+            || (p.stretch_limit.is_some() && !self.model_springs.is_empty())
             || p.sphere.is_some()
     }
 
@@ -637,10 +656,11 @@ impl MeshKernel {
     pub fn steps(&mut self, n: usize) {
         match self.pool.take() {
             Some(pool) => {
-                let leaf = (self.len() / (4 * self.threads)).max(MIN_LEAF);
+                let per_task = |len: usize| (len / (4 * self.threads)).max(MIN_LEAF);
+                let leaves = (per_task(self.model_springs.len()), per_task(self.len()));
                 pool.install(|| {
                     for _ in 0..n {
-                        self.one_step(Some(leaf));
+                        self.one_step(Some(leaves));
                     }
                 });
                 self.pool = Some(pool);
@@ -653,15 +673,29 @@ impl MeshKernel {
         }
     }
 
-    fn one_step(&mut self, leaf: Option<usize>) {
+    /// One step; `leaves` (springs, particles per task) when on the pool.
+    fn one_step(&mut self, leaves: Option<(usize, usize)>) {
+        let x = self.x.each_ref().map(Vec::as_slice);
+        let v = self.v.each_ref().map(Vec::as_slice);
+        let springs = SpringCtx {
+            springs: &self.springs,
+            x,
+            v,
+            avx2: self.avx2,
+        };
+        let out = self.spring_f.each_mut().map(Vec::as_mut_slice);
+        match leaves {
+            Some((leaf, _)) => spring_pass_parallel(&springs, 0, out, leaf),
+            None => spring_pass(&springs, 0, out),
+        }
         let ctx = Ctx {
             p: self.params,
-            x: self.x.each_ref().map(Vec::as_slice),
-            v: self.v.each_ref().map(Vec::as_slice),
+            x,
+            v,
             inv_mass: &self.inv_mass,
             offsets: &self.offsets,
             links: &self.links,
-            avx2: self.avx2,
+            spring_f: self.spring_f.each_ref().map(Vec::as_slice),
         };
         let out = Out {
             start: 0,
@@ -669,8 +703,8 @@ impl MeshKernel {
             v: self.v_next.each_mut().map(Vec::as_mut_slice),
             u: self.u.each_mut().map(Vec::as_mut_slice),
         };
-        match leaf {
-            Some(leaf) => advance_parallel(&ctx, out, leaf),
+        match leaves {
+            Some((_, leaf)) => advance_parallel(&ctx, out, leaf),
             None => advance(&ctx, out),
         }
         std::mem::swap(&mut self.x, &mut self.x_next);
@@ -697,7 +731,7 @@ impl MeshKernel {
             }
         }
         if let Some(tau) = p.stretch_limit {
-            for s in &self.springs {
+            for s in &self.model_springs {
                 let longest = (1.0 + tau) * s.rest;
                 restore_length(x, inv_mass, s.a as usize, s.b as usize, |l| {
                     (l > longest).then_some(longest)
