@@ -6,9 +6,15 @@
 //! damping. Results then agree with the f64 general path to float32 round-off
 //! (about 1e-6 relative; `tests/fast_path.rs`).
 //!
-//! The f64 state stays the system's state: it is copied into the kernel when
-//! something outside changed it, and back after every chunk of steps, where the
-//! divergence check runs.
+//! Any other system without aerodynamic drag stepped by symplectic Euler,
+//! explicit Euler or position Verlet (chains, lattices, ropes) goes to the f64 mesh
+//! engine of [`super::mesh_kernel`], which does the general path's arithmetic in
+//! its order: bit for bit its results for the Euler methods, f64 round-off for
+//! Verlet (`tests/mesh_engine.rs`).
+//!
+//! The f64 state stays the system's state: it is copied into the engine when
+//! something outside changed it, and back at the end of a run (or when a cheap scan
+//! of the engine's state finds trouble), where the divergence check runs.
 
 use glam::DVec3;
 
@@ -170,8 +176,9 @@ impl GridSprings {
 }
 
 impl System {
-    /// Allows (or forbids) the f32 grid kernel for [`System::run`]. Off by default:
-    /// the library is exact (f64) unless asked otherwise.
+    /// Allows (or forbids) the fast engines (the grid kernel, the mesh engine) for
+    /// [`System::run`]. Off by default: the library is exact (the general f64
+    /// engine) unless asked otherwise.
     pub fn set_fast_path(&mut self, allowed: bool) {
         self.fast_path_allowed = allowed;
         if !allowed {
