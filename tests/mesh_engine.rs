@@ -220,3 +220,24 @@ fn what_the_mesh_engine_does_not_model_runs_on_the_general_path() {
         system.run(10).unwrap();
     }
 }
+
+#[test]
+fn a_divergence_on_the_mesh_engine_is_caught_where_the_f64_engine_catches_it() {
+    // Explicit Euler at 10x the jelly's step: unstable, it runs away within a few
+    // hundred steps. Both engines compute the same numbers, so both stop at the
+    // same check; the mesh engine checks at the end of each chunk of 32 steps (or of
+    // the run), the general engine after every step, so the mesh engine stops at
+    // most 31 steps later, and no later than the run's end.
+    let overrides = ["integrator=\"explicit-euler\"", "dt=0.002"];
+    let mut fast = build("jelly", &overrides);
+    fast.set_fast_path(true);
+    assert_eq!(fast.engine(), Engine::Mesh);
+    let mut exact = build("jelly", &overrides);
+    let fast_err = fast.run(20_000).unwrap_err();
+    let exact_err = exact.run(20_000).unwrap_err();
+    let (f, e) = (fast.steps_taken(), exact.steps_taken());
+    assert!(
+        f >= e && f < e + 32,
+        "mesh stopped at step {f} ({fast_err}), general at {e} ({exact_err})"
+    );
+}
