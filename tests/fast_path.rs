@@ -96,13 +96,20 @@ fn what_the_kernel_does_not_model_runs_on_the_general_path() {
         ("cloth", &["integrator=\"rk4\""][..]),
         ("cloth", &["integrator=\"rk2\""][..]),
         ("cloth", &["integrator=\"implicit-euler\""][..]),
-        ("chain", &[][..]),
-        ("jelly", &[][..]),
-        ("rope", &[][..]),
+        ("jelly", &["integrator=\"rk4\""][..]),
+        ("rope", &["integrator=\"implicit-euler\""][..]),
     ] {
         let mut system = build(name, overrides);
         system.set_fast_path(true);
         assert_eq!(system.engine(), Engine::General, "{name} {overrides:?}");
+        system.run(10).unwrap();
+    }
+    // Topologies that are not grids take the f64 mesh engine (`tests/mesh_engine.rs`).
+    for name in ["chain", "jelly", "rope", "spring"] {
+        let mut system = build(name, &[]);
+        system.set_fast_path(true);
+        assert_eq!(system.engine(), Engine::Mesh, "{name}");
+        assert!(system.engine().is_fast() && !system.engine().is_grid());
         system.run(10).unwrap();
     }
     // What the kernel models since the engine took in the panel's controls.

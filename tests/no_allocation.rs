@@ -31,9 +31,16 @@ unsafe impl GlobalAlloc for Counting {
 static GLOBAL: Counting = Counting;
 
 fn allocations_during(scene: &str, overrides: &[&str], steps: u64) -> usize {
+    allocations_on(false, scene, overrides, steps)
+}
+
+/// Allocations of `steps` steps on the general engine, or on a fast engine when
+/// `fast` (the first run, not counted, builds the engine).
+fn allocations_on(fast: bool, scene: &str, overrides: &[&str], steps: u64) -> usize {
     let mut scene = Scene::load(scene).unwrap();
     scene.set_all(overrides.iter().copied()).unwrap();
     let mut system = scene.build().unwrap();
+    system.set_fast_path(fast);
     system.run(10).unwrap();
     let before = ALLOCATIONS.load(Ordering::SeqCst);
     system.run(steps).unwrap();
@@ -59,6 +66,30 @@ fn stepping_allocates_nothing() {
         let n = allocations_during(scene, &[], 1_000);
         assert_eq!(n, 0, "{scene} allocated {n} times in 1,000 steps");
     }
+    // The mesh engine, on one thread and (16³ particles) on the machine's threads,
+    // which it enters once per chunk of 32 steps: rayon's queue allocates a block
+    // every 63 entries.
+    for (scene, overrides) in [
+        ("rope", &[][..]),
+        ("jelly", &[][..]),
+        ("chain", &[][..]),
+        ("spring", &[][..]),
+        (
+            "jelly",
+            &["integrator=\"verlet\"", "stretch_limit=0.01"][..],
+        ),
+    ] {
+        let n = allocations_on(true, scene, overrides, 1_000);
+        assert_eq!(
+            n, 0,
+            "{scene} on the mesh engine allocated {n} times in 1,000 steps"
+        );
+    }
+    let n = allocations_on(true, "jelly", &["width=16", "height=16", "depth=16"], 1_000);
+    assert!(
+        n <= 1,
+        "the threaded mesh engine allocated {n} times in 1,000 steps"
+    );
     // Big enough for the threaded force path.
     let n = allocations_during("bench", &["width=128", "height=128"], 200);
     assert!(

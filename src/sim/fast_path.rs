@@ -8,15 +8,23 @@
 //! so a new one fails to compile until the kernel models it or refuses it. Results
 //! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
 //!
-//! The f64 state stays the system's state: it is copied into the kernel when
-//! something outside changed it, and back after every chunk of steps, where the
-//! divergence check runs. A live edit of a coefficient (stiffness, damping, mass,
-//! wind...) updates the kernel in place ([`GridCloth::respec`]); only a new shape,
-//! integrator or precision builds a new one.
+//! Any other system without aerodynamic drag stepped by symplectic Euler,
+//! explicit Euler or position Verlet (chains, lattices, ropes) goes to the f64 mesh
+//! engine of [`super::mesh_kernel`], which does the general path's arithmetic in
+//! its order: bit for bit its results for the Euler methods, f64 round-off for
+//! Verlet (`tests/mesh_engine.rs`).
+//!
+//! The f64 state stays the system's state: it is copied into the engine when
+//! something outside changed it, and back after every chunk of steps (or when a
+//! cheap scan of the engine's state finds trouble), where the divergence check
+//! runs. A live edit of a coefficient (stiffness, damping, mass, wind...) updates
+//! the engine in place ([`GridCloth::respec`]); only a new shape, integrator or
+//! precision builds a new one.
 
 use glam::DVec3;
 
 use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
+use super::mesh_kernel::{MeshKernel, MeshParams};
 use super::{Integrator, SpringKind, System};
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
@@ -29,6 +37,9 @@ pub enum Engine {
     General,
     /// The grid stencil kernel, in the precision the system needs.
     Grid(Precision),
+    /// The f64 mesh engine ([`super::mesh_kernel`]): any topology, results equal to
+    /// the general path's to f64 round-off.
+    Mesh,
 }
 
 impl Engine {
@@ -38,7 +49,13 @@ impl Engine {
             Self::General => "general-f64",
             Self::Grid(Precision::Single) => "grid-f32",
             Self::Grid(Precision::Double) => "grid-f64",
+            Self::Mesh => "mesh-f64",
         }
+    }
+
+    /// Whether this is one of the fast engines (grid or mesh).
+    pub fn is_fast(self) -> bool {
+        matches!(self, Self::Grid(_) | Self::Mesh)
     }
 
     /// Whether this is the fast grid kernel (in either precision).
@@ -65,6 +82,24 @@ impl Clone for FastPathSlot {
     fn clone(&self) -> Self {
         Self(None)
     }
+}
+
+/// The mesh engine, once built; like [`FastPathSlot`], a clone starts without one.
+#[derive(Debug, Default)]
+pub(super) struct MeshSlot(pub(super) Option<MeshPath>);
+
+impl Clone for MeshSlot {
+    fn clone(&self) -> Self {
+        Self(None)
+    }
+}
+
+/// The mesh engine and whether it holds the f64 state.
+#[derive(Debug)]
+pub(super) struct MeshPath {
+    kernel: MeshKernel,
+    /// Whether the engine holds the same state as the f64 arrays.
+    pub(super) in_sync: bool,
 }
 
 /// The kernel and what it was built from.
@@ -176,12 +211,14 @@ impl GridSprings {
 }
 
 impl System {
-    /// Allows (or forbids) the f32 grid kernel for [`System::run`]. Off by default:
-    /// the library is exact (f64) unless asked otherwise.
+    /// Allows (or forbids) the fast engines (the grid kernel, the mesh engine) for
+    /// [`System::run`]. Off by default: the library is exact (the general f64
+    /// engine) unless asked otherwise.
     pub fn set_fast_path(&mut self, allowed: bool) {
         self.fast_path_allowed = allowed;
         if !allowed {
             self.fast_path.0 = None;
+            self.mesh_path.0 = None;
         }
     }
 
@@ -194,10 +231,77 @@ impl System {
 
     /// The engine [`System::run`] would use now.
     pub fn engine(&self) -> Engine {
-        match self.grid_spec() {
-            Some(spec) if self.fast_path_allowed => Engine::Grid(spec.precision),
-            _ => Engine::General,
+        if !self.fast_path_allowed {
+            return Engine::General;
         }
+        if let Some(spec) = self.grid_spec() {
+            Engine::Grid(spec.precision)
+        } else if MeshParams::of(&self.model).is_some() {
+            Engine::Mesh
+        } else {
+            Engine::General
+        }
+    }
+
+    /// Runs `n` steps on the mesh engine if allowed and it models the system
+    /// exactly; `None` when the general path must run them. Call after
+    /// [`Self::run_on_grid`] declined.
+    pub(super) fn run_on_mesh(&mut self, n: u64) -> Option<Result<(), super::Divergence>> {
+        if !self.fast_path_allowed {
+            return None;
+        }
+        let params = MeshParams::of(&self.model)?;
+        let reused = self.mesh_path.0.take().and_then(|mut mesh| {
+            // Coefficients, masses and pins are taken in place; a new topology or
+            // integrator needs a new engine.
+            mesh.kernel.refresh(&self.model, params).then_some(mesh)
+        });
+        let mut mesh = match reused {
+            Some(mesh) => mesh,
+            None => {
+                let mut kernel = MeshKernel::new(&self.model, params);
+                kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
+                MeshPath {
+                    kernel,
+                    in_sync: false,
+                }
+            }
+        };
+        if !mesh.in_sync {
+            mesh.kernel
+                .set_state(&self.state.positions, &self.state.velocities);
+            if let Some(u) = self.verlet_update_velocities() {
+                mesh.kernel.set_update_velocities(&u);
+            }
+            mesh.in_sync = true;
+        }
+        let dt = self.model.params.dt;
+        let mut done = 0;
+        let mut result = Ok(());
+        while done < n && result.is_ok() {
+            let chunk = CHUNK.min(n - done);
+            mesh.kernel.steps(chunk as usize);
+            done += chunk;
+            for _ in 0..chunk {
+                self.state.time += dt;
+            }
+            self.state.steps += chunk;
+            if done == n || !self.mesh_state_plausible(&mesh.kernel) {
+                mesh.kernel.positions_into(&mut self.state.positions);
+                mesh.kernel.velocities_into(&mut self.state.velocities);
+                self.set_verlet_history(|u| mesh.kernel.update_velocities_into(u));
+                result = self.check();
+            }
+        }
+        self.mesh_path.0 = Some(mesh);
+        Some(result)
+    }
+
+    /// Whether the mesh engine's state passes the divergence check's limits.
+    fn mesh_state_plausible(&self, kernel: &MeshKernel) -> bool {
+        let far = self.runaway_distance();
+        let (speed2, dist2) = kernel.extremes(self.start_center);
+        speed2 <= super::RUNAWAY_SPEED.powi(2) && dist2 <= far * far
     }
 
     /// The kernel's description of this system, if the kernel models it exactly.
@@ -342,7 +446,7 @@ impl System {
                 for &(i, position) in &fast.held {
                     self.state.positions[i] = position;
                 }
-                self.set_verlet_history_from(&fast.kernel);
+                self.set_verlet_history(|u| fast.kernel.update_velocities_into(u));
                 result = self.check();
             }
         }
@@ -367,9 +471,10 @@ impl System {
         )
     }
 
-    /// The f64 Verlet history from the kernel: `x_prev = x - h u`, and the last
-    /// acceleration from the velocity estimate `v = u + h/2 a`.
-    fn set_verlet_history_from(&mut self, kernel: &GridCloth) {
+    /// The f64 Verlet history from a fast engine's update velocities `u` (which
+    /// `fill` writes): `x_prev = x - h u`, and the last acceleration from the
+    /// velocity estimate `v = u + h/2 a`.
+    fn set_verlet_history(&mut self, fill: impl FnOnce(&mut [DVec3])) {
         let state = &mut self.state;
         if self.model.params.integrator != Integrator::Verlet
             || state.prev_positions.len() != state.positions.len()
@@ -377,7 +482,7 @@ impl System {
             return;
         }
         let h = self.model.params.dt;
-        kernel.update_velocities_into(&mut state.prev_accelerations);
+        fill(&mut state.prev_accelerations);
         for i in 0..state.positions.len() {
             let u = state.prev_accelerations[i];
             state.prev_positions[i] = state.positions[i] - h * u;

@@ -12,6 +12,7 @@ pub mod forces;
 pub mod grid_kernel;
 pub mod implicit;
 pub mod integrators;
+pub mod mesh_kernel;
 pub mod safe;
 pub mod springs;
 pub mod stability;
@@ -242,6 +243,8 @@ pub struct System {
     grabbed: Option<(usize, DVec3)>,
     fast_path_allowed: bool,
     fast_path: fast_path::FastPathSlot,
+    /// The mesh engine, for what the grid kernel does not model.
+    mesh_path: fast_path::MeshSlot,
     /// The springs and masses as the grid kernel sees them, summarised on each edit.
     grid_springs: Option<fast_path::GridSprings>,
     /// How many times a grid kernel was built for this system.
@@ -307,6 +310,7 @@ impl System {
             grabbed: None,
             fast_path_allowed: false,
             fast_path: fast_path::FastPathSlot::default(),
+            mesh_path: fast_path::MeshSlot::default(),
             grid_springs: None,
             kernel_builds: 0,
         };
@@ -580,6 +584,9 @@ impl System {
         if let Some(result) = self.run_on_grid(n) {
             return result;
         }
+        if let Some(result) = self.run_on_mesh(n) {
+            return result;
+        }
         self.mark_changed();
         let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());
         if forces::uses_threads(&self.model) {
@@ -636,6 +643,9 @@ impl System {
     fn mark_changed(&mut self) {
         if let Some(fast) = &mut self.fast_path.0 {
             fast.in_sync = false;
+        }
+        if let Some(mesh) = &mut self.mesh_path.0 {
+            mesh.in_sync = false;
         }
     }
 

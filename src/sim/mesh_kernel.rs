@@ -1,0 +1,766 @@
+//! The mesh engine: any topology (chains, lattices, ropes, meshes) stepped in f64
+//! on structure-of-arrays state, each particle gathering its own forces.
+//!
+//! State is `x, y, z, vx, vy, vz` (m, m/s) and, for position Verlet, the velocity of
+//! the last position update `u = (x - x_prev) / h`. A step is two passes:
+//! 1. each spring's force on its `a` end, `f_a = -(k (l - L) + b (v_a - v_b)·u) u`
+//!    with `u = (x_a - x_b)/l` ([`spring_force`]), into a per-spring array: the
+//!    springs' ends are gathered in batches of [`BATCH`] to the stack and evaluated
+//!    in a loop the compiler vectorizes (built for AVX2 when the CPU has it);
+//! 2. per particle, the sum over its springs from a compressed adjacency (CSR) in
+//!    the model's canonical spring order, `+f` at an `a` end and `-f` at a `b` end,
+//!    then air damping `-c v`, ground penalty `k_c d - c_g v_y` (at depth `d > 0`),
+//!    `a = F / m + g` (0 when pinned) and one step of symplectic Euler, explicit
+//!    Euler or position Verlet (`u += h a; x += h u; v = u + h/2 a`), written into
+//!    a second set of arrays (ping-pong).
+//!
+//! That is the f64 engine's arithmetic in its order, so symplectic and explicit
+//! Euler give bit for bit its results (Verlet rounds differently: it keeps `u`, not
+//! `x_prev`). Threads split the springs, then the particles, into ranges: no two
+//! write the same memory, and results are the same for any number of threads.
+//! (Evaluating each spring from both ends in the particle pass, which needs no
+//! per-spring array, measured 0.7x as fast: twice the square roots and divisions.)
+//!
+//! Constraints follow, on one thread, Gauss-Seidel in the f64 engine's order (bars
+//! `bar_iterations` times, stretch limit, sphere); a particle moved by `δ` gains
+//! `δ/h` in `v` (and in `u` for Verlet). Per-triangle aerodynamic drag is not
+//! modelled: systems with it run on the general engine (see `fast_path`).
+//!
+//! A step allocates nothing.
+
+use glam::DVec3;
+
+use super::constraints::{length_correction, out_of_sphere};
+use super::forces::spring_force;
+use super::{Bar, Ground, Integrator, Model, Sphere, Spring};
+
+/// Models with fewer particles than this run on the calling thread even when
+/// several threads are allowed. Measured on the jelly lattice (about 12 springs a
+/// particle), 2 threads against 1 on two busy cores: no gain at 512 particles,
+/// 1.1-1.65x at 1,000, 1.75-1.9x from 1,728 on.
+pub const PARALLEL_MIN_PARTICLES: usize = 1500;
+
+/// Smallest range of springs or particles one task takes on when a pass is split.
+const MIN_LEAF: usize = 512;
+
+/// Springs gathered to the stack and evaluated together.
+const BATCH: usize = 32;
+
+/// Marks a link at a spring's `b` end (the force there is minus the spring's).
+const B_END: u32 = 1 << 31;
+
+/// What the mesh engine needs of the parameters, already reduced to the terms that
+/// run (gravity zero when off, air damping 0 when off).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MeshParams {
+    /// Gravitational acceleration in m/s² (zero when the term is off).
+    pub gravity: DVec3,
+    /// Viscous air damping `c` in N·s/m (0: off).
+    pub air_damping: f64,
+    /// Ground plane, if any.
+    pub ground: Option<Ground>,
+    /// Sphere collider, if any.
+    pub sphere: Option<Sphere>,
+    /// Symplectic Euler, explicit Euler or position Verlet.
+    pub integrator: Integrator,
+    /// Time step in s.
+    pub dt: f64,
+    /// Bar relaxation passes per step.
+    pub bar_iterations: u32,
+    /// Maximum stretch `tau` of springs, if any.
+    pub stretch_limit: Option<f64>,
+}
+
+impl MeshParams {
+    /// The parameters of `model`, if the mesh engine models it exactly: no
+    /// aerodynamic drag, and symplectic Euler, explicit Euler or position Verlet.
+    ///
+    /// Every parameter and force term is named here (no `..`): a new one fails to
+    /// compile until it is either passed to the engine or made a reason to refuse it.
+    pub fn of(model: &Model) -> Option<Self> {
+        let super::Params {
+            gravity,
+            wind: _,             // only the aerodynamic drag uses it (refused below)
+            gust: _,             // likewise
+            air_density: _,      // likewise
+            drag_coefficient: _, // likewise
+            air_damping,
+            ground,
+            sphere,
+            integrator,
+            dt,
+            bar_iterations,
+            stretch_limit,
+            seed: _, // only the gusts use it
+        } = model.params;
+        let super::ForceTerms {
+            gravity: gravity_on,
+            springs: _, // the engine always evaluates the springs it holds
+            aero,
+            air_damping: air_damping_on,
+            ground: _, // `ground` itself says
+        } = model.terms;
+        if aero || !MeshKernel::supports(integrator) {
+            return None;
+        }
+        Some(Self {
+            gravity: if gravity_on { gravity } else { DVec3::ZERO },
+            air_damping: if air_damping_on { air_damping } else { 0.0 },
+            ground,
+            sphere,
+            integrator,
+            dt,
+            bar_iterations,
+            stretch_limit,
+        })
+    }
+}
+
+/// The mesh engine's state and topology.
+pub struct MeshKernel {
+    params: MeshParams,
+    /// Positions `[x, y, z]` in m.
+    x: [Vec<f64>; 3],
+    /// Velocities in m/s.
+    v: [Vec<f64>; 3],
+    /// Verlet's velocity of the last position update (empty for the other methods).
+    u: [Vec<f64>; 3],
+    /// The other half of the ping-pong pair for `x` and `v`.
+    x_next: [Vec<f64>; 3],
+    v_next: [Vec<f64>; 3],
+    /// Positions before the constraints (empty without constraints).
+    before: [Vec<f64>; 3],
+    inv_mass: Vec<f64>,
+    /// Each spring's force on its `a` end in N, this step.
+    spring_f: [Vec<f64>; 3],
+    /// `offsets[i]..offsets[i + 1]` indexes `links`.
+    offsets: Vec<u32>,
+    /// Per particle, the springs touching it, with [`B_END`] set at a `b` end.
+    links: Vec<u32>,
+    /// The springs as the first pass reads them.
+    springs: SpringArrays,
+    /// The model's springs, canonical (for the stretch limit and to notice edits).
+    model_springs: Vec<Spring>,
+    bars: Vec<Bar>,
+    threads: usize,
+    pool: Option<rayon::ThreadPool>,
+    /// Whether the passes run their AVX2 builds.
+    avx2: bool,
+}
+
+/// Springs as structure of arrays.
+#[derive(Clone, Debug, Default)]
+struct SpringArrays {
+    /// Ends `[a, b]`.
+    ends: Vec<[u32; 2]>,
+    /// `[rest length (m), stiffness (N/m), damping (N·s/m)]`.
+    coefficients: [Vec<f64>; 3],
+}
+
+impl SpringArrays {
+    fn set_coefficients(&mut self, springs: &[Spring]) {
+        let [rest, k, b] = &mut self.coefficients;
+        for (i, s) in springs.iter().enumerate() {
+            (rest[i], k[i], b[i]) = (s.rest, s.stiffness, s.damping);
+        }
+    }
+}
+
+impl std::fmt::Debug for MeshKernel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MeshKernel")
+            .field("particles", &self.len())
+            .field("springs", &self.model_springs.len())
+            .field("bars", &self.bars.len())
+            .field("params", &self.params)
+            .field("threads", &self.threads)
+            .finish_non_exhaustive()
+    }
+}
+
+type Halves<'b> = ([&'b mut [f64]; 3], [&'b mut [f64]; 3]);
+
+/// Three slices each split at `mid` (or at their end when shorter: empty ones).
+fn halves(a: [&mut [f64]; 3], mid: usize) -> Halves<'_> {
+    let [a0, a1, a2] = a.map(|s| {
+        let mid = mid.min(s.len());
+        s.split_at_mut(mid)
+    });
+    ([a0.0, a1.0, a2.0], [a0.1, a1.1, a2.1])
+}
+
+/// What the spring pass reads.
+struct SpringCtx<'a> {
+    springs: &'a SpringArrays,
+    x: [&'a [f64]; 3],
+    v: [&'a [f64]; 3],
+    avx2: bool,
+}
+
+/// Each spring's force on its `a` end, for springs `start..start + out[0].len()`.
+fn spring_pass(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
+    #[cfg(target_arch = "x86_64")]
+    if ctx.avx2 {
+        // SAFETY: `avx2` is set only when the CPU has AVX2.
+        unsafe { spring_pass_avx2(ctx, start, out) };
+        return;
+    }
+    spring_pass_body(ctx, start, out);
+}
+
+/// [`spring_pass`] compiled for AVX2: four springs per instruction (IEEE square
+/// roots and divisions and no fused multiply-add, so the same results as the
+/// baseline build).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn spring_pass_avx2(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
+    spring_pass_body(ctx, start, out);
+}
+
+#[inline(always)]
+fn spring_pass_body(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
+    let (x, v) = (ctx.x, ctx.v);
+    let [rest, k, b] = ctx.springs.coefficients.each_ref().map(Vec::as_slice);
+    let mut d = [[0.0; BATCH]; 3];
+    let mut dv = [[0.0; BATCH]; 3];
+    let [fx, fy, fz] = out;
+    let len = fx.len();
+    let mut lo = 0;
+    while lo < len {
+        let n = (len - lo).min(BATCH);
+        let first = start + lo;
+        for (e, &[a, b]) in ctx.springs.ends[first..first + n].iter().enumerate() {
+            let (a, b) = (a as usize, b as usize);
+            for k in 0..3 {
+                d[k][e] = x[k][a] - x[k][b];
+                dv[k][e] = v[k][a] - v[k][b];
+            }
+        }
+        let (rest, k, b) = (
+            &rest[first..first + n],
+            &k[first..first + n],
+            &b[first..first + n],
+        );
+        for e in 0..n {
+            let f = spring_force(
+                DVec3::new(d[0][e], d[1][e], d[2][e]),
+                DVec3::new(dv[0][e], dv[1][e], dv[2][e]),
+                rest[e],
+                k[e],
+                b[e],
+            );
+            (fx[lo + e], fy[lo + e], fz[lo + e]) = (f.x, f.y, f.z);
+        }
+        lo += n;
+    }
+}
+
+/// Splits the spring pass in halves down to `leaf` springs, run with `rayon::join`.
+fn spring_pass_parallel(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3], leaf: usize) {
+    let len = out[0].len();
+    if len <= leaf {
+        spring_pass(ctx, start, out);
+        return;
+    }
+    let mid = len / 2;
+    let (a, b) = halves(out, mid);
+    rayon::join(
+        || spring_pass_parallel(ctx, start, a, leaf),
+        || spring_pass_parallel(ctx, start + mid, b, leaf),
+    );
+}
+
+/// What the particle pass reads.
+struct Ctx<'a> {
+    p: MeshParams,
+    x: [&'a [f64]; 3],
+    v: [&'a [f64]; 3],
+    inv_mass: &'a [f64],
+    offsets: &'a [u32],
+    links: &'a [u32],
+    spring_f: [&'a [f64]; 3],
+}
+
+/// What the particle pass writes, for particles `start..start + len`.
+struct Out<'a> {
+    start: usize,
+    x: [&'a mut [f64]; 3],
+    v: [&'a mut [f64]; 3],
+    /// Verlet's `u`, updated in place (only its own particle reads it); empty otherwise.
+    u: [&'a mut [f64]; 3],
+}
+
+impl Out<'_> {
+    fn len(&self) -> usize {
+        self.x[0].len()
+    }
+
+    fn split(self, mid: usize) -> (Self, Self) {
+        let (x0, x1) = halves(self.x, mid);
+        let (v0, v1) = halves(self.v, mid);
+        let (u0, u1) = halves(self.u, mid);
+        let first = Self {
+            start: self.start,
+            x: x0,
+            v: v0,
+            u: u0,
+        };
+        let second = Self {
+            start: self.start + mid,
+            x: x1,
+            v: v1,
+            u: u1,
+        };
+        (first, second)
+    }
+}
+
+fn load(a: [&[f64]; 3], i: usize) -> DVec3 {
+    DVec3::new(a[0][i], a[1][i], a[2][i])
+}
+
+fn store(a: &mut [&mut [f64]; 3], i: usize, value: DVec3) {
+    a[0][i] = value.x;
+    a[1][i] = value.y;
+    a[2][i] = value.z;
+}
+
+/// Forces, accelerations and the integrator's update for the particles of `out`.
+fn advance(ctx: &Ctx, mut out: Out) {
+    let p = &ctx.p;
+    let h = p.dt;
+    let verlet = !out.u[0].is_empty();
+    let sf = ctx.spring_f;
+    for local in 0..out.len() {
+        let i = out.start + local;
+        let xi = load(ctx.x, i);
+        let vi = load(ctx.v, i);
+        // The f64 engine's gather: `f += sign * f_spring` in spring order.
+        let mut f = DVec3::ZERO;
+        for &e in &ctx.links[ctx.offsets[i] as usize..ctx.offsets[i + 1] as usize] {
+            let s = (e & !B_END) as usize;
+            let sign = if e & B_END == 0 { 1.0 } else { -1.0 };
+            f += sign * DVec3::new(sf[0][s], sf[1][s], sf[2][s]);
+        }
+        if p.air_damping > 0.0 {
+            f -= p.air_damping * vi;
+        }
+        if let Some(ground) = p.ground {
+            let depth = ground.height - xi.y;
+            if depth > 0.0 {
+                f.y += ground.stiffness * depth - ground.damping * vi.y;
+            }
+        }
+        let w = ctx.inv_mass[i];
+        let a = if w > 0.0 {
+            f * w + p.gravity
+        } else {
+            DVec3::ZERO
+        };
+        let (x_new, v_new) = match p.integrator {
+            Integrator::ExplicitEuler => (xi + h * vi, vi + h * a),
+            Integrator::Verlet if verlet => {
+                if w == 0.0 {
+                    // Held in place: the f64 engine sets `x_prev = x` and keeps `v`.
+                    store(&mut out.u, local, DVec3::ZERO);
+                    (xi, vi)
+                } else {
+                    let u = load(out.u.each_ref().map(|s| &**s), local) + h * a;
+                    store(&mut out.u, local, u);
+                    (xi + h * u, u + 0.5 * h * a)
+                }
+            }
+            _ => {
+                let v_new = vi + h * a;
+                (xi + h * v_new, v_new)
+            }
+        };
+        store(&mut out.x, local, x_new);
+        store(&mut out.v, local, v_new);
+    }
+}
+
+/// Splits `out` in halves down to `leaf` particles, run with `rayon::join`.
+fn advance_parallel(ctx: &Ctx, out: Out, leaf: usize) {
+    if out.len() <= leaf {
+        advance(ctx, out);
+        return;
+    }
+    let mid = out.len() / 2;
+    let (a, b) = out.split(mid);
+    rayon::join(
+        || advance_parallel(ctx, a, leaf),
+        || advance_parallel(ctx, b, leaf),
+    );
+}
+
+/// Moves particles `a` and `b` along their joining line to distance `target(l)`
+/// ([`length_correction`]), on structure-of-arrays positions.
+fn restore_length(
+    x: &mut [Vec<f64>; 3],
+    inv_mass: &[f64],
+    a: usize,
+    b: usize,
+    target: impl Fn(f64) -> Option<f64>,
+) {
+    let (wa, wb) = (inv_mass[a], inv_mass[b]);
+    let xa = DVec3::new(x[0][a], x[1][a], x[2][a]);
+    let xb = DVec3::new(x[0][b], x[1][b], x[2][b]);
+    if let Some(c) = length_correction(xa, xb, wa, wb, target) {
+        let (na, nb) = (xa - wa * c, xb + wb * c);
+        for (k, axis) in x.iter_mut().enumerate() {
+            axis[a] = na[k];
+            axis[b] = nb[k];
+        }
+    }
+}
+
+impl MeshKernel {
+    /// Builds the engine for `model`'s particles, springs, bars and masses, with
+    /// `params` ([`MeshParams::of`]). The state starts at rest at the origin: set it
+    /// with [`Self::set_state`]. Runs on the calling thread until
+    /// [`Self::set_threads`] is called.
+    pub fn new(model: &Model, params: MeshParams) -> Self {
+        let n = model.mass.len();
+        let m = model.springs.len();
+        let mut offsets = vec![0u32; n + 1];
+        for s in &model.springs {
+            offsets[s.a as usize + 1] += 1;
+            offsets[s.b as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        // Filled in spring order per particle: the f64 engine's gather order.
+        let mut cursor = offsets.clone();
+        let mut links = vec![0u32; 2 * m];
+        for (index, s) in model.springs.iter().enumerate() {
+            for (end, flag) in [(s.a, 0), (s.b, B_END)] {
+                let slot = &mut cursor[end as usize];
+                links[*slot as usize] = index as u32 | flag;
+                *slot += 1;
+            }
+        }
+        let mut springs = SpringArrays {
+            ends: model.springs.iter().map(|s| [s.a, s.b]).collect(),
+            coefficients: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
+        };
+        springs.set_coefficients(&model.springs);
+        let zeros = |len| [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
+        let verlet = params.integrator == Integrator::Verlet;
+        let mut kernel = Self {
+            params,
+            x: zeros(n),
+            v: zeros(n),
+            u: zeros(if verlet { n } else { 0 }),
+            x_next: zeros(n),
+            v_next: zeros(n),
+            before: Default::default(),
+            inv_mass: model.inv_mass.clone(),
+            spring_f: zeros(m),
+            offsets,
+            links,
+            springs,
+            model_springs: model.springs.clone(),
+            bars: model.bars.clone(),
+            threads: 1,
+            pool: None,
+            #[cfg(target_arch = "x86_64")]
+            avx2: std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(not(target_arch = "x86_64"))]
+            avx2: false,
+        };
+        kernel.size_before();
+        kernel
+    }
+
+    /// Whether the engine steps a system with this integrator.
+    pub fn supports(integrator: Integrator) -> bool {
+        match integrator {
+            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet => true,
+            Integrator::Rk2 | Integrator::Rk4 | Integrator::ImplicitEuler => false,
+        }
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.inv_mass.len()
+    }
+
+    /// Whether there are no particles.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The parameters in effect.
+    pub fn params(&self) -> &MeshParams {
+        &self.params
+    }
+
+    /// Takes in `model`'s current springs, bars and inverse masses and `params`
+    /// without new arrays when only coefficients changed (a live edit). Returns
+    /// `false`, changing nothing, when the topology or the integrator differs (a
+    /// new engine is needed).
+    pub fn refresh(&mut self, model: &Model, params: MeshParams) -> bool {
+        let same_ends = |a: &Spring, b: &Spring| (a.a, a.b) == (b.a, b.b);
+        let same_bars = |a: &Bar, b: &Bar| (a.a, a.b) == (b.a, b.b);
+        if params.integrator != self.params.integrator
+            || model.inv_mass.len() != self.len()
+            || model.springs.len() != self.model_springs.len()
+            || model.bars.len() != self.bars.len()
+            || !model
+                .springs
+                .iter()
+                .zip(&self.model_springs)
+                .all(|(a, b)| same_ends(a, b))
+            || !model
+                .bars
+                .iter()
+                .zip(&self.bars)
+                .all(|(a, b)| same_bars(a, b))
+        {
+            return false;
+        }
+        self.params = params;
+        self.size_before();
+        self.inv_mass.copy_from_slice(&model.inv_mass);
+        self.bars.copy_from_slice(&model.bars);
+        if model.springs != self.model_springs {
+            self.model_springs.copy_from_slice(&model.springs);
+            self.springs.set_coefficients(&model.springs);
+        }
+        true
+    }
+
+    /// Whether anything is enforced after integration.
+    fn has_constraints(&self) -> bool {
+        let p = &self.params;
+        (p.bar_iterations > 0 && !self.bars.is_empty())
+            || (p.stretch_limit.is_some() && !self.model_springs.is_empty())
+            || p.sphere.is_some()
+    }
+
+    fn size_before(&mut self) {
+        let len = if self.has_constraints() {
+            self.len()
+        } else {
+            0
+        };
+        for axis in &mut self.before {
+            axis.resize(len, 0.0);
+        }
+    }
+
+    /// Use `n` threads (at least 1) for models of [`PARALLEL_MIN_PARTICLES`]
+    /// particles or more; smaller ones run on the calling thread. Builds a rayon pool
+    /// (this allocates; the steps do not).
+    pub fn set_threads(&mut self, n: usize) {
+        self.set_threads_from(n, PARALLEL_MIN_PARTICLES);
+    }
+
+    /// As [`Self::set_threads`], with the size from which threads are used given
+    /// (for tests: results must not depend on the thread count at any size).
+    pub fn set_threads_from(&mut self, n: usize, min_particles: usize) {
+        let n = n.max(1);
+        self.threads = n;
+        self.pool = if n > 1 && self.len() >= min_particles.max(2) {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .thread_name(|i| format!("cloth-mesh-{i}"))
+                .build()
+                .ok()
+        } else {
+            None
+        };
+    }
+
+    /// True if steps run on several threads.
+    pub fn is_parallel(&self) -> bool {
+        self.pool.is_some()
+    }
+
+    /// Sets positions (m) and velocities (m/s). Verlet's update velocities start
+    /// equal to the velocities (call [`Self::set_update_velocities`] after this to
+    /// give them their own values).
+    pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
+        for (i, (p, v)) in positions
+            .iter()
+            .zip(velocities)
+            .enumerate()
+            .take(self.len())
+        {
+            for k in 0..3 {
+                self.x[k][i] = p[k];
+                self.v[k][i] = v[k];
+            }
+        }
+        if self.params.integrator == Integrator::Verlet {
+            self.set_update_velocities(velocities);
+        }
+    }
+
+    /// Sets position Verlet's velocities of the last position update,
+    /// `(x - x_prev) / h` (m/s); ignored for the other integrators.
+    pub fn set_update_velocities(&mut self, u: &[DVec3]) {
+        if self.u[0].is_empty() {
+            return;
+        }
+        for (i, q) in u.iter().enumerate().take(self.len()) {
+            for k in 0..3 {
+                self.u[k][i] = q[k];
+            }
+        }
+    }
+
+    fn read_into(arrays: &[Vec<f64>; 3], out: &mut [DVec3]) {
+        for (i, o) in out.iter_mut().enumerate().take(arrays[0].len()) {
+            *o = DVec3::new(arrays[0][i], arrays[1][i], arrays[2][i]);
+        }
+    }
+
+    /// Copies the positions (m) into `out`.
+    pub fn positions_into(&self, out: &mut [DVec3]) {
+        Self::read_into(&self.x, out);
+    }
+
+    /// Copies the velocities (m/s) into `out`.
+    pub fn velocities_into(&self, out: &mut [DVec3]) {
+        Self::read_into(&self.v, out);
+    }
+
+    /// Copies Verlet's update velocities (m/s) into `out`; nothing for the other
+    /// integrators.
+    pub fn update_velocities_into(&self, out: &mut [DVec3]) {
+        Self::read_into(&self.u, out);
+    }
+
+    /// The largest squared speed and squared distance from `center`, or infinities
+    /// when a value is not finite (for a cheap divergence scan).
+    pub fn extremes(&self, center: DVec3) -> (f64, f64) {
+        let (mut speed2, mut dist2) = (0.0f64, 0.0f64);
+        for i in 0..self.len() {
+            let v = DVec3::new(self.v[0][i], self.v[1][i], self.v[2][i]);
+            let d = DVec3::new(self.x[0][i], self.x[1][i], self.x[2][i]) - center;
+            let (v2, d2) = (v.length_squared(), d.length_squared());
+            if v2.is_nan() || d2.is_nan() {
+                return (f64::INFINITY, f64::INFINITY);
+            }
+            speed2 = speed2.max(v2);
+            dist2 = dist2.max(d2);
+        }
+        (speed2, dist2)
+    }
+
+    /// Advances by `n` steps of the parameters' `dt`. On several threads the pool is
+    /// entered once for all `n` steps.
+    pub fn steps(&mut self, n: usize) {
+        match self.pool.take() {
+            Some(pool) => {
+                let per_task = |len: usize| (len / (4 * self.threads)).max(MIN_LEAF);
+                let leaves = (per_task(self.model_springs.len()), per_task(self.len()));
+                pool.install(|| {
+                    for _ in 0..n {
+                        self.one_step(Some(leaves));
+                    }
+                });
+                self.pool = Some(pool);
+            }
+            None => {
+                for _ in 0..n {
+                    self.one_step(None);
+                }
+            }
+        }
+    }
+
+    /// One step; `leaves` (springs, particles per task) when on the pool.
+    fn one_step(&mut self, leaves: Option<(usize, usize)>) {
+        let x = self.x.each_ref().map(Vec::as_slice);
+        let v = self.v.each_ref().map(Vec::as_slice);
+        let springs = SpringCtx {
+            springs: &self.springs,
+            x,
+            v,
+            avx2: self.avx2,
+        };
+        let out = self.spring_f.each_mut().map(Vec::as_mut_slice);
+        match leaves {
+            Some((leaf, _)) => spring_pass_parallel(&springs, 0, out, leaf),
+            None => spring_pass(&springs, 0, out),
+        }
+        let ctx = Ctx {
+            p: self.params,
+            x,
+            v,
+            inv_mass: &self.inv_mass,
+            offsets: &self.offsets,
+            links: &self.links,
+            spring_f: self.spring_f.each_ref().map(Vec::as_slice),
+        };
+        let out = Out {
+            start: 0,
+            x: self.x_next.each_mut().map(Vec::as_mut_slice),
+            v: self.v_next.each_mut().map(Vec::as_mut_slice),
+            u: self.u.each_mut().map(Vec::as_mut_slice),
+        };
+        match leaves {
+            Some((_, leaf)) => advance_parallel(&ctx, out, leaf),
+            None => advance(&ctx, out),
+        }
+        std::mem::swap(&mut self.x, &mut self.x_next);
+        std::mem::swap(&mut self.v, &mut self.v_next);
+        if self.has_constraints() {
+            self.constrain();
+        }
+    }
+
+    /// Bars, stretch limit and sphere, in the f64 engine's order, then `v += δ/h`
+    /// (and `u` for Verlet).
+    fn constrain(&mut self) {
+        let p = self.params;
+        for k in 0..3 {
+            self.before[k].copy_from_slice(&self.x[k]);
+        }
+        let x = &mut self.x;
+        let inv_mass = &self.inv_mass;
+        for _ in 0..p.bar_iterations {
+            for bar in &self.bars {
+                restore_length(x, inv_mass, bar.a as usize, bar.b as usize, |l| {
+                    (l != bar.length).then_some(bar.length)
+                });
+            }
+        }
+        if let Some(tau) = p.stretch_limit {
+            for s in &self.model_springs {
+                let longest = (1.0 + tau) * s.rest;
+                restore_length(x, inv_mass, s.a as usize, s.b as usize, |l| {
+                    (l > longest).then_some(longest)
+                });
+            }
+        }
+        if let Some(sphere) = p.sphere {
+            for (i, &w) in inv_mass.iter().enumerate() {
+                let xi = DVec3::new(x[0][i], x[1][i], x[2][i]);
+                if w > 0.0
+                    && let Some(outside) = out_of_sphere(xi, &sphere)
+                {
+                    for (k, axis) in x.iter_mut().enumerate() {
+                        axis[i] = outside[k];
+                    }
+                }
+            }
+        }
+        let h = p.dt;
+        let verlet = !self.u[0].is_empty();
+        for k in 0..3 {
+            let (x, before) = (&self.x[k], &self.before[k]);
+            for i in 0..x.len() {
+                let dv = (x[i] - before[i]) / h;
+                self.v[k][i] += dv;
+                if verlet {
+                    self.u[k][i] += dv;
+                }
+            }
+        }
+    }
+}

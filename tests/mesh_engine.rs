@@ -1,0 +1,251 @@
+//! The mesh engine against the f64 general engine (the exact reference), on the
+//! scenes that are not grids: each run is built twice from the same scene, one
+//! allowed the fast path (and taking the mesh engine), one exact, and both stepped
+//! the same number of steps.
+//!
+//! Tolerance: both engines compute in f64. The mesh engine evaluates each spring
+//! from both of its ends (the two evaluations are exact negations of each other)
+//! and sums a particle's springs in the general engine's gather order, then adds
+//! air damping, ground and gravity in the same order, so symplectic and explicit
+//! Euler agree bit for bit (measured: 0 m). Position Verlet differs in form: the
+//! mesh engine keeps the update velocity `u = (x - x_prev)/h` and steps
+//! `x += h (u + h a)`, the general engine `x_next = 2x - x_prev + h² a`, so each
+//! step rounds differently, by a few ulps of the position. The bound ([`bound`]) is
+//! that rounding adding up linearly: 4 ulps of the largest coordinate per step,
+//! 2e-12 m for 300 steps of the jelly (coordinates up to 8 m; measured 7e-13 m) and
+//! 9e-13 m for 400 steps of the rope (measured 2e-13 m) -- about 1e-12 m, a
+//! ten-millionth of the float32 grid kernel's agreement (`tests/fast_path.rs`).
+
+use cloth_sandbox::scene::Scene;
+use cloth_sandbox::sim::mesh_kernel::{MeshKernel, MeshParams};
+use cloth_sandbox::sim::{Engine, System};
+use glam::DVec3;
+
+/// Largest particle distance (m) allowed between the mesh and general engines
+/// after `steps` steps of a system whose coordinates reach `scale` m: 4 ulps of
+/// `scale` per step (see the module comment).
+fn bound(steps: u64, scale: f64) -> f64 {
+    steps as f64 * 4.0 * f64::EPSILON * scale
+}
+
+/// The largest coordinate (m), for [`bound`].
+fn scale(system: &System) -> f64 {
+    system
+        .positions()
+        .iter()
+        .map(|p| p.abs().max_element())
+        .fold(1.0, f64::max)
+}
+
+fn build(name: &str, overrides: &[&str]) -> System {
+    let mut scene = Scene::load(name).unwrap();
+    scene.set_all(overrides.iter().copied()).unwrap();
+    scene.build().unwrap()
+}
+
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0, f64::max)
+}
+
+/// Steps `name` with `overrides` on the mesh engine and on the general engine;
+/// returns the largest particle distance and how far the particles moved.
+fn mesh_and_exact(name: &str, overrides: &[&str], steps: u64) -> (f64, f64) {
+    let mut fast = build(name, overrides);
+    fast.set_fast_path(true);
+    assert_eq!(
+        fast.engine(),
+        Engine::Mesh,
+        "{name} {overrides:?} should take the mesh engine"
+    );
+    assert!(fast.engine().is_fast() && !fast.engine().is_grid());
+    let mut exact = build(name, overrides);
+    assert_eq!(exact.engine(), Engine::General);
+    let start = exact.positions().to_vec();
+    fast.run(steps).unwrap();
+    exact.run(steps).unwrap();
+    assert_eq!(fast.steps_taken(), exact.steps_taken());
+    assert_eq!(fast.time(), exact.time());
+    let d = max_distance(fast.positions(), exact.positions());
+    let dv = max_distance(fast.velocities(), exact.velocities());
+    let moved = max_distance(exact.positions(), &start);
+    let bound = bound(
+        steps,
+        scale(&exact).max(start.iter().fold(0.0, |m, p| m.max(p.abs().max_element()))),
+    );
+    assert!(
+        d <= bound,
+        "{name} {overrides:?}: engines differ by {d:e} m after {steps} steps (bound {bound:e} m)"
+    );
+    // Velocities are m/s over a step of ~1e-3 s: 1e-6 m/s is 1e-9 m a step.
+    assert!(
+        dv <= 1e-6,
+        "{name} {overrides:?}: velocities differ by {dv:e}"
+    );
+    // Verlet's different rounding shows that the fast run did not take the general
+    // path (for the Euler methods the results are identical by design).
+    if fast.params().integrator == cloth_sandbox::sim::Integrator::Verlet {
+        assert!(
+            d > 0.0,
+            "{name} {overrides:?}: identical Verlet results: the mesh engine did not run"
+        );
+    }
+    // The run must have done something for the comparison to mean anything.
+    assert!(
+        moved > 1e-6,
+        "{name} {overrides:?}: nothing moved ({moved:e} m)"
+    );
+    (d, moved)
+}
+
+/// The lowest particle height of a scene as built (m).
+fn lowest(name: &str, overrides: &[&str]) -> f64 {
+    build(name, overrides)
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn the_non_grid_scenes_agree_with_the_f64_engine() {
+    for name in ["chain", "jelly", "rope", "spring"] {
+        let (d, moved) = mesh_and_exact(name, &[], 400);
+        println!("{name}: {d:e} m apart after moving {moved:.3e} m");
+    }
+}
+
+#[test]
+fn a_bigger_jelly_agrees_feature_by_feature() {
+    let big = ["width=12", "height=12", "depth=12"];
+    // Resting on the ground from the start: its lowest particle 5 cm deep.
+    let ground = format!("ground_height={}", lowest("jelly", &big) + 0.05);
+    // A sphere inside the cube: the particles within are pushed out at once.
+    let centre = build("jelly", &big)
+        .positions()
+        .iter()
+        .copied()
+        .sum::<DVec3>()
+        / (12.0 * 12.0 * 12.0);
+    let sphere_center = format!("sphere_center=\"{},{},{}\"", centre.x, centre.y, centre.z);
+    let cases: Vec<Vec<String>> = vec![
+        vec![],
+        vec![ground.clone()],
+        vec!["air_damping=0.5".into()],
+        vec![sphere_center, "sphere_radius=2.5".into()],
+        vec!["integrator=\"verlet\"".into(), ground.clone()],
+        vec!["integrator=\"explicit-euler\"".into()],
+        vec!["stretch_limit=0.0001".into(), ground],
+    ];
+    for extra in cases {
+        let overrides: Vec<&str> = big
+            .iter()
+            .copied()
+            .chain(extra.iter().map(String::as_str))
+            .collect();
+        let (d, moved) = mesh_and_exact("jelly", &overrides, 300);
+        println!("jelly {extra:?}: {d:e} m apart after moving {moved:.3e} m");
+    }
+}
+
+#[test]
+fn a_jelly_big_enough_for_threads_agrees_with_the_f64_engine() {
+    // 16³ = 4096 particles: past the size from which `System::run` uses threads
+    // (`mesh_kernel::PARALLEL_MIN_PARTICLES`; the 12³ jelly above is too).
+    let (d, _) = mesh_and_exact("jelly", &["width=16", "height=16", "depth=16"], 100);
+    println!("jelly 16³: {d:e} m");
+}
+
+/// Positions and velocities after `steps` steps of the mesh engine on `threads`
+/// threads (forced, whatever the size).
+fn kernel_run(system: &System, threads: usize, steps: usize) -> (Vec<DVec3>, Vec<DVec3>) {
+    let params = MeshParams::of(system.model()).expect("the mesh engine models it");
+    let mut kernel = MeshKernel::new(system.model(), params);
+    kernel.set_threads_from(threads, 0);
+    assert_eq!(kernel.is_parallel(), threads > 1);
+    kernel.set_state(system.positions(), system.velocities());
+    kernel.steps(steps);
+    let n = system.particle_count();
+    let (mut x, mut v) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+    kernel.positions_into(&mut x);
+    kernel.velocities_into(&mut v);
+    (x, v)
+}
+
+#[test]
+fn one_and_two_threads_give_identical_results() {
+    for (name, overrides) in [
+        ("jelly", &["width=12", "height=12", "depth=12"][..]),
+        (
+            "jelly",
+            &["width=12", "height=12", "depth=12", "integrator=\"verlet\""][..],
+        ),
+        ("chain", &["width=3000"][..]),
+        ("rope", &[][..]),
+    ] {
+        let system = build(name, overrides);
+        let one = kernel_run(&system, 1, 200);
+        let two = kernel_run(&system, 2, 200);
+        assert!(one == two, "{name} {overrides:?}: 1 and 2 threads differ");
+    }
+}
+
+#[test]
+fn edits_between_runs_reach_the_mesh_engine() {
+    let mut fast = build("chain", &[]);
+    fast.set_fast_path(true);
+    let mut exact = build("chain", &[]);
+    for system in [&mut fast, &mut exact] {
+        system.run(100).unwrap();
+        system.set_pinned(10, true);
+        system.run(100).unwrap();
+        system.set_spring_stiffness(cloth_sandbox::sim::SpringKind::Other, 300.0);
+        system.grab(5, DVec3::new(1.0, 2.0, 0.0));
+        system.run(100).unwrap();
+        system.release();
+        system.set_pinned(10, false);
+        system.set_particle_mass(0.25);
+        system.run(100).unwrap();
+    }
+    assert_eq!(fast.engine(), Engine::Mesh);
+    // Symplectic Euler: bit for bit.
+    let d = max_distance(fast.positions(), exact.positions());
+    assert!(d <= bound(400, scale(&exact)), "{d:e} m");
+}
+
+#[test]
+fn what_the_mesh_engine_does_not_model_runs_on_the_general_path() {
+    for (name, overrides) in [
+        ("jelly", &["integrator=\"rk4\""][..]),
+        ("chain", &["integrator=\"rk2\""][..]),
+        ("rope", &["integrator=\"implicit-euler\""][..]),
+    ] {
+        let mut system = build(name, overrides);
+        system.set_fast_path(true);
+        assert_eq!(system.engine(), Engine::General, "{name} {overrides:?}");
+        system.run(10).unwrap();
+    }
+}
+
+#[test]
+fn a_divergence_on_the_mesh_engine_is_caught_where_the_f64_engine_catches_it() {
+    // Explicit Euler at 10x the jelly's step: unstable, it runs away within a few
+    // hundred steps. Both engines compute the same numbers, so both stop at the
+    // same check; the mesh engine checks at the end of each chunk of 32 steps (or of
+    // the run), the general engine after every step, so the mesh engine stops at
+    // most 31 steps later, and no later than the run's end.
+    let overrides = ["integrator=\"explicit-euler\"", "dt=0.002"];
+    let mut fast = build("jelly", &overrides);
+    fast.set_fast_path(true);
+    assert_eq!(fast.engine(), Engine::Mesh);
+    let mut exact = build("jelly", &overrides);
+    let fast_err = fast.run(20_000).unwrap_err();
+    let exact_err = exact.run(20_000).unwrap_err();
+    let (f, e) = (fast.steps_taken(), exact.steps_taken());
+    assert!(
+        f >= e && f < e + 32,
+        "mesh stopped at step {f} ({fast_err}), general at {e} ({exact_err})"
+    );
+}
