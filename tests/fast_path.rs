@@ -2,23 +2,12 @@
 //! general path to float32 round-off, falls back to the general path for anything
 //! the kernel does not model, and honours pins and grabs made between runs.
 
-use cloth_sandbox::scene::Scene;
 use cloth_sandbox::sim::grid_kernel::Precision;
 use cloth_sandbox::sim::{Engine, System};
 use glam::DVec3;
 
-fn build(name: &str, overrides: &[&str]) -> System {
-    let mut scene = Scene::load(name).unwrap();
-    scene.set_all(overrides.iter().copied()).unwrap();
-    scene.build().unwrap()
-}
-
-fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| p.distance(*q))
-        .fold(0.0, f64::max)
-}
+mod common;
+use common::{build, max_distance};
 
 fn fast_and_exact(name: &str, overrides: &[&str], steps: u64) -> (System, System) {
     let mut fast = build(name, overrides);

@@ -16,7 +16,6 @@
 //! 9e-13 m for 400 steps of the rope (measured 2e-13 m) -- about 1e-12 m, a
 //! ten-millionth of the float32 grid kernel's agreement (`tests/fast_path.rs`).
 
-use cloth_sandbox::scene::Scene;
 use cloth_sandbox::sim::mesh_kernel::{MeshKernel, MeshParams};
 use cloth_sandbox::sim::{Engine, System};
 use glam::DVec3;
@@ -37,18 +36,8 @@ fn scale(system: &System) -> f64 {
         .fold(1.0, f64::max)
 }
 
-fn build(name: &str, overrides: &[&str]) -> System {
-    let mut scene = Scene::load(name).unwrap();
-    scene.set_all(overrides.iter().copied()).unwrap();
-    scene.build().unwrap()
-}
-
-fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| p.distance(*q))
-        .fold(0.0, f64::max)
-}
+mod common;
+use common::{build, max_distance};
 
 /// Steps `name` with `overrides` on the mesh engine and on the general engine;
 /// returns the largest particle distance and how far the particles moved.

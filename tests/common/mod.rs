@@ -6,6 +6,21 @@
 use cloth_sandbox::scene::Scene;
 use cloth_sandbox::sim::System;
 
+/// A built-in scene with `key=value` overrides, built.
+pub fn build(name: &str, overrides: &[&str]) -> System {
+    let mut scene = Scene::load(name).unwrap();
+    scene.set_all(overrides.iter().copied()).unwrap();
+    scene.build().unwrap()
+}
+
+/// The largest distance (m) between corresponding points.
+pub fn max_distance(a: &[glam::DVec3], b: &[glam::DVec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0, f64::max)
+}
+
 /// The `spring` scene's vertical oscillator: a mass `m` hanging from a fixed point on a
 /// spring (k, L, b) under gravity g. With s the distance below the fixed point,
 /// `m s'' = m g - k (s - L) - b s'`, so `u = s - s_eq` with `s_eq = L + m g / k`
