@@ -170,7 +170,16 @@ fn info_reports_counts_terms_parameters_and_stability() {
     );
     assert!(v["stability"]["dt_over_dt_critical"].as_f64().unwrap() > 0.0);
     assert_eq!(v["parameters"]["integrator"], "symplectic-euler");
-    assert_eq!(v["engine"], "grid-f32");
+    assert_eq!(
+        v["engine"], "grid-mixed",
+        "k / m = 1e5 needs double-float positions"
+    );
+    let bench = cloth(&["info", "--scene", "bench", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(stdout(&bench).trim()).unwrap();
+    assert_eq!(
+        v["engine"], "grid-f32",
+        "the peers' cloth is soft enough for float32"
+    );
     let stiff = cloth(&[
         "info",
         "--scene",

@@ -210,17 +210,29 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
         cloth.velocities_into(&mut v);
         v.iter().map(|v| 0.5 * m * v.length_squared()).sum::<f64>()
     };
-    let (single, double) = (kinetic(Precision::Single), kinetic(Precision::Double));
-    println!("kinetic energy from rest: {single:.3e} J (float32), {double:.3e} J (float64)");
+    let [single, mixed, double] =
+        [Precision::Single, Precision::Mixed, Precision::Double].map(kinetic);
+    println!(
+        "kinetic energy from rest: {single:.3e} J (float32), {mixed:.3e} J (float32 on \
+         double-float positions), {double:.3e} J (float64)"
+    );
     assert!(
         single > 1e3 * double.max(1e-30),
         "{single:e} J vs {double:e} J"
     );
+    assert!(
+        mixed > 1e3 * double.max(1e-30),
+        "{mixed:e} J vs {double:e} J"
+    );
+    // The rule: float64 for this cloth, double-float positions for a moderately
+    // stiff one, float32 for the peers' cloth.
     let mut spec = GridSpec::peer_bench(32, false);
     spec.structural.k = 1e7;
-    assert_eq!(Precision::needed(&spec), Precision::Double);
+    assert_eq!(Precision::needed(&spec, 2.0), Precision::Double);
+    spec.structural.k = 100.0;
+    assert_eq!(Precision::needed(&spec, 2.0), Precision::Mixed);
     assert_eq!(
-        Precision::needed(&GridSpec::peer_bench(32, false)),
+        Precision::needed(&GridSpec::peer_bench(32, false), 2.0),
         Precision::Single
     );
 }

@@ -48,6 +48,7 @@ impl Engine {
         match self {
             Self::General => "general-f64",
             Self::Grid(Precision::Single) => "grid-f32",
+            Self::Grid(Precision::Mixed) => "grid-mixed",
             Self::Grid(Precision::Double) => "grid-f64",
             Self::Mesh => "mesh-f64",
         }
@@ -366,7 +367,10 @@ impl System {
             present: springs.present,
             precision: Precision::Single,
         };
-        spec.precision = Precision::needed(&spec);
+        // How far from the origin the cloth may go before float32 positions lose
+        // what the precision rule allowed: twice its start's farthest point.
+        let reach = 2.0 * (self.start_center.length() + self.start_extent);
+        spec.precision = Precision::needed(&spec, reach);
         Some(spec)
     }
 

@@ -146,20 +146,23 @@ pub struct GridSpec {
     pub precision: Precision,
 }
 
-/// The float type a [`GridCloth`] computes in.
+/// The float types a [`GridCloth`] keeps and computes in.
 ///
-/// Positions are double-float in both (a high and a low part, so `x += h v` keeps
-/// every bit whatever the step), but in `Single` a spring's length is computed in
-/// float32, which resolves its stretch only to about `2^-23 L`. Times `k`, that is
-/// force noise: harmless while it is small against the forces that move the cloth,
-/// heating where it is not (a k = 1e9 N/m cloth of 1 mg particles). `Double` is the
-/// same code in float64, at about half the speed (half as many lanes).
+/// Float32 positions lose the low bits of each move `x += h v`, and float32 spring
+/// lengths resolve the stretch only to about `2^-23 L`; times `k / m`, either is an
+/// acceleration noise that heats a stiff cloth (0.15 J in 200 steps of a k = 1e7 N/m
+/// cloth that the f64 engine keeps at 2e-6 J). [`Precision::needed`] takes the
+/// cheapest level whose noise stays under [`Precision::NOISE_LIMIT`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Precision {
-    /// Float32 arithmetic.
+    /// Float32 positions and arithmetic: noise `~ k 2^-23 |x| / m`, with `|x|` the
+    /// largest coordinate.
     #[default]
     Single,
-    /// Float64 arithmetic.
+    /// Float32 arithmetic on double-float positions (a high and a low float, `x +=
+    /// h v` exact, a spring's `d` accurate to its length): noise `~ k 2^-23 L / m`.
+    Mixed,
+    /// Float64 positions and arithmetic (the same code at half the lanes).
     Double,
 }
 
@@ -168,26 +171,30 @@ impl Precision {
     /// standard gravity.
     pub const NOISE_LIMIT: f64 = 0.0981;
 
-    /// The precision a grid cloth needs: `Single` when the acceleration noise of
-    /// float32 spring lengths, `sum_kinds k 2^-23 L / m`, stays below
-    /// [`Self::NOISE_LIMIT`], else `Double`.
-    pub fn needed(spec: &GridSpec) -> Self {
-        if Self::float32_noise(spec) <= Self::NOISE_LIMIT {
+    /// The precision a grid cloth needs whose coordinates stay within `reach` (m)
+    /// of the origin: `Single` when float32 positions keep the noise under the
+    /// limit, else `Mixed` when float32 spring lengths do, else `Double`.
+    pub fn needed(spec: &GridSpec, reach: f64) -> Self {
+        if Self::float32_noise(spec, Some(reach)) <= Self::NOISE_LIMIT {
             Self::Single
+        } else if Self::float32_noise(spec, None) <= Self::NOISE_LIMIT {
+            Self::Mixed
         } else {
             Self::Double
         }
     }
 
-    /// The acceleration noise (m/s²) of float32 spring lengths on `spec`'s cloth.
-    pub fn float32_noise(spec: &GridSpec) -> f64 {
+    /// The acceleration noise (m/s²) of float32 on `spec`'s cloth, `sum_kinds 4 k
+    /// 2^-23 r / m` (a particle has up to 4 springs of each kind), with `r` the
+    /// position's size `reach` for float32 positions, or each kind's rest length
+    /// for double-float positions (`None`).
+    pub fn float32_noise(spec: &GridSpec, reach: Option<f64>) -> f64 {
         let h = spec.spacing.abs();
         let ulp = f32::EPSILON as f64;
         let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
         let kinds = [spec.structural, spec.shear, spec.bend];
-        // Each particle has up to 4 springs of each kind.
         let noise: f64 = (kinds.iter().zip(rests))
-            .map(|(kind, rest)| 4.0 * kind.k.abs() * ulp * rest)
+            .map(|(kind, rest)| 4.0 * kind.k.abs() * ulp * reach.unwrap_or(rest).abs())
             .sum();
         if spec.particle_mass > 0.0 {
             noise / spec.particle_mass
@@ -487,6 +494,8 @@ struct Params<E> {
     verlet_half_dt: E,
     /// Whether the velocity of the last position update `u` is its own array (Verlet).
     verlet: bool,
+    /// Whether positions have low parts ([`Precision::Mixed`]).
+    compensated: bool,
     /// Sphere centre, radius and squared radius, projected onto inside the fused step.
     sphere: Option<([E; 3], E, E)>,
 }
@@ -529,6 +538,7 @@ impl<E: Real> Params<E> {
             },
             verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
+            compensated: spec.precision == Precision::Mixed,
             // With a stretch limit the sphere comes after it, in the constraint pass.
             sphere: spec
                 .sphere
@@ -670,7 +680,9 @@ impl<E: Real> Kernel<E> {
             for (a, q) in start.into_iter().enumerate() {
                 let hi = E::of(q);
                 cur.x[a].as_mut_slice()[i] = hi;
-                cur.xl[a].as_mut_slice()[i] = E::of(q - hi.f64());
+                if spec.precision == Precision::Mixed {
+                    cur.xl[a].as_mut_slice()[i] = E::of(q - hi.f64());
+                }
             }
         }
         let mut inv_mass = Buf::zeros(grid.len());
@@ -1057,7 +1069,11 @@ impl<E: Real> Kernel<E> {
         for a in 0..3 {
             let hi = E::of(q[a]);
             self.cur.x[a].as_mut_slice()[i] = hi;
-            self.cur.xl[a].as_mut_slice()[i] = E::of(q[a] - hi.f64());
+            self.cur.xl[a].as_mut_slice()[i] = if self.params.compensated {
+                E::of(q[a] - hi.f64())
+            } else {
+                E::ZERO
+            };
         }
     }
 
@@ -1223,7 +1239,7 @@ impl GridCloth {
     /// If the spec's integrator is not one the kernel has ([`GridCloth::supports`]).
     pub fn new(spec: GridSpec) -> Self {
         Self(match spec.precision {
-            Precision::Single => Kernels::Single(Kernel::new(spec)),
+            Precision::Single | Precision::Mixed => Kernels::Single(Kernel::new(spec)),
             Precision::Double => Kernels::Double(Kernel::new(spec)),
         })
     }
@@ -1430,16 +1446,34 @@ fn row_variant<S: Simd>(
     lo: usize,
     own: bool,
 ) {
+    if ctx.p.compensated {
+        row_modes::<S, true>(s, ctx, band, row, out, lo, own);
+    } else {
+        row_modes::<S, false>(s, ctx, band, row, out, lo, own);
+    }
+}
+
+/// [`row_variant`] with (`LO`) or without the positions' low parts.
+#[inline(always)]
+fn row_modes<S: Simd, const LO: bool>(
+    s: S,
+    ctx: &Ctx<S::E>,
+    band: &mut Band<S::E>,
+    row: usize,
+    out: &mut Out<S::E>,
+    lo: usize,
+    own: bool,
+) {
     // A plain cloth (symplectic Euler, no air damping, ground or sphere) gets a
     // version of the step without them.
     let plain = ctx.p.is_plain();
     match (ctx.drag, own, plain) {
-        (true, true, true) => row_step::<S, true, true, true>(s, ctx, band, row, out, lo),
-        (true, true, false) => row_step::<S, true, true, false>(s, ctx, band, row, out, lo),
-        (false, true, true) => row_step::<S, false, true, true>(s, ctx, band, row, out, lo),
-        (false, true, false) => row_step::<S, false, true, false>(s, ctx, band, row, out, lo),
-        (true, false, _) => row_step::<S, true, false, true>(s, ctx, band, row, out, lo),
-        (false, false, _) => row_step::<S, false, false, true>(s, ctx, band, row, out, lo),
+        (true, true, true) => row_step::<S, true, true, true, LO>(s, ctx, band, row, out, lo),
+        (true, true, false) => row_step::<S, true, true, false, LO>(s, ctx, band, row, out, lo),
+        (false, true, true) => row_step::<S, false, true, true, LO>(s, ctx, band, row, out, lo),
+        (false, true, false) => row_step::<S, false, true, false, LO>(s, ctx, band, row, out, lo),
+        (true, false, _) => row_step::<S, true, false, true, LO>(s, ctx, band, row, out, lo),
+        (false, false, _) => row_step::<S, false, false, true, LO>(s, ctx, band, row, out, lo),
     }
 }
 
@@ -1817,14 +1851,20 @@ type Particle<'a, V> = (&'a [V; 3], &'a [V; 3], &'a [V; 3]);
 /// is accurate to its own size, not to that of the positions), `dv = v_i - v_j`.
 /// `kind` is `[-k, k L, -b]`.
 #[inline(always)]
-fn spring<S: Simd>(
+fn spring<S: Simd, const LO: bool>(
     s: S,
     (xi, xli, vi): Particle<S::V>,
     (xj, xlj, vj): Particle<S::V>,
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
 ) -> [S::V; 3] {
-    let d: [S::V; 3] = std::array::from_fn(|a| s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a])));
+    let d: [S::V; 3] = std::array::from_fn(|a| {
+        if LO {
+            s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a]))
+        } else {
+            s.sub(xi[a], xj[a])
+        }
+    });
     let u = [
         s.sub(vi[0], vj[0]),
         s.sub(vi[1], vj[1]),
@@ -1926,7 +1966,7 @@ type SphereLanes<V> = ([V; 3], V, V);
 /// the last two columns, and the last two rows, mask the springs and triangles
 /// that reach ghost particles.
 #[inline(always)]
-fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool>(
+fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
     s: S,
     ctx: &Ctx<S::E>,
     band: &mut Band<S::E>,
@@ -2006,12 +2046,12 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool>(
     let mut c = 0;
     while c < c_mask {
         // SAFETY: c < nv, a multiple of LANES; bounds asserted above.
-        unsafe { block::<S, DRAG, OWN, false, PLAIN>(&k, c, &mut carry) };
+        unsafe { block::<S, DRAG, OWN, false, PLAIN, LO>(&k, c, &mut carry) };
         c += S::LANES;
     }
     while c < nv {
         // SAFETY: as above.
-        unsafe { block::<S, DRAG, OWN, true, PLAIN>(&k, c, &mut carry) };
+        unsafe { block::<S, DRAG, OWN, true, PLAIN, LO>(&k, c, &mut carry) };
         c += S::LANES;
     }
 }
@@ -2022,7 +2062,14 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool>(
 /// `c + LANES <= nv`, and the pointers and offsets of `k` are valid as asserted in
 /// [`row_step`].
 #[inline(always)]
-unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, const PLAIN: bool>(
+unsafe fn block<
+    S: Simd,
+    const DRAG: bool,
+    const OWN: bool,
+    const MASK: bool,
+    const PLAIN: bool,
+    const LO: bool,
+>(
     k: &RowKernel<S>,
     c: usize,
     carry: &mut [[S::V; 3]; 3],
@@ -2038,24 +2085,14 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, co
         ]
     };
     let [b0, b1, b2] = k.b;
-    let p00 = (&ld(k.x, b0 + c), &ld(k.xl, b0 + c), &ld(k.v, b0 + c));
-    let p01 = (
-        &ld(k.x, b0 + c + 1),
-        &ld(k.xl, b0 + c + 1),
-        &ld(k.v, b0 + c + 1),
-    );
-    let p02 = (
-        &ld(k.x, b0 + c + 2),
-        &ld(k.xl, b0 + c + 2),
-        &ld(k.v, b0 + c + 2),
-    );
-    let p10 = (&ld(k.x, b1 + c), &ld(k.xl, b1 + c), &ld(k.v, b1 + c));
-    let p11 = (
-        &ld(k.x, b1 + c + 1),
-        &ld(k.xl, b1 + c + 1),
-        &ld(k.v, b1 + c + 1),
-    );
-    let p20 = (&ld(k.x, b2 + c), &ld(k.xl, b2 + c), &ld(k.v, b2 + c));
+    // The positions' low parts, or zeros without them.
+    let ldl = |i: usize| if LO { ld(k.xl, i) } else { [zero; 3] };
+    let p00 = (&ld(k.x, b0 + c), &ldl(b0 + c), &ld(k.v, b0 + c));
+    let p01 = (&ld(k.x, b0 + c + 1), &ldl(b0 + c + 1), &ld(k.v, b0 + c + 1));
+    let p02 = (&ld(k.x, b0 + c + 2), &ldl(b0 + c + 2), &ld(k.v, b0 + c + 2));
+    let p10 = (&ld(k.x, b1 + c), &ldl(b1 + c), &ld(k.v, b1 + c));
+    let p11 = (&ld(k.x, b1 + c + 1), &ldl(b1 + c + 1), &ld(k.v, b1 + c + 1));
+    let p20 = (&ld(k.x, b2 + c), &ldl(b2 + c), &ld(k.v, b2 + c));
     let (m1, m2, m1d, down, down2) = if MASK {
         // SAFETY: as above.
         let (m1, m2) = unsafe {
@@ -2070,12 +2107,12 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, co
         (None, None, None, None, None)
     };
     let [structural, bend, shear] = k.kinds;
-    let right = spring(s, p00, p01, structural, m1);
-    let right2 = spring(s, p00, p02, bend, m2);
-    let d = spring(s, p00, p10, structural, down);
-    let dr = spring(s, p00, p11, shear, m1d);
-    let anti = spring(s, p01, p10, shear, m1d);
-    let d2 = spring(s, p00, p20, bend, down2);
+    let right = spring::<S, LO>(s, p00, p01, structural, m1);
+    let right2 = spring::<S, LO>(s, p00, p02, bend, m2);
+    let d = spring::<S, LO>(s, p00, p10, structural, down);
+    let dr = spring::<S, LO>(s, p00, p11, shear, m1d);
+    let anti = spring::<S, LO>(s, p01, p10, shear, m1d);
+    let d2 = spring::<S, LO>(s, p00, p20, bend, down2);
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
         let (va, vb, vd, ve) = (p00.2, p01.2, p10.2, p11.2);
@@ -2129,7 +2166,7 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, co
             // SAFETY: as above; outputs hold `lo + nv` floats.
             unsafe {
                 let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
-                integrate::<S, PLAIN>(k, c, i, w, p00, force);
+                integrate::<S, PLAIN, LO>(k, c, i, w, p00, force);
             }
         }
         carry[0][i] = l;
@@ -2138,7 +2175,7 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, co
     }
     if OWN && !PLAIN && k.sphere.is_some() {
         // SAFETY: as above.
-        unsafe { project_out_of_sphere(k, c, w) };
+        unsafe { project_out_of_sphere::<S, LO>(k, c, w) };
     }
 }
 
@@ -2152,7 +2189,7 @@ unsafe fn block<S: Simd, const DRAG: bool, const OWN: bool, const MASK: bool, co
 ///
 /// `PLAIN`: symplectic Euler with no air damping or ground (see `Params::is_plain`).
 #[inline(always)]
-unsafe fn integrate<S: Simd, const PLAIN: bool>(
+unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
     k: &RowKernel<S>,
     c: usize,
     i: usize,
@@ -2164,12 +2201,16 @@ unsafe fn integrate<S: Simd, const PLAIN: bool>(
     if PLAIN {
         let a = s.mul_add(force, w, k.gravity[i]);
         let vn = s.keep_if_positive(w, s.mul_add(k.dt, a, v[i]));
-        let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, vn));
         // SAFETY: outputs hold `lo + nv` floats.
         unsafe {
             let o = k.lo + c;
-            s.store(k.out[i].add(o), xn);
-            s.store(k.out[3 + i].add(o), xnl);
+            if LO {
+                let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, vn));
+                s.store(k.out[i].add(o), xn);
+                s.store(k.out[3 + i].add(o), xnl);
+            } else {
+                s.store(k.out[i].add(o), s.mul_add(k.dt, vn, x[i]));
+            }
             s.store(k.out[6 + i].add(o), vn);
         }
         return;
@@ -2193,13 +2234,19 @@ unsafe fn integrate<S: Simd, const PLAIN: bool>(
     let un = s.keep_if_positive(w, s.mul_add(k.dt, a, u));
     // Explicit Euler moves with the old velocity, the others with the new one.
     let moving = s.mul_add(k.explicit, s.sub(u, un), un);
-    let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, moving));
+    let (xn, xnl) = if LO {
+        add_double(s, (x[i], xl[i]), s.mul(k.dt, moving))
+    } else {
+        (s.mul_add(k.dt, moving, x[i]), k.zero)
+    };
     let vn = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un));
     // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
     unsafe {
         let o = k.lo + c;
         s.store(k.out[i].add(o), xn);
-        s.store(k.out[3 + i].add(o), xnl);
+        if LO {
+            s.store(k.out[3 + i].add(o), xnl);
+        }
         s.store(k.out[6 + i].add(o), vn);
         if k.verlet {
             s.store(k.out[9 + i].add(o), un);
@@ -2214,7 +2261,7 @@ unsafe fn integrate<S: Simd, const PLAIN: bool>(
 /// # Safety
 /// As for [`integrate`], after it ran for all three components.
 #[inline(always)]
-unsafe fn project_out_of_sphere<S: Simd>(k: &RowKernel<S>, c: usize, w: S::V) {
+unsafe fn project_out_of_sphere<S: Simd, const LO: bool>(k: &RowKernel<S>, c: usize, w: S::V) {
     let s = k.s;
     let Some((center, radius, radius2)) = k.sphere else {
         return;
@@ -2230,13 +2277,15 @@ unsafe fn project_out_of_sphere<S: Simd>(k: &RowKernel<S>, c: usize, w: S::V) {
     for i in 0..3 {
         let onto = s.mul_add(d[i], scale, center[i]);
         let dx = s.mul(inside, s.sub(onto, xn[i]));
-        let xnl = out(3 + i);
+        let xnl = if LO { out(3 + i) } else { k.zero };
         let dl = s.mul(inside, xnl);
         let dv = s.mul(s.sub(dx, dl), k.inv_dt);
         // SAFETY: as above.
         unsafe {
             s.store(k.out[i].add(o), s.add(xn[i], dx));
-            s.store(k.out[3 + i].add(o), s.sub(xnl, dl));
+            if LO {
+                s.store(k.out[3 + i].add(o), s.sub(xnl, dl));
+            }
             s.store(k.out[6 + i].add(o), s.add(out(6 + i), dv));
             if k.verlet {
                 s.store(k.out[9 + i].add(o), s.add(out(9 + i), dv));
