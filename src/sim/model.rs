@@ -1,0 +1,172 @@
+//! What stays fixed while the state advances: parameters, colliders, topology and
+//! the model built from them, with the energy of a state.
+
+use glam::{DVec2, DVec3};
+
+use super::{Adjacency, Bar, Energy, ForceTerms, GridShape, Integrator, Spring, Wind};
+
+/// A horizontal ground plane `y = height` with penalty contact (seed 002's jelly cube).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ground {
+    /// Height of the plane in m.
+    pub height: f64,
+    /// Penalty stiffness `k_c` in N/m.
+    pub stiffness: f64,
+    /// Damping of the normal velocity while in contact, N·s/m.
+    pub damping: f64,
+}
+
+/// A solid sphere that particles cannot enter (seed 003's collider), enforced by
+/// projection onto its surface after each step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    /// Centre in m.
+    pub center: DVec3,
+    /// Radius in m.
+    pub radius: f64,
+}
+
+/// Everything about the simulation that is not topology or state. Units are SI.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Params {
+    /// Gravitational acceleration in m/s² (default: (0, -9.81, 0)).
+    pub gravity: DVec3,
+    /// Mean wind velocity in m/s.
+    pub wind: DVec3,
+    /// Gust amplitude in m/s (0: steady).
+    pub gust: f64,
+    /// Air density `rho` in kg/m³ (default: 1.2).
+    pub air_density: f64,
+    /// Aerodynamic drag coefficient `C_d` (dimensionless, default: 1).
+    pub drag_coefficient: f64,
+    /// Viscous air damping `c` in `-c v`, N·s/m (default: 0).
+    pub air_damping: f64,
+    /// Ground plane, if any.
+    pub ground: Option<Ground>,
+    /// Sphere collider, if any.
+    pub sphere: Option<Sphere>,
+    /// Integration method.
+    pub integrator: Integrator,
+    /// Time step in s.
+    pub dt: f64,
+    /// Rigid-bar relaxation passes per step (seed 001).
+    pub bar_iterations: u32,
+    /// Maximum stretch `tau` (Provot 1995): no spring longer than `(1 + tau) L`.
+    pub stretch_limit: Option<f64>,
+    /// Seed of the gusts.
+    pub seed: u64,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            gravity: DVec3::new(0.0, -9.81, 0.0),
+            wind: DVec3::ZERO,
+            gust: 0.0,
+            air_density: 1.2,
+            drag_coefficient: 1.0,
+            air_damping: 0.0,
+            ground: None,
+            sphere: None,
+            integrator: Integrator::default(),
+            dt: 1.0 / 960.0,
+            bar_iterations: 0,
+            stretch_limit: None,
+            seed: 0,
+        }
+    }
+}
+
+/// What connects the particles: springs, bars and the surface.
+#[derive(Clone, Debug, Default)]
+pub struct Topology {
+    /// Damped springs (any order; [`System::new`] makes them canonical).
+    pub springs: Vec<Spring>,
+    /// Rigid bars.
+    pub bars: Vec<Bar>,
+    /// Surface triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates per particle (empty without a surface).
+    pub uvs: Vec<DVec2>,
+    /// The grid's shape when the particles form a regular grid cloth
+    /// (`p = row * width + column`), which the grid fast path needs.
+    pub grid: Option<GridShape>,
+}
+
+/// Topology and parameters: what stays fixed while the state advances.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Particle masses in kg (kept for pinned particles too, so they can be unpinned).
+    pub mass: Vec<f64>,
+    /// Inverse masses; 0 for pinned or grabbed particles.
+    pub inv_mass: Vec<f64>,
+    /// Which particles the scene or the user pinned.
+    pub pinned: Vec<bool>,
+    /// Damped springs, canonical (see [`springs::canonicalize`]).
+    pub springs: Vec<Spring>,
+    /// For each particle, the springs touching it.
+    pub adjacency: Adjacency,
+    /// Rigid bars, relaxed after each step.
+    pub bars: Vec<Bar>,
+    /// Surface triangles (empty for scenes without a surface).
+    pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinates per particle (empty without a surface).
+    pub uvs: Vec<DVec2>,
+    /// Grid shape, for grid cloths.
+    pub grid: Option<GridShape>,
+    /// Parameters.
+    pub params: Params,
+    /// Force terms that run.
+    pub terms: ForceTerms,
+    /// The wind as a function of time.
+    pub wind: Wind,
+}
+
+impl Model {
+    /// Recomputes which force terms run, from the parameters and topology.
+    pub fn refresh_terms(&mut self) {
+        let p = &self.params;
+        self.terms = ForceTerms {
+            gravity: p.gravity != DVec3::ZERO,
+            springs: !self.springs.is_empty(),
+            aero: !self.triangles.is_empty() && p.air_density > 0.0 && p.drag_coefficient > 0.0,
+            air_damping: p.air_damping > 0.0,
+            ground: p.ground.is_some(),
+        };
+    }
+
+    pub(super) fn refresh_inv_mass(&mut self, grabbed: Option<usize>) {
+        for (i, w) in self.inv_mass.iter_mut().enumerate() {
+            let m = self.mass[i];
+            *w = if self.pinned[i] || grabbed == Some(i) || m <= 0.0 {
+                0.0
+            } else {
+                1.0 / m
+            };
+        }
+    }
+
+    /// Energy of positions `x` and velocities `v`; gravity relative to y = 0.
+    pub fn energy(&self, x: &[DVec3], v: &[DVec3]) -> Energy {
+        let mut e = Energy::default();
+        for i in 0..x.len() {
+            if self.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let m = self.mass[i];
+            e.kinetic += 0.5 * m * v[i].length_squared();
+            e.gravity -= m * self.params.gravity.dot(x[i]);
+            if let Some(g) = self.params.ground {
+                let depth = g.height - x[i].y;
+                if depth > 0.0 {
+                    e.elastic += 0.5 * g.stiffness * depth * depth;
+                }
+            }
+        }
+        for s in &self.springs {
+            let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
+            e.elastic += 0.5 * s.stiffness * stretch * stretch;
+        }
+        e
+    }
+}

@@ -1,0 +1,496 @@
+//! [`System`]: a model, its state and the scratch space a step needs, and the step
+//! itself, read in one place ([`System::step`]): forces and integration
+//! ([`super::integrators`]), then constraints ([`super::constraints`]), then the
+//! divergence check.
+
+use glam::{DVec2, DVec3};
+
+use super::{
+    Adjacency, Bar, Divergence, Energy, ForceTerms, Integrator, Model, Params, RUNAWAY_EXTENT,
+    Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path, forces, implicit,
+    integrators, springs, stability,
+};
+
+/// Scratch space for a step, sized once per model and integrator.
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    pub(crate) spring_forces: Vec<DVec3>,
+    pub(crate) accelerations: Vec<DVec3>,
+    pub(crate) x_tmp: Vec<DVec3>,
+    pub(crate) v_tmp: Vec<DVec3>,
+    pub(crate) dx_sum: Vec<DVec3>,
+    pub(crate) dv_sum: Vec<DVec3>,
+    pub(crate) before_constraints: Vec<DVec3>,
+    pub(crate) implicit: implicit::ImplicitWorkspace,
+}
+
+/// A simulated system: model, state and scratch space.
+#[derive(Clone, Debug)]
+pub struct System {
+    pub(super) model: Model,
+    pub(super) state: State,
+    pub(super) work: Workspace,
+    pub(super) start_center: DVec3,
+    pub(super) start_extent: f64,
+    pub(super) grabbed: Option<(usize, DVec3)>,
+    pub(super) fast_path_allowed: bool,
+    pub(super) fast_path: fast_path::FastPathSlot,
+    /// The mesh engine, for what the grid kernel does not model.
+    pub(super) mesh_path: fast_path::MeshSlot,
+    /// The springs and masses as the grid kernel sees them, summarised on each edit.
+    pub(super) grid_springs: Option<fast_path::GridSprings>,
+    /// How many times a grid kernel was built for this system.
+    pub(super) kernel_builds: u64,
+}
+
+impl System {
+    /// Builds a system from particle masses, start positions, pinned particles,
+    /// topology and parameters. Velocities start at zero.
+    pub fn new(
+        masses: Vec<f64>,
+        positions: Vec<DVec3>,
+        pinned: &[usize],
+        topology: Topology,
+        params: Params,
+    ) -> Self {
+        let Topology {
+            mut springs,
+            bars,
+            triangles,
+            uvs,
+            grid,
+        } = topology;
+        let n = positions.len();
+        assert_eq!(masses.len(), n, "one mass per particle");
+        springs::canonicalize(&mut springs);
+        let mut pinned_flags = vec![false; n];
+        for &i in pinned {
+            if i < n {
+                pinned_flags[i] = true;
+            }
+        }
+        let adjacency = Adjacency::new(n, &springs);
+        let wind = Wind::new(params.wind, params.gust, params.seed);
+        let mut model = Model {
+            inv_mass: vec![0.0; n],
+            mass: masses,
+            pinned: pinned_flags,
+            springs,
+            adjacency,
+            bars,
+            triangles,
+            uvs,
+            grid,
+            params,
+            terms: ForceTerms::default(),
+            wind,
+        };
+        model.refresh_terms();
+        model.refresh_inv_mass(None);
+        let (start_center, start_extent) = bounding_sphere(&positions);
+        let state = State {
+            velocities: vec![DVec3::ZERO; n],
+            positions,
+            ..State::default()
+        };
+        let mut system = Self {
+            model,
+            state,
+            work: Workspace::default(),
+            start_center,
+            start_extent,
+            grabbed: None,
+            fast_path_allowed: false,
+            fast_path: fast_path::FastPathSlot::default(),
+            mesh_path: fast_path::MeshSlot::default(),
+            grid_springs: None,
+            kernel_builds: 0,
+        };
+        system.grid_springs = fast_path::GridSprings::of(&system.model);
+        system.prepare_integrator();
+        system
+    }
+
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.state.positions.len()
+    }
+    /// Positions in m.
+    pub fn positions(&self) -> &[DVec3] {
+        &self.state.positions
+    }
+    /// Velocities in m/s.
+    pub fn velocities(&self) -> &[DVec3] {
+        &self.state.velocities
+    }
+    /// Particle masses in kg.
+    pub fn masses(&self) -> &[f64] {
+        &self.model.mass
+    }
+    /// Inverse masses (0 for pinned or grabbed particles).
+    pub fn inv_masses(&self) -> &[f64] {
+        &self.model.inv_mass
+    }
+    /// Springs.
+    pub fn springs(&self) -> &[Spring] {
+        &self.model.springs
+    }
+    /// Rigid bars.
+    pub fn bars(&self) -> &[Bar] {
+        &self.model.bars
+    }
+    /// Surface triangles (empty without a surface).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.model.triangles
+    }
+    /// Texture coordinates, one per particle (empty without a surface).
+    pub fn uvs(&self) -> &[DVec2] {
+        &self.model.uvs
+    }
+    /// Parameters in effect.
+    pub fn params(&self) -> &Params {
+        &self.model.params
+    }
+    /// Force terms that run.
+    pub fn force_terms(&self) -> ForceTerms {
+        self.model.terms
+    }
+    /// The model (topology and parameters).
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+    /// The state.
+    pub fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// Puts back a state taken from this system with [`Self::state`] (e.g. to rerun
+    /// from the start). Ignored if its particle count differs.
+    pub fn set_state(&mut self, state: State) {
+        let n = self.particle_count();
+        if state.positions.len() != n || state.velocities.len() != n {
+            return;
+        }
+        self.mark_changed();
+        self.state = state;
+        if self.model.params.integrator == Integrator::Verlet
+            && self.state.prev_positions.len() != n
+        {
+            self.restart_verlet_history();
+        }
+    }
+    /// Simulated time in s.
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+    /// Steps taken.
+    pub fn steps_taken(&self) -> u64 {
+        self.state.steps
+    }
+    /// Conjugate-gradient iterations of the last implicit-Euler step (0 for other integrators).
+    pub fn solver_iterations(&self) -> usize {
+        self.work.implicit.last_iterations
+    }
+    /// The particle the user holds, if any, and where it is held.
+    pub fn grabbed(&self) -> Option<(usize, DVec3)> {
+        self.grabbed
+    }
+
+    /// Whether particle `i` is pinned (by the scene or the user).
+    pub fn is_pinned(&self, i: usize) -> bool {
+        self.model.pinned.get(i).copied().unwrap_or(false)
+    }
+
+    /// Pins or unpins particle `i` (ignored if out of range). A pinned particle stops.
+    pub fn set_pinned(&mut self, i: usize, pinned: bool) {
+        self.mark_changed();
+        if i >= self.particle_count() {
+            return;
+        }
+        self.model.pinned[i] = pinned;
+        if pinned {
+            self.state.velocities[i] = DVec3::ZERO;
+        }
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+        self.sync_verlet_history(i);
+    }
+
+    /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
+    /// hand and pulls its neighbours through their springs. Non-finite targets are ignored.
+    pub fn grab(&mut self, i: usize, target: DVec3) {
+        self.mark_changed();
+        if i >= self.particle_count() || !target.is_finite() {
+            return;
+        }
+        if let Some((j, _)) = self.grabbed
+            && j != i
+        {
+            self.release();
+        }
+        self.grabbed = Some((i, target));
+        self.state.positions[i] = target;
+        self.state.velocities[i] = DVec3::ZERO;
+        self.model.refresh_inv_mass(Some(i));
+        self.sync_verlet_history(i);
+    }
+
+    /// Lets go of the held particle: it is free again unless pinned.
+    pub fn release(&mut self) {
+        self.mark_changed();
+        if let Some((i, _)) = self.grabbed.take() {
+            self.state.velocities[i] = DVec3::ZERO;
+            self.model.refresh_inv_mass(None);
+            self.sync_verlet_history(i);
+        }
+    }
+
+    /// Changes parameters that need no rebuild (k and b go through
+    /// [`Self::set_spring_stiffness`]); recomputes which force terms run.
+    pub fn set_params(&mut self, params: Params) {
+        self.mark_changed();
+        let integrator_changed = params.integrator != self.model.params.integrator;
+        let dt_changed = params.dt != self.model.params.dt;
+        self.model.params = params;
+        self.model.wind = Wind::new(params.wind, params.gust, params.seed);
+        self.model.refresh_terms();
+        if integrator_changed {
+            self.prepare_integrator();
+        } else if dt_changed && params.integrator == Integrator::Verlet {
+            self.restart_verlet_history();
+        }
+    }
+
+    /// Sets the stiffness (N/m) of every spring of `kind`.
+    pub fn set_spring_stiffness(&mut self, kind: SpringKind, stiffness: f64) {
+        for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
+            s.stiffness = stiffness;
+        }
+        self.grid_springs = match self.grid_springs {
+            // A whole kind changes together: the grid stays a grid, no rescan.
+            Some(grid) => Some(grid.with_kind(kind, |c| c.k = stiffness)),
+            None => fast_path::GridSprings::of(&self.model),
+        };
+    }
+
+    /// Sets the damping (N·s/m) of every spring of `kind`.
+    pub fn set_spring_damping(&mut self, kind: SpringKind, damping: f64) {
+        for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
+            s.damping = damping;
+        }
+        self.grid_springs = match self.grid_springs {
+            Some(grid) => Some(grid.with_kind(kind, |c| c.b = damping)),
+            None => fast_path::GridSprings::of(&self.model),
+        };
+    }
+
+    /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
+    pub fn scale_rest_lengths(&mut self, factor: f64) {
+        if !(factor.is_finite() && factor >= 0.0) {
+            return;
+        }
+        for s in &mut self.model.springs {
+            s.rest *= factor;
+        }
+        for b in &mut self.model.bars {
+            b.length *= factor;
+        }
+        self.grid_springs = fast_path::GridSprings::of(&self.model);
+    }
+
+    /// Scales the whole system by `factor`: rest lengths, bar lengths and positions
+    /// about the centroid of the pinned particles (of all particles if none is
+    /// pinned). Strains and velocities are unchanged, so no energy is injected: this
+    /// is how a rest-length edit applies to a running cloth.
+    pub fn rescale(&mut self, factor: f64) {
+        self.mark_changed();
+        if !(factor.is_finite() && factor > 0.0) {
+            return;
+        }
+        let anchors: Vec<DVec3> = (0..self.particle_count())
+            .filter(|&i| self.model.pinned[i])
+            .map(|i| self.state.positions[i])
+            .collect();
+        let points = if anchors.is_empty() {
+            &self.state.positions[..]
+        } else {
+            &anchors[..]
+        };
+        let center = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
+        let scale = |p: &mut DVec3| *p = center + (*p - center) * factor;
+        self.state.positions.iter_mut().for_each(scale);
+        self.state.prev_positions.iter_mut().for_each(scale);
+        if let Some((_, target)) = &mut self.grabbed {
+            scale(target);
+        }
+        self.scale_rest_lengths(factor);
+        let (start_center, start_extent) = bounding_sphere(&self.state.positions);
+        (self.start_center, self.start_extent) = (start_center, start_extent);
+    }
+
+    /// Sets every particle's mass (kg), keeping pins.
+    pub fn set_particle_mass(&mut self, mass: f64) {
+        if !(mass.is_finite() && mass > 0.0) {
+            return;
+        }
+        self.model.mass.fill(mass);
+        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
+        self.grid_springs = fast_path::GridSprings::of(&self.model);
+    }
+
+    /// Energy now.
+    pub fn energy(&self) -> Energy {
+        self.model
+            .energy(&self.state.positions, &self.state.velocities)
+    }
+
+    /// Stability estimate for the current parameters.
+    pub fn stability(&self) -> Stability {
+        stability::estimate(&self.model)
+    }
+
+    /// Advances one step of `dt`, then checks the state. On divergence the state is
+    /// left as it is (the caller decides to reset).
+    pub fn step(&mut self) -> Result<(), Divergence> {
+        self.mark_changed();
+        if let Some((i, target)) = self.grabbed {
+            self.state.positions[i] = target;
+            self.state.velocities[i] = DVec3::ZERO;
+            self.sync_verlet_history(i);
+        }
+        integrators::step(&self.model, &mut self.state, &mut self.work);
+        if self.has_constraints() {
+            self.work
+                .before_constraints
+                .clone_from(&self.state.positions);
+            constraints::apply(&self.model, &mut self.state, &mut self.work);
+        }
+        self.state.time += self.model.params.dt;
+        self.state.steps += 1;
+        self.check()
+    }
+
+    /// Runs `n` steps, stopping at the first divergence. A model big enough for the
+    /// threaded force path runs its whole loop on a pool thread, so the parallel loops
+    /// inside go through worker-local queues and allocate nothing per step.
+    pub fn run(&mut self, n: u64) -> Result<(), Divergence> {
+        if let Some(result) = self.run_on_grid(n) {
+            return result;
+        }
+        if let Some(result) = self.run_on_mesh(n) {
+            return result;
+        }
+        self.mark_changed();
+        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());
+        if forces::uses_threads(&self.model) {
+            let mut result = Ok(());
+            rayon::scope(|_| result = steps(self));
+            result
+        } else {
+            steps(self)
+        }
+    }
+
+    /// Whether anything is enforced after integration.
+    pub fn has_constraints(&self) -> bool {
+        let p = &self.model.params;
+        (!self.model.bars.is_empty() && p.bar_iterations > 0)
+            || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
+            || p.sphere.is_some()
+    }
+
+    /// Distance from the start (m) past which a particle counts as a runaway.
+    pub(super) fn runaway_distance(&self) -> f64 {
+        RUNAWAY_EXTENT * (self.start_extent + 0.1) + 1000.0
+    }
+
+    /// Checks for non-finite values and runaways ([`super::divergence::check`]).
+    pub fn check(&self) -> Result<(), Divergence> {
+        super::divergence::check(&self.state, self.start_center, self.runaway_distance())
+    }
+
+    /// The f64 state is about to change outside the grid kernel: it must be copied
+    /// in again before the kernel next runs.
+    pub(super) fn mark_changed(&mut self) {
+        if let Some(fast) = &mut self.fast_path.0 {
+            fast.in_sync = false;
+        }
+        if let Some(mesh) = &mut self.mesh_path.0 {
+            mesh.in_sync = false;
+        }
+    }
+
+    pub(super) fn prepare_integrator(&mut self) {
+        let n = self.particle_count();
+        let m = self.model.springs.len();
+        let w = &mut self.work;
+        w.spring_forces.resize(m, DVec3::ZERO);
+        w.accelerations.resize(n, DVec3::ZERO);
+        let multistage = matches!(
+            self.model.params.integrator,
+            Integrator::Rk2 | Integrator::Rk4
+        );
+        let len = if multistage { n } else { 0 };
+        w.x_tmp.resize(len, DVec3::ZERO);
+        w.v_tmp.resize(len, DVec3::ZERO);
+        let len = if self.model.params.integrator == Integrator::Rk4 {
+            n
+        } else {
+            0
+        };
+        w.dx_sum.resize(len, DVec3::ZERO);
+        w.dv_sum.resize(len, DVec3::ZERO);
+        if self.model.params.integrator == Integrator::ImplicitEuler {
+            w.implicit.resize(n, m);
+        } else {
+            w.implicit = Default::default();
+        }
+        if self.model.params.integrator == Integrator::Verlet {
+            self.restart_verlet_history();
+        } else {
+            self.state.prev_positions = Vec::new();
+            self.state.prev_accelerations = Vec::new();
+        }
+    }
+
+    /// Verlet needs the previous positions: make them consistent with the current
+    /// velocities, `x_prev = x - h v + h²/2 a`, so that its velocity estimate
+    /// `(x - x_prev)/h + h/2 a_prev` starts equal to `v`.
+    pub(super) fn restart_verlet_history(&mut self) {
+        let h = self.model.params.dt;
+        let (x, v, t) = (
+            &self.state.positions,
+            &self.state.velocities,
+            self.state.time,
+        );
+        let mut a = std::mem::take(&mut self.work.accelerations);
+        a.resize(x.len(), DVec3::ZERO);
+        self.model
+            .accelerations(x, v, t, &mut self.work.spring_forces, &mut a);
+        self.state.prev_positions = (x.iter().zip(v).zip(&a))
+            .map(|((&x, &v), &a)| x - h * v + 0.5 * h * h * a)
+            .collect();
+        self.state.prev_accelerations = a.clone();
+        self.work.accelerations = a;
+    }
+
+    /// After the user moves, pins or releases particle `i`, its Verlet history must
+    /// not remember the old motion.
+    pub(super) fn sync_verlet_history(&mut self, i: usize) {
+        if let Some(prev) = self.state.prev_positions.get_mut(i) {
+            *prev = self.state.positions[i] - self.model.params.dt * self.state.velocities[i];
+            self.state.prev_accelerations[i] = DVec3::ZERO;
+        }
+    }
+}
+
+/// Centre and radius (m) of a sphere around the points, for runaway detection and framing.
+pub fn bounding_sphere(points: &[DVec3]) -> (DVec3, f64) {
+    let Some(&first) = points.first() else {
+        return (DVec3::ZERO, 0.0);
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let center = (lo + hi) * 0.5;
+    (center, (hi - lo).length() * 0.5)
+}
