@@ -134,3 +134,65 @@ fn coincident_particles_stay_finite() {
         }
     }
 }
+
+/// The same with every feature of the engine on, in each precision: Verlet, air
+/// damping, a ground, a sphere, the stretch limit and gusty drag (tolerance 0).
+#[test]
+fn threads_give_bit_identical_results_with_every_feature() {
+    use cloth_sandbox::sim::grid_kernel::Precision;
+    use cloth_sandbox::sim::{Ground, Integrator, Sphere, Wind};
+    let wind = Wind::new(DVec3::new(0.0, 0.0, 5.0), 2.0, 7);
+    for precision in [Precision::Single, Precision::Mixed, Precision::Double] {
+        for stretch_limit in [None, Some(0.2)] {
+            let state = |threads: usize| {
+                let mut spec = GridSpec::peer_bench(96, true);
+                spec.integrator = Integrator::Verlet;
+                spec.air_damping = 1e-5;
+                // The bottom row sags into the ground, the wind blows the cloth
+                // into the sphere.
+                spec.ground = Some(Ground {
+                    height: -0.05,
+                    stiffness: 50.0,
+                    damping: 0.01,
+                });
+                spec.sphere = Some(Sphere {
+                    center: DVec3::new(0.5, 0.3, 0.22),
+                    radius: 0.2,
+                });
+                spec.stretch_limit = stretch_limit;
+                spec.precision = precision;
+                let mut cloth = GridCloth::new(spec);
+                cloth.set_threads(threads);
+                cloth.steps_in_wind(DT, 150, 0.0, &wind);
+                let mut x = vec![DVec3::ZERO; cloth.len()];
+                cloth.positions_into(&mut x);
+                let mut v = x.clone();
+                cloth.velocities_into(&mut v);
+                (x, v, cloth.is_parallel())
+            };
+            let (one, two) = (state(1), state(2));
+            assert!(two.2, "the 96 x 96 cloth should run on two threads");
+            let finite = |s: &[DVec3]| s.iter().all(|p| p.is_finite());
+            // The colliders were reached: particles on the sphere and below the ground.
+            let center = DVec3::new(0.5, 0.3, 0.22);
+            let on_sphere = one
+                .0
+                .iter()
+                .filter(|p| p.distance(center) < 0.2 + 1e-3)
+                .count();
+            let below = one.0.iter().filter(|p| p.y < -0.05).count();
+            assert!(
+                on_sphere > 0 && below > 0,
+                "{on_sphere} on the sphere, {below} below"
+            );
+            assert!(
+                finite(&one.0) && finite(&one.1),
+                "{precision:?} {stretch_limit:?}"
+            );
+            assert!(
+                one.0 == two.0 && one.1 == two.1,
+                "{precision:?} {stretch_limit:?}"
+            );
+        }
+    }
+}
