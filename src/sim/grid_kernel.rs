@@ -335,86 +335,60 @@ trait Real:
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
 }
 
-impl Real for f32 {
-    const ZERO: Self = 0.0;
-    const ONE: Self = 1.0;
-    const LOWEST: Self = f32::MIN;
-    const EPS2: Self = EPS2;
-    const TINY: Self = TINY;
-    fn of(x: f64) -> Self {
-        x as f32
-    }
-    fn f64(self) -> f64 {
-        self as f64
-    }
-    fn sqrt(self) -> Self {
-        f32::sqrt(self)
-    }
-    #[inline(always)]
-    fn mul_add(self, a: Self, b: Self) -> Self {
-        if cfg!(any(target_arch = "aarch64", target_feature = "fma")) {
-            f32::mul_add(self, a, b)
-        } else {
-            self * a + b
+/// `Real` for a float type: its constants and the row functions of each SIMD level.
+macro_rules! real {
+    ($t:ident, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident) => {
+        impl Real for $t {
+            const ZERO: Self = 0.0;
+            const ONE: Self = 1.0;
+            const LOWEST: Self = $t::MIN;
+            const EPS2: Self = $eps2;
+            const TINY: Self = $tiny;
+            fn of(x: f64) -> Self {
+                x as $t
+            }
+            fn f64(self) -> f64 {
+                self as f64
+            }
+            fn sqrt(self) -> Self {
+                $t::sqrt(self)
+            }
+            #[inline(always)]
+            fn mul_add(self, a: Self, b: Self) -> Self {
+                if cfg!(any(target_arch = "aarch64", target_feature = "fma")) {
+                    $t::mul_add(self, a, b)
+                } else {
+                    self * a + b
+                }
+            }
+            fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
+                match ctx.simd {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2
+                    // and FMA.
+                    SimdLevel::Avx512 => {
+                        band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                            x86::$avx512(ctx, band, row, out, lo, own)
+                        })
+                    }
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
+                    SimdLevel::Avx2 => {
+                        band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                            x86::$avx2(ctx, band, row, out, lo, own)
+                        })
+                    }
+                    _ => band_rows(ctx, band, out, row_portable::<$t>),
+                }
+            }
         }
-    }
-    fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
-        match ctx.simd {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-            SimdLevel::Avx512 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
-                x86::row_avx512(ctx, band, row, out, lo, own)
-            }),
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-            SimdLevel::Avx2 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
-                x86::row_avx2(ctx, band, row, out, lo, own)
-            }),
-            _ => band_rows(ctx, band, out, row_portable::<f32>),
-        }
-    }
+    };
 }
 
-impl Real for f64 {
-    const ZERO: Self = 0.0;
-    const ONE: Self = 1.0;
-    const LOWEST: Self = f64::MIN;
-    const EPS2: Self = 1e-24;
-    const TINY: Self = 1e-30;
-    fn of(x: f64) -> Self {
-        x
-    }
-    fn f64(self) -> f64 {
-        self
-    }
-    fn sqrt(self) -> Self {
-        f64::sqrt(self)
-    }
-    #[inline(always)]
-    fn mul_add(self, a: Self, b: Self) -> Self {
-        if cfg!(any(target_arch = "aarch64", target_feature = "fma")) {
-            f64::mul_add(self, a, b)
-        } else {
-            self * a + b
-        }
-    }
-    fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
-        match ctx.simd {
-            // The portable lanes, compiled for the CPU's vector width.
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-            SimdLevel::Avx512 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
-                x86::row_avx512_f64(ctx, band, row, out, lo, own)
-            }),
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-            SimdLevel::Avx2 => band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
-                x86::row_avx2_f64(ctx, band, row, out, lo, own)
-            }),
-            _ => band_rows(ctx, band, out, row_portable::<f64>),
-        }
-    }
-}
+// Float32: the intrinsics of `x86`. Float64: the portable lanes compiled for each
+// level's features.
+real!(f32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2);
+real!(f64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64);
 
 /// 16 floats, so that buffers and padded rows start on a cache line.
 #[derive(Clone, Copy, Debug)]
