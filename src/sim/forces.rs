@@ -163,11 +163,20 @@ impl Model {
             return;
         };
         for ((f, xi), vi) in out.iter_mut().zip(x).zip(v) {
-            let depth = ground.height - xi.y;
-            if depth > 0.0 {
-                f.y += ground.stiffness * depth - ground.damping * vi.y;
-            }
+            f.y += ground_force(&ground, *xi, *vi);
         }
+    }
+}
+
+/// Upward force (N) of the ground on a particle at `x` moving at `v`: `k_c d - c_g
+/// v_y` at depth `d = height - y > 0`, else 0.
+#[inline]
+pub fn ground_force(ground: &super::Ground, x: DVec3, v: DVec3) -> f64 {
+    let depth = ground.height - x.y;
+    if depth > 0.0 {
+        ground.stiffness * depth - ground.damping * v.y
+    } else {
+        0.0
     }
 }
 

@@ -12,6 +12,8 @@
 //! Pinned and grabbed particles have zero inverse mass, so their acceleration is zero
 //! and, starting at rest, they never move.
 
+use glam::DVec3;
+
 use super::{Model, State, Workspace, implicit};
 
 /// Integration method, chosen at run time.
@@ -90,8 +92,6 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
                 &mut work.spring_forces,
                 a,
             );
-            // Both take the acceleration of the old state; explicit Euler moves with
-            // the old velocity, symplectic Euler with the new one.
             let symplectic = model.params.integrator == Integrator::SymplecticEuler;
             for ((x, v), a) in state
                 .positions
@@ -99,19 +99,26 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
                 .zip(&mut state.velocities)
                 .zip(a.iter())
             {
-                if symplectic {
-                    *v += h * *a;
-                    *x += h * *v;
-                } else {
-                    *x += h * *v;
-                    *v += h * *a;
-                }
+                (*x, *v) = euler_update(symplectic, *x, *v, *a, h);
             }
         }
         Integrator::Verlet => verlet(model, state, work, h, t),
         Integrator::Rk2 => rk2(model, state, work, h, t),
         Integrator::Rk4 => rk4(model, state, work, h, t),
         Integrator::ImplicitEuler => implicit::step(model, state, &mut work.implicit, h, t),
+    }
+}
+
+/// One Euler step of a particle at `x` moving at `v` with acceleration `a` (of the
+/// old state): symplectic Euler moves with the new velocity, `v' = v + h a; x' = x +
+/// h v'`, explicit Euler with the old one, `x' = x + h v; v' = v + h a`.
+#[inline]
+pub fn euler_update(symplectic: bool, x: DVec3, v: DVec3, a: DVec3, h: f64) -> (DVec3, DVec3) {
+    let v_new = v + h * a;
+    if symplectic {
+        (x + h * v_new, v_new)
+    } else {
+        (x + h * v, v_new)
     }
 }
 

@@ -31,7 +31,8 @@
 use glam::DVec3;
 
 use super::constraints::{length_correction, out_of_sphere};
-use super::forces::spring_force;
+use super::forces::{ground_force, spring_force};
+use super::integrators::euler_update;
 use super::{Bar, Ground, Integrator, Model, Sphere, Spring};
 
 /// Models with fewer particles than this run on the calling thread even when
@@ -345,11 +346,8 @@ fn advance(ctx: &Ctx, mut out: Out) {
         if p.air_damping > 0.0 {
             f -= p.air_damping * vi;
         }
-        if let Some(ground) = p.ground {
-            let depth = ground.height - xi.y;
-            if depth > 0.0 {
-                f.y += ground.stiffness * depth - ground.damping * vi.y;
-            }
+        if let Some(ground) = &p.ground {
+            f.y += ground_force(ground, xi, vi);
         }
         let w = ctx.inv_mass[i];
         let a = if w > 0.0 {
@@ -358,7 +356,7 @@ fn advance(ctx: &Ctx, mut out: Out) {
             DVec3::ZERO
         };
         let (x_new, v_new) = match p.integrator {
-            Integrator::ExplicitEuler => (xi + h * vi, vi + h * a),
+            Integrator::ExplicitEuler => euler_update(false, xi, vi, a, h),
             Integrator::Verlet if verlet => {
                 if w == 0.0 {
                     // Held in place: the f64 engine sets `x_prev = x` and keeps `v`.
@@ -370,10 +368,7 @@ fn advance(ctx: &Ctx, mut out: Out) {
                     (xi + h * u, u + 0.5 * h * a)
                 }
             }
-            _ => {
-                let v_new = vi + h * a;
-                (xi + h * v_new, v_new)
-            }
+            _ => euler_update(true, xi, vi, a, h),
         };
         store(&mut out.x, local, x_new);
         store(&mut out.v, local, v_new);
