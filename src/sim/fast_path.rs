@@ -25,7 +25,7 @@ use glam::DVec3;
 
 use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
 use super::mesh_kernel::{MeshKernel, MeshParams};
-use super::{Integrator, SpringKind, System};
+use super::{Divergence, Integrator, SpringKind, System};
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
 const CHUNK: u64 = 32;
@@ -247,7 +247,7 @@ impl System {
     /// Runs `n` steps on the mesh engine if allowed and it models the system
     /// exactly; `None` when the general path must run them. Call after
     /// [`Self::run_on_grid`] declined.
-    pub(super) fn run_on_mesh(&mut self, n: u64) -> Option<Result<(), super::Divergence>> {
+    pub(super) fn run_on_mesh(&mut self, n: u64) -> Option<Result<(), Divergence>> {
         if !self.fast_path_allowed {
             return None;
         }
@@ -276,33 +276,9 @@ impl System {
             }
             mesh.in_sync = true;
         }
-        let dt = self.model.params.dt;
-        let mut done = 0;
-        let mut result = Ok(());
-        while done < n && result.is_ok() {
-            let chunk = CHUNK.min(n - done);
-            mesh.kernel.steps(chunk as usize);
-            done += chunk;
-            for _ in 0..chunk {
-                self.state.time += dt;
-            }
-            self.state.steps += chunk;
-            if done == n || !self.mesh_state_plausible(&mesh.kernel) {
-                mesh.kernel.positions_into(&mut self.state.positions);
-                mesh.kernel.velocities_into(&mut self.state.velocities);
-                self.set_verlet_history(|u| mesh.kernel.update_velocities_into(u));
-                result = self.check();
-            }
-        }
+        let result = self.run_in_chunks(n, &mut mesh);
         self.mesh_path.0 = Some(mesh);
         Some(result)
-    }
-
-    /// Whether the mesh engine's state passes the divergence check's limits.
-    fn mesh_state_plausible(&self, kernel: &MeshKernel) -> bool {
-        let far = self.runaway_distance();
-        let (speed2, dist2) = kernel.extremes(self.start_center);
-        speed2 <= super::RUNAWAY_SPEED.powi(2) && dist2 <= far * far
     }
 
     /// The kernel's description of this system, if the kernel models it exactly.
@@ -376,7 +352,7 @@ impl System {
 
     /// Runs `n` steps on the kernel if allowed and possible; `None` when the general
     /// path must run them.
-    pub(super) fn run_on_grid(&mut self, n: u64) -> Option<Result<(), super::Divergence>> {
+    pub(super) fn run_on_grid(&mut self, n: u64) -> Option<Result<(), Divergence>> {
         if !self.fast_path_allowed {
             return None;
         }
@@ -424,38 +400,35 @@ impl System {
             }
             fast.in_sync = true;
         }
+        let result = self.run_in_chunks(n, &mut fast);
+        self.fast_path.0 = Some(fast);
+        Some(result)
+    }
+
+    /// Runs `n` steps on a fast engine in chunks of [`CHUNK`]. Simulated time
+    /// advances by whole steps, as in the general path. After each chunk a cheap scan
+    /// of the engine's own arrays; the f64 state (and the full check, with its
+    /// message) only at the end or when the scan finds trouble.
+    fn run_in_chunks(&mut self, n: u64, engine: &mut impl FastEngine) -> Result<(), Divergence> {
         let dt = self.model.params.dt;
-        let gusty = self.model.wind.gust != 0.0 && self.model.terms.aero;
         let mut done = 0;
-        let mut result = Ok(());
-        while done < n && result.is_ok() {
+        while done < n {
             let chunk = CHUNK.min(n - done);
-            if gusty {
-                let wind = &self.model.wind;
-                (fast.kernel).steps_in_wind(dt, chunk as usize, self.state.time, wind);
-            } else {
-                fast.kernel.steps(dt, chunk as usize);
-            }
+            engine.advance(self, chunk as usize);
             done += chunk;
-            // Simulated time advances by whole steps, as in the general path.
             for _ in 0..chunk {
                 self.state.time += dt;
             }
             self.state.steps += chunk;
-            // A cheap scan of the kernel's own arrays; the f64 state (and the full
-            // check, with its message) only at the end or when the scan finds trouble.
-            if done == n || !self.kernel_state_plausible(&fast.kernel) {
-                fast.kernel.positions_into(&mut self.state.positions);
-                fast.kernel.velocities_into(&mut self.state.velocities);
-                for &(i, position) in &fast.held {
-                    self.state.positions[i] = position;
-                }
-                self.set_verlet_history(|u| fast.kernel.update_velocities_into(u));
-                result = self.check();
+            let far = self.runaway_distance();
+            let (speed2, dist2) = engine.extremes(self.start_center);
+            let plausible = speed2 <= super::RUNAWAY_SPEED.powi(2) && dist2 <= far * far;
+            if done == n || !plausible {
+                engine.copy_back(self);
+                self.check()?;
             }
         }
-        self.fast_path.0 = Some(fast);
-        Some(result)
+        Ok(())
     }
 
     /// Position Verlet's velocities of the last update, `(x - x_prev) / h`, from the
@@ -493,12 +466,51 @@ impl System {
             state.prev_accelerations[i] = (state.velocities[i] - u) * (2.0 / h);
         }
     }
+}
 
-    /// Whether the kernel's state passes the divergence check's limits: finite, no
-    /// speed above [`super::RUNAWAY_SPEED`], nothing beyond the runaway distance.
-    fn kernel_state_plausible(&self, kernel: &GridCloth) -> bool {
-        let far = self.runaway_distance();
-        let (speed2, dist2) = kernel.extremes(self.start_center);
-        speed2 <= super::RUNAWAY_SPEED.powi(2) && dist2 <= far * far
+/// What [`System::run_in_chunks`] needs of a fast engine.
+trait FastEngine {
+    /// `steps` steps of the system's `dt`, from the system's time.
+    fn advance(&mut self, system: &System, steps: usize);
+    /// The largest squared speed and squared distance from `center` (infinite on
+    /// NaN).
+    fn extremes(&self, center: DVec3) -> (f64, f64);
+    /// The engine's state into the system's f64 state.
+    fn copy_back(&self, system: &mut System);
+}
+
+impl FastEngine for FastPath {
+    fn advance(&mut self, system: &System, steps: usize) {
+        let (model, dt) = (&system.model, system.model.params.dt);
+        if model.wind.gust != 0.0 && model.terms.aero {
+            (self.kernel).steps_in_wind(dt, steps, system.state.time, &model.wind);
+        } else {
+            self.kernel.steps(dt, steps);
+        }
+    }
+    fn extremes(&self, center: DVec3) -> (f64, f64) {
+        self.kernel.extremes(center)
+    }
+    fn copy_back(&self, system: &mut System) {
+        self.kernel.positions_into(&mut system.state.positions);
+        self.kernel.velocities_into(&mut system.state.velocities);
+        for &(i, position) in &self.held {
+            system.state.positions[i] = position;
+        }
+        system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
+    }
+}
+
+impl FastEngine for MeshPath {
+    fn advance(&mut self, _: &System, steps: usize) {
+        self.kernel.steps(steps);
+    }
+    fn extremes(&self, center: DVec3) -> (f64, f64) {
+        self.kernel.extremes(center)
+    }
+    fn copy_back(&self, system: &mut System) {
+        self.kernel.positions_into(&mut system.state.positions);
+        self.kernel.velocities_into(&mut system.state.velocities);
+        system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
     }
 }
