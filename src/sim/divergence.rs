@@ -42,29 +42,69 @@ pub const RUNAWAY_SPEED: f64 = 1e5;
 /// Distances from the start above this many start extents (plus 1 km) count as a runaway.
 pub const RUNAWAY_EXTENT: f64 = 1e4;
 
-/// Checks `state` for non-finite values, speeds over [`RUNAWAY_SPEED`] and particles
-/// farther than `far` (m) from `start_center`.
-pub(crate) fn check(state: &State, start_center: DVec3, far: f64) -> Result<(), Divergence> {
-    let (time, step) = (state.time, state.steps);
-    let mut max_speed2: f64 = 0.0;
-    let mut max_dist2: f64 = 0.0;
-    for (x, v) in state.positions.iter().zip(&state.velocities) {
-        if !(x.is_finite() && v.is_finite()) {
-            return Err(Divergence::NonFinite { time, step });
+/// Where a run started and how big it was: the yardstick for runaways.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Runaway {
+    /// Centre of the start positions, in m.
+    pub center: DVec3,
+    /// Radius of the start positions about `center`, in m.
+    pub extent: f64,
+}
+
+impl Runaway {
+    /// The yardstick for a run starting at `positions`.
+    pub fn around(positions: &[DVec3]) -> Self {
+        let (center, extent) = bounding_sphere(positions);
+        Self { center, extent }
+    }
+
+    /// Distance from the start (m) past which a particle counts as a runaway.
+    pub fn distance(&self) -> f64 {
+        RUNAWAY_EXTENT * (self.extent + 0.1) + 1000.0
+    }
+
+    /// Whether the largest squared speed and squared distance from `center` of a
+    /// state are within bounds (the fast engines' cheap scan; false on NaN).
+    pub fn plausible(&self, speed2: f64, dist2: f64) -> bool {
+        speed2 <= RUNAWAY_SPEED * RUNAWAY_SPEED && dist2 <= self.distance().powi(2)
+    }
+
+    /// Checks `state` for non-finite values, speeds over [`RUNAWAY_SPEED`] and
+    /// particles farther than [`Self::distance`] from the start.
+    pub fn check(&self, state: &State) -> Result<(), Divergence> {
+        let (time, step) = (state.time, state.steps);
+        let mut max_speed2: f64 = 0.0;
+        let mut max_dist2: f64 = 0.0;
+        for (x, v) in state.positions.iter().zip(&state.velocities) {
+            if !(x.is_finite() && v.is_finite()) {
+                return Err(Divergence::NonFinite { time, step });
+            }
+            max_speed2 = max_speed2.max(v.length_squared());
+            max_dist2 = max_dist2.max((*x - self.center).length_squared());
         }
-        max_speed2 = max_speed2.max(v.length_squared());
-        max_dist2 = max_dist2.max((*x - start_center).length_squared());
+        if max_speed2 > RUNAWAY_SPEED * RUNAWAY_SPEED {
+            return Err(Divergence::Runaway {
+                time,
+                step,
+                what: "a particle passed 100 km/s",
+            });
+        }
+        if max_dist2 > self.distance().powi(2) {
+            let what = "a particle flew 10,000 scene sizes from the start";
+            return Err(Divergence::Runaway { time, step, what });
+        }
+        Ok(())
     }
-    if max_speed2 > RUNAWAY_SPEED * RUNAWAY_SPEED {
-        return Err(Divergence::Runaway {
-            time,
-            step,
-            what: "a particle passed 100 km/s",
-        });
-    }
-    if max_dist2 > far * far {
-        let what = "a particle flew 10,000 scene sizes from the start";
-        return Err(Divergence::Runaway { time, step, what });
-    }
-    Ok(())
+}
+
+/// Centre and radius (m) of a sphere around the points, for runaway detection and framing.
+pub fn bounding_sphere(points: &[DVec3]) -> (DVec3, f64) {
+    let Some(&first) = points.first() else {
+        return (DVec3::ZERO, 0.0);
+    };
+    let (lo, hi) = points
+        .iter()
+        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let center = (lo + hi) * 0.5;
+    (center, (hi - lo).length() * 0.5)
 }

@@ -74,42 +74,75 @@ pub struct GridShape {
     pub height: usize,
 }
 
-/// The kernel, once built. A clone of a system starts without one and builds its own
-/// on first use (the kernel's buffers are not shared).
+/// A system's fast engines: whether they may run, each one once built, and the
+/// grid summary the grid kernel is specified from. A clone of a system starts
+/// without built engines and builds its own on first use (their buffers and
+/// threads are not shared).
 #[derive(Debug, Default)]
-pub(super) struct FastPathSlot(pub(super) Option<FastPath>);
+pub(super) struct Engines {
+    /// Whether [`System::run`] may hand runs to them ([`System::set_fast_path`]).
+    allowed: bool,
+    grid: Option<FastPath>,
+    mesh: Option<MeshPath>,
+    /// The springs and masses as the grid kernel sees them, summarised on each edit.
+    pub(super) grid_springs: Option<GridSprings>,
+    /// How many times a grid kernel was built for this system.
+    builds: u64,
+}
 
-impl Clone for FastPathSlot {
+impl Clone for Engines {
     fn clone(&self) -> Self {
-        Self(None)
+        Self {
+            allowed: self.allowed,
+            grid: None,
+            mesh: None,
+            grid_springs: self.grid_springs,
+            builds: self.builds,
+        }
     }
 }
 
-/// The mesh engine, once built; like [`FastPathSlot`], a clone starts without one.
-#[derive(Debug, Default)]
-pub(super) struct MeshSlot(pub(super) Option<MeshPath>);
+impl Engines {
+    /// The f64 state changed outside the engines: copy it in before they next run.
+    pub(super) fn mark_stale(&mut self) {
+        if let Some(grid) = &mut self.grid {
+            grid.in_sync = false;
+        }
+        if let Some(mesh) = &mut self.mesh {
+            mesh.in_sync = false;
+        }
+    }
 
-impl Clone for MeshSlot {
-    fn clone(&self) -> Self {
-        Self(None)
+    /// Applies `edit` to the coefficients of one whole spring kind in the grid
+    /// summary (the grid stays a grid, no rescan); rescans `model` if there was none.
+    pub(super) fn edit_grid_springs(
+        &mut self,
+        model: &super::Model,
+        kind: SpringKind,
+        edit: impl Fn(&mut SpringCoefficients),
+    ) {
+        self.grid_springs = match self.grid_springs {
+            Some(grid) => Some(grid.with_kind(kind, edit)),
+            None => GridSprings::of(model),
+        };
     }
 }
 
 /// The mesh engine and whether it holds the f64 state.
 #[derive(Debug)]
-pub(super) struct MeshPath {
+struct MeshPath {
     kernel: MeshKernel,
     /// Whether the engine holds the same state as the f64 arrays.
-    pub(super) in_sync: bool,
+    in_sync: bool,
 }
 
 /// The kernel and what it was built from.
 #[derive(Debug)]
-pub(super) struct FastPath {
+struct FastPath {
     kernel: GridCloth,
     spec: GridSpec,
     /// Whether the kernel holds the same state as the f64 arrays.
-    pub(super) in_sync: bool,
+    in_sync: bool,
     /// Positions of the particles held in place (pinned or grabbed), exactly as
     /// the f64 state had them: the kernel holds them in f32.
     held: Vec<(usize, DVec3)>,
@@ -216,10 +249,10 @@ impl System {
     /// [`System::run`]. Off by default: the library is exact (the general f64
     /// engine) unless asked otherwise.
     pub fn set_fast_path(&mut self, allowed: bool) {
-        self.fast_path_allowed = allowed;
+        self.engines.allowed = allowed;
         if !allowed {
-            self.fast_path.0 = None;
-            self.mesh_path.0 = None;
+            self.engines.grid = None;
+            self.engines.mesh = None;
         }
     }
 
@@ -227,12 +260,12 @@ impl System {
     /// shape, integrator or precision changed (live edits of coefficients update the
     /// kernel in place).
     pub fn kernel_builds(&self) -> u64 {
-        self.kernel_builds
+        self.engines.builds
     }
 
     /// The engine [`System::run`] would use now.
     pub fn engine(&self) -> Engine {
-        if !self.fast_path_allowed {
+        if !self.engines.allowed {
             return Engine::General;
         }
         if let Some(spec) = self.grid_spec() {
@@ -248,11 +281,11 @@ impl System {
     /// exactly; `None` when the general path must run them. Call after
     /// [`Self::run_on_grid`] declined.
     pub(super) fn run_on_mesh(&mut self, n: u64) -> Option<Result<(), Divergence>> {
-        if !self.fast_path_allowed {
+        if !self.engines.allowed {
             return None;
         }
         let params = MeshParams::of(&self.model)?;
-        let reused = self.mesh_path.0.take().and_then(|mut mesh| {
+        let reused = self.engines.mesh.take().and_then(|mut mesh| {
             // Coefficients, masses and pins are taken in place; a new topology or
             // integrator needs a new engine.
             mesh.kernel.refresh(&self.model, params).then_some(mesh)
@@ -277,7 +310,7 @@ impl System {
             mesh.in_sync = true;
         }
         let result = self.run_in_chunks(n, &mut mesh);
-        self.mesh_path.0 = Some(mesh);
+        self.engines.mesh = Some(mesh);
         Some(result)
     }
 
@@ -287,7 +320,7 @@ impl System {
     /// it is either passed to the kernel or made a reason to refuse it.
     fn grid_spec(&self) -> Option<GridSpec> {
         let model = &self.model;
-        let (shape, springs) = (model.grid?, self.grid_springs?);
+        let (shape, springs) = (model.grid?, self.engines.grid_springs?);
         let super::Params {
             gravity,
             wind,
@@ -345,7 +378,7 @@ impl System {
         };
         // How far from the origin the cloth may go before float32 positions lose
         // what the precision rule allowed: twice its start's farthest point.
-        let reach = 2.0 * (self.start_center.length() + self.start_extent);
+        let reach = 2.0 * (self.runaway.center.length() + self.runaway.extent);
         spec.precision = Precision::needed(&spec, reach);
         Some(spec)
     }
@@ -353,13 +386,13 @@ impl System {
     /// Runs `n` steps on the kernel if allowed and possible; `None` when the general
     /// path must run them.
     pub(super) fn run_on_grid(&mut self, n: u64) -> Option<Result<(), Divergence>> {
-        if !self.fast_path_allowed {
+        if !self.engines.allowed {
             return None;
         }
         let spec = self.grid_spec()?;
         // The kernel is taken out of `self` while it runs, so that the divergence
         // check can borrow the system.
-        let reused = self.fast_path.0.take().and_then(|mut fast| {
+        let reused = self.engines.grid.take().and_then(|mut fast| {
             if fast.spec != spec {
                 // A live edit of a coefficient: updated in place, no new arrays or
                 // threads; a new shape or integrator needs a new kernel.
@@ -374,7 +407,7 @@ impl System {
         let mut fast = match reused {
             Some(fast) => fast,
             None => {
-                self.kernel_builds += 1;
+                self.engines.builds += 1;
                 let mut kernel = GridCloth::new(spec.clone());
                 kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
                 FastPath {
@@ -401,7 +434,7 @@ impl System {
             fast.in_sync = true;
         }
         let result = self.run_in_chunks(n, &mut fast);
-        self.fast_path.0 = Some(fast);
+        self.engines.grid = Some(fast);
         Some(result)
     }
 
@@ -420,10 +453,8 @@ impl System {
                 self.state.time += dt;
             }
             self.state.steps += chunk;
-            let far = self.runaway_distance();
-            let (speed2, dist2) = engine.extremes(self.start_center);
-            let plausible = speed2 <= super::RUNAWAY_SPEED.powi(2) && dist2 <= far * far;
-            if done == n || !plausible {
+            let (speed2, dist2) = engine.extremes(self.runaway.center);
+            if done == n || !self.runaway.plausible(speed2, dist2) {
                 engine.copy_back(self);
                 self.check()?;
             }
@@ -431,40 +462,25 @@ impl System {
         Ok(())
     }
 
-    /// Position Verlet's velocities of the last update, `(x - x_prev) / h`, from the
-    /// f64 history (`None` for the other integrators).
+    /// Position Verlet's update velocities `(x - x_prev) / h` for a fast engine
+    /// (`None` for the other integrators).
     fn verlet_update_velocities(&self) -> Option<Vec<DVec3>> {
-        let state = &self.state;
-        if self.model.params.integrator != Integrator::Verlet
-            || state.prev_positions.len() != state.positions.len()
-        {
+        if self.model.params.integrator != Integrator::Verlet {
             return None;
         }
-        let h = self.model.params.dt;
-        Some(
-            (state.positions.iter().zip(&state.prev_positions))
-                .map(|(&x, &prev)| (x - prev) / h)
-                .collect(),
-        )
+        let state = &self.state;
+        (state.verlet).update_velocities(&state.positions, self.model.params.dt)
     }
 
-    /// The f64 Verlet history from a fast engine's update velocities `u` (which
-    /// `fill` writes): `x_prev = x - h u`, and the last acceleration from the
-    /// velocity estimate `v = u + h/2 a`.
+    /// The f64 Verlet history from a fast engine's update velocities (which `fill`
+    /// writes).
     fn set_verlet_history(&mut self, fill: impl FnOnce(&mut [DVec3])) {
-        let state = &mut self.state;
-        if self.model.params.integrator != Integrator::Verlet
-            || state.prev_positions.len() != state.positions.len()
-        {
+        if self.model.params.integrator != Integrator::Verlet {
             return;
         }
+        let state = &mut self.state;
         let h = self.model.params.dt;
-        fill(&mut state.prev_accelerations);
-        for i in 0..state.positions.len() {
-            let u = state.prev_accelerations[i];
-            state.prev_positions[i] = state.positions[i] - h * u;
-            state.prev_accelerations[i] = (state.velocities[i] - u) * (2.0 / h);
-        }
+        (state.verlet).set_from_update_velocities(&state.positions, &state.velocities, h, fill);
     }
 }
 

@@ -14,7 +14,7 @@
 
 use glam::DVec3;
 
-use super::{Model, State, Workspace, implicit};
+use super::{Model, State, VerletHistory, Workspace, implicit};
 
 /// Integration method, chosen at run time.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
@@ -136,8 +136,11 @@ fn verlet(model: &Model, state: &mut State, work: &mut Workspace, h: f64, t: f64
     let State {
         positions,
         velocities,
-        prev_positions,
-        prev_accelerations,
+        verlet:
+            VerletHistory {
+                positions: prev_positions,
+                accelerations: prev_accelerations,
+            },
         ..
     } = state;
     for i in 0..positions.len() {

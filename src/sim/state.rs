@@ -2,18 +2,17 @@
 
 use glam::DVec3;
 
-/// The state that advances: positions, velocities and, for Verlet, the previous
-/// positions and accelerations.
+use super::VerletHistory;
+
+/// The state that advances: positions, velocities and, for Verlet, its history.
 #[derive(Clone, Debug, Default)]
 pub struct State {
     /// Positions in m.
     pub positions: Vec<DVec3>,
     /// Velocities in m/s.
     pub velocities: Vec<DVec3>,
-    /// Positions one step ago (Verlet only; empty otherwise).
-    pub prev_positions: Vec<DVec3>,
-    /// Accelerations of the previous step (Verlet only; empty otherwise).
-    pub prev_accelerations: Vec<DVec3>,
+    /// Position Verlet's memory (empty for the other integrators).
+    pub verlet: VerletHistory,
     /// Simulated time in s.
     pub time: f64,
     /// Steps taken.

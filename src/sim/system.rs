@@ -1,13 +1,19 @@
 //! [`System`]: a model, its state and the scratch space a step needs, and the step
 //! itself, read in one place ([`System::step`]): forces and integration
 //! ([`super::integrators`]), then constraints ([`super::constraints`]), then the
-//! divergence check.
+//! divergence check ([`super::divergence`]).
+//!
+//! The system ties together parts that live in their own files: the [`Model`],
+//! the [`State`] (with its [`super::VerletHistory`]), the [`Workspace`], the user's
+//! [`Grab`], the runaway yardstick and the fast engines it hands runs to
+//! ([`super::fast_path`]).
 
 use glam::{DVec2, DVec3};
 
+use super::divergence::Runaway;
 use super::{
-    Adjacency, Bar, Divergence, Energy, ForceTerms, Integrator, Model, Params, RUNAWAY_EXTENT,
-    Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path, forces, implicit,
+    Adjacency, Bar, Divergence, Energy, ForceTerms, Grab, Integrator, Model, Params, Spring,
+    SpringKind, Stability, State, Topology, Wind, constraints, fast_path, forces, implicit,
     integrators, springs, stability,
 };
 
@@ -30,17 +36,11 @@ pub struct System {
     pub(super) model: Model,
     pub(super) state: State,
     pub(super) work: Workspace,
-    pub(super) start_center: DVec3,
-    pub(super) start_extent: f64,
-    pub(super) grabbed: Option<(usize, DVec3)>,
-    pub(super) fast_path_allowed: bool,
-    pub(super) fast_path: fast_path::FastPathSlot,
-    /// The mesh engine, for what the grid kernel does not model.
-    pub(super) mesh_path: fast_path::MeshSlot,
-    /// The springs and masses as the grid kernel sees them, summarised on each edit.
-    pub(super) grid_springs: Option<fast_path::GridSprings>,
-    /// How many times a grid kernel was built for this system.
-    pub(super) kernel_builds: u64,
+    /// Where the run started, for the runaway check.
+    pub(super) runaway: Runaway,
+    pub(super) grab: Option<Grab>,
+    /// The fast engines runs are handed to, when allowed.
+    pub(super) engines: fast_path::Engines,
 }
 
 impl System {
@@ -87,7 +87,7 @@ impl System {
         };
         model.refresh_terms();
         model.refresh_inv_mass(None);
-        let (start_center, start_extent) = bounding_sphere(&positions);
+        let runaway = Runaway::around(&positions);
         let state = State {
             velocities: vec![DVec3::ZERO; n],
             positions,
@@ -97,16 +97,11 @@ impl System {
             model,
             state,
             work: Workspace::default(),
-            start_center,
-            start_extent,
-            grabbed: None,
-            fast_path_allowed: false,
-            fast_path: fast_path::FastPathSlot::default(),
-            mesh_path: fast_path::MeshSlot::default(),
-            grid_springs: None,
-            kernel_builds: 0,
+            runaway,
+            grab: None,
+            engines: fast_path::Engines::default(),
         };
-        system.grid_springs = fast_path::GridSprings::of(&system.model);
+        system.engines.grid_springs = fast_path::GridSprings::of(&system.model);
         system.prepare_integrator();
         system
     }
@@ -173,9 +168,7 @@ impl System {
         }
         self.mark_changed();
         self.state = state;
-        if self.model.params.integrator == Integrator::Verlet
-            && self.state.prev_positions.len() != n
-        {
+        if self.model.params.integrator == Integrator::Verlet && !self.state.verlet.covers(n) {
             self.restart_verlet_history();
         }
     }
@@ -193,7 +186,7 @@ impl System {
     }
     /// The particle the user holds, if any, and where it is held.
     pub fn grabbed(&self) -> Option<(usize, DVec3)> {
-        self.grabbed
+        self.grab.map(|g| (g.particle, g.target))
     }
 
     /// Whether particle `i` is pinned (by the scene or the user).
@@ -211,8 +204,8 @@ impl System {
         if pinned {
             self.state.velocities[i] = DVec3::ZERO;
         }
-        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
-        self.sync_verlet_history(i);
+        self.model.refresh_inv_mass(self.grab.map(|g| g.particle));
+        self.forget_motion(i);
     }
 
     /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
@@ -222,25 +215,25 @@ impl System {
         if i >= self.particle_count() || !target.is_finite() {
             return;
         }
-        if let Some((j, _)) = self.grabbed
-            && j != i
-        {
+        if self.grab.is_some_and(|g| g.particle != i) {
             self.release();
         }
-        self.grabbed = Some((i, target));
-        self.state.positions[i] = target;
-        self.state.velocities[i] = DVec3::ZERO;
+        let grab = Grab {
+            particle: i,
+            target,
+        };
+        grab.hold(&mut self.state, self.model.params.dt);
+        self.grab = Some(grab);
         self.model.refresh_inv_mass(Some(i));
-        self.sync_verlet_history(i);
     }
 
     /// Lets go of the held particle: it is free again unless pinned.
     pub fn release(&mut self) {
         self.mark_changed();
-        if let Some((i, _)) = self.grabbed.take() {
+        if let Some(Grab { particle: i, .. }) = self.grab.take() {
             self.state.velocities[i] = DVec3::ZERO;
             self.model.refresh_inv_mass(None);
-            self.sync_verlet_history(i);
+            self.forget_motion(i);
         }
     }
 
@@ -265,11 +258,9 @@ impl System {
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.stiffness = stiffness;
         }
-        self.grid_springs = match self.grid_springs {
-            // A whole kind changes together: the grid stays a grid, no rescan.
-            Some(grid) => Some(grid.with_kind(kind, |c| c.k = stiffness)),
-            None => fast_path::GridSprings::of(&self.model),
-        };
+        // A whole kind changes together: the grid stays a grid, no rescan.
+        self.engines
+            .edit_grid_springs(&self.model, kind, |c| c.k = stiffness);
     }
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
@@ -277,10 +268,8 @@ impl System {
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.damping = damping;
         }
-        self.grid_springs = match self.grid_springs {
-            Some(grid) => Some(grid.with_kind(kind, |c| c.b = damping)),
-            None => fast_path::GridSprings::of(&self.model),
-        };
+        self.engines
+            .edit_grid_springs(&self.model, kind, |c| c.b = damping);
     }
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
@@ -294,7 +283,7 @@ impl System {
         for b in &mut self.model.bars {
             b.length *= factor;
         }
-        self.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
     /// Scales the whole system by `factor`: rest lengths, bar lengths and positions
@@ -318,13 +307,12 @@ impl System {
         let center = points.iter().copied().sum::<DVec3>() / points.len().max(1) as f64;
         let scale = |p: &mut DVec3| *p = center + (*p - center) * factor;
         self.state.positions.iter_mut().for_each(scale);
-        self.state.prev_positions.iter_mut().for_each(scale);
-        if let Some((_, target)) = &mut self.grabbed {
-            scale(target);
+        self.state.verlet.positions.iter_mut().for_each(scale);
+        if let Some(grab) = &mut self.grab {
+            scale(&mut grab.target);
         }
         self.scale_rest_lengths(factor);
-        let (start_center, start_extent) = bounding_sphere(&self.state.positions);
-        (self.start_center, self.start_extent) = (start_center, start_extent);
+        self.runaway = Runaway::around(&self.state.positions);
     }
 
     /// Sets every particle's mass (kg), keeping pins.
@@ -333,8 +321,8 @@ impl System {
             return;
         }
         self.model.mass.fill(mass);
-        self.model.refresh_inv_mass(self.grabbed.map(|g| g.0));
-        self.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.model.refresh_inv_mass(self.grab.map(|g| g.particle));
+        self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
     /// Energy now.
@@ -352,10 +340,8 @@ impl System {
     /// left as it is (the caller decides to reset).
     pub fn step(&mut self) -> Result<(), Divergence> {
         self.mark_changed();
-        if let Some((i, target)) = self.grabbed {
-            self.state.positions[i] = target;
-            self.state.velocities[i] = DVec3::ZERO;
-            self.sync_verlet_history(i);
+        if let Some(grab) = self.grab {
+            grab.hold(&mut self.state, self.model.params.dt);
         }
         integrators::step(&self.model, &mut self.state, &mut self.work);
         if self.has_constraints() {
@@ -398,25 +384,15 @@ impl System {
             || p.sphere.is_some()
     }
 
-    /// Distance from the start (m) past which a particle counts as a runaway.
-    pub(super) fn runaway_distance(&self) -> f64 {
-        RUNAWAY_EXTENT * (self.start_extent + 0.1) + 1000.0
-    }
-
-    /// Checks for non-finite values and runaways ([`super::divergence::check`]).
+    /// Checks for non-finite values and runaways ([`super::divergence`]).
     pub fn check(&self) -> Result<(), Divergence> {
-        super::divergence::check(&self.state, self.start_center, self.runaway_distance())
+        self.runaway.check(&self.state)
     }
 
-    /// The f64 state is about to change outside the grid kernel: it must be copied
-    /// in again before the kernel next runs.
+    /// The f64 state is about to change outside the fast engines: it must be
+    /// copied in again before they next run.
     pub(super) fn mark_changed(&mut self) {
-        if let Some(fast) = &mut self.fast_path.0 {
-            fast.in_sync = false;
-        }
-        if let Some(mesh) = &mut self.mesh_path.0 {
-            mesh.in_sync = false;
-        }
+        self.engines.mark_stale();
     }
 
     pub(super) fn prepare_integrator(&mut self) {
@@ -447,50 +423,27 @@ impl System {
         if self.model.params.integrator == Integrator::Verlet {
             self.restart_verlet_history();
         } else {
-            self.state.prev_positions = Vec::new();
-            self.state.prev_accelerations = Vec::new();
+            self.state.verlet.clear();
         }
     }
 
-    /// Verlet needs the previous positions: make them consistent with the current
-    /// velocities, `x_prev = x - h v + h²/2 a`, so that its velocity estimate
-    /// `(x - x_prev)/h + h/2 a_prev` starts equal to `v`.
+    /// Verlet needs a history consistent with the current velocities
+    /// ([`super::VerletHistory::restart`]).
     pub(super) fn restart_verlet_history(&mut self) {
-        let h = self.model.params.dt;
-        let (x, v, t) = (
-            &self.state.positions,
-            &self.state.velocities,
-            self.state.time,
-        );
-        let mut a = std::mem::take(&mut self.work.accelerations);
-        a.resize(x.len(), DVec3::ZERO);
-        self.model
-            .accelerations(x, v, t, &mut self.work.spring_forces, &mut a);
-        self.state.prev_positions = (x.iter().zip(v).zip(&a))
-            .map(|((&x, &v), &a)| x - h * v + 0.5 * h * h * a)
-            .collect();
-        self.state.prev_accelerations = a.clone();
-        self.work.accelerations = a;
+        let State {
+            positions,
+            velocities,
+            time,
+            verlet,
+            ..
+        } = &mut self.state;
+        verlet.restart(&self.model, positions, velocities, *time, &mut self.work);
     }
 
     /// After the user moves, pins or releases particle `i`, its Verlet history must
     /// not remember the old motion.
-    pub(super) fn sync_verlet_history(&mut self, i: usize) {
-        if let Some(prev) = self.state.prev_positions.get_mut(i) {
-            *prev = self.state.positions[i] - self.model.params.dt * self.state.velocities[i];
-            self.state.prev_accelerations[i] = DVec3::ZERO;
-        }
+    fn forget_motion(&mut self, i: usize) {
+        let (x, v) = (self.state.positions[i], self.state.velocities[i]);
+        (self.state.verlet).forget_motion(i, x, v, self.model.params.dt);
     }
-}
-
-/// Centre and radius (m) of a sphere around the points, for runaway detection and framing.
-pub fn bounding_sphere(points: &[DVec3]) -> (DVec3, f64) {
-    let Some(&first) = points.first() else {
-        return (DVec3::ZERO, 0.0);
-    };
-    let (lo, hi) = points
-        .iter()
-        .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let center = (lo + hi) * 0.5;
-    (center, (hi - lo).length() * 0.5)
 }
