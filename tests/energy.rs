@@ -4,6 +4,7 @@
 
 mod common;
 
+use cloth_sandbox::sim::Divergence;
 use common::spring_system;
 
 fn energy_history(integrator: &str, steps: usize) -> Vec<f64> {
@@ -15,7 +16,12 @@ fn energy_history(integrator: &str, steps: usize) -> Vec<f64> {
     ]);
     let mut history = vec![system.energy().total()];
     for _ in 0..steps {
-        system.step().expect("finite");
+        // The energy check may flag explicit Euler's growth (it is a divergence);
+        // the step is taken all the same, and the growth law is what is tested here.
+        match system.step() {
+            Ok(()) | Err(Divergence::EnergyGrowth { .. }) => {}
+            Err(other) => panic!("{other}"),
+        }
         history.push(system.energy().total());
     }
     history

@@ -401,6 +401,25 @@ fn contents(
                 Color32::from_rgb(120, 220, 120)
             };
             ui.colored_label(color, format!("stability dt / dt_crit = {margin:.3}"));
+            if let Some(budget) = system.energy_budget() {
+                // How much of the energy rise the budget allows is used.
+                let used = (e.total() - budget.base) / budget.allowed;
+                let color = if used >= 0.5 {
+                    Color32::from_rgb(255, 200, 60)
+                } else {
+                    Color32::from_rgb(120, 220, 120)
+                };
+                ui.colored_label(
+                    color,
+                    format!("energy budget used {:.0}%", 100.0 * used.max(0.0)),
+                )
+                .on_hover_text(format!(
+                    "The run counts as diverged when its energy rises more than {:.3e} J \
+                         above the {:.3e} J it had at the start or the last edit",
+                    budget.limit() - budget.base,
+                    budget.base
+                ));
+            }
             ui.label(format!("engine {}", system.engine().name()));
             ui.label(RichText::new(format!("adapter: {adapter}")).small());
         });

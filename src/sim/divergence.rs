@@ -26,13 +26,31 @@ pub enum Divergence {
         /// Which limit was passed.
         what: &'static str,
     },
+    /// The mechanical energy rose past anything the forces and the step could
+    /// supply ([`super::energy_budget`]).
+    #[error(
+        "the energy rose {ratio:.1}x as far as its budget allows at t = {time:.4} s (step {step}): {rise:.3e} J above the start or the last edit, where the forces and the step can add {allowed:.3e} J",
+        ratio = rise / allowed
+    )]
+    EnergyGrowth {
+        /// Simulated time in s.
+        time: f64,
+        /// Step count.
+        step: u64,
+        /// How far the energy rose above the budget's base, in J.
+        rise: f64,
+        /// How far it may rise, in J.
+        allowed: f64,
+    },
 }
 
 impl Divergence {
     /// Simulated time at which it happened, in s.
     pub fn time(&self) -> f64 {
         match *self {
-            Self::NonFinite { time, .. } | Self::Runaway { time, .. } => time,
+            Self::NonFinite { time, .. }
+            | Self::Runaway { time, .. }
+            | Self::EnergyGrowth { time, .. } => time,
         }
     }
 }

@@ -23,6 +23,7 @@
 
 use glam::DVec3;
 
+use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
 use super::mesh_kernel::{MeshKernel, MeshParams};
 use super::{Divergence, Integrator, SpringKind, System};
@@ -440,21 +441,28 @@ impl System {
 
     /// Runs `n` steps on a fast engine in chunks of [`CHUNK`]. Simulated time
     /// advances by whole steps, as in the general path. After each chunk a cheap scan
-    /// of the engine's own arrays; the f64 state (and the full check, with its
-    /// message) only at the end or when the scan finds trouble.
+    /// of the engine's own arrays; the f64 state and the full check (with the
+    /// energy budget, and the message) at the end, every [`ENERGY_CHECK_STEPS`]
+    /// steps, or when the scan finds trouble.
     fn run_in_chunks(&mut self, n: u64, engine: &mut impl FastEngine) -> Result<(), Divergence> {
         let dt = self.model.params.dt;
         let mut done = 0;
+        let mut unchecked = 0;
         while done < n {
             let chunk = CHUNK.min(n - done);
             engine.advance(self, chunk as usize);
             done += chunk;
+            unchecked += chunk;
             for _ in 0..chunk {
                 self.state.time += dt;
             }
             self.state.steps += chunk;
             let (speed2, dist2) = engine.extremes(self.runaway.center);
-            if done == n || !self.runaway.plausible(speed2, dist2) {
+            if done == n
+                || unchecked >= ENERGY_CHECK_STEPS
+                || !self.runaway.plausible(speed2, dist2)
+            {
+                unchecked = 0;
                 engine.copy_back(self);
                 self.check()?;
             }

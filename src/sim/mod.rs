@@ -7,8 +7,9 @@
 //!   (the f64 general engine, the reference);
 //! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook
 //!   into [`System::run`];
-//! - [`divergence`], [`stability`], [`safe`]: when a run has blown up, the stable
-//!   step, and safe stepping;
+//! - [`divergence`], [`energy_budget`], [`stability`], [`safe`]: when a run has
+//!   blown up (runaways, and energy past its budget), the stable step, and safe
+//!   stepping;
 //! - [`springs`], [`wind`], [`clock`]: springs and their adjacency, gusts, the
 //!   fixed-step clock.
 //!
@@ -17,6 +18,7 @@
 pub mod clock;
 pub mod constraints;
 pub mod divergence;
+pub mod energy_budget;
 pub mod fast_path;
 pub mod forces;
 pub mod grab;
@@ -35,6 +37,7 @@ pub mod wind;
 
 pub use clock::Clock;
 pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere};
+pub use energy_budget::EnergyBudget;
 pub use fast_path::{Engine, GridShape};
 pub use forces::ForceTerms;
 pub use grab::Grab;

@@ -11,9 +11,10 @@
 use glam::{DVec2, DVec3};
 
 use super::divergence::Runaway;
+use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
-    Adjacency, Bar, Divergence, Energy, ForceTerms, Grab, Integrator, Model, Params, Spring,
-    SpringKind, Stability, State, Topology, Wind, constraints, fast_path, forces, implicit,
+    Adjacency, Bar, Divergence, Energy, EnergyBudget, ForceTerms, Grab, Integrator, Model, Params,
+    Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path, forces, implicit,
     integrators, springs, stability,
 };
 
@@ -38,6 +39,9 @@ pub struct System {
     pub(super) work: Workspace,
     /// Where the run started, for the runaway check.
     pub(super) runaway: Runaway,
+    /// The energy the run may reach; `None` after an edit, until the next step
+    /// sets it from the edited state.
+    pub(super) budget: Option<EnergyBudget>,
     pub(super) grab: Option<Grab>,
     /// The fast engines runs are handed to, when allowed.
     pub(super) engines: fast_path::Engines,
@@ -98,6 +102,7 @@ impl System {
             state,
             work: Workspace::default(),
             runaway,
+            budget: None,
             grab: None,
             engines: fast_path::Engines::default(),
         };
@@ -166,7 +171,7 @@ impl System {
         if state.positions.len() != n || state.velocities.len() != n {
             return;
         }
-        self.mark_changed();
+        self.mark_edited();
         self.state = state;
         if self.model.params.integrator == Integrator::Verlet && !self.state.verlet.covers(n) {
             self.restart_verlet_history();
@@ -196,7 +201,7 @@ impl System {
 
     /// Pins or unpins particle `i` (ignored if out of range). A pinned particle stops.
     pub fn set_pinned(&mut self, i: usize, pinned: bool) {
-        self.mark_changed();
+        self.mark_edited();
         if i >= self.particle_count() {
             return;
         }
@@ -211,7 +216,7 @@ impl System {
     /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
     /// hand and pulls its neighbours through their springs. Non-finite targets are ignored.
     pub fn grab(&mut self, i: usize, target: DVec3) {
-        self.mark_changed();
+        self.mark_edited();
         if i >= self.particle_count() || !target.is_finite() {
             return;
         }
@@ -229,7 +234,7 @@ impl System {
 
     /// Lets go of the held particle: it is free again unless pinned.
     pub fn release(&mut self) {
-        self.mark_changed();
+        self.mark_edited();
         if let Some(Grab { particle: i, .. }) = self.grab.take() {
             self.state.velocities[i] = DVec3::ZERO;
             self.model.refresh_inv_mass(None);
@@ -240,7 +245,7 @@ impl System {
     /// Changes parameters that need no rebuild (k and b go through
     /// [`Self::set_spring_stiffness`]); recomputes which force terms run.
     pub fn set_params(&mut self, params: Params) {
-        self.mark_changed();
+        self.mark_edited();
         let integrator_changed = params.integrator != self.model.params.integrator;
         let dt_changed = params.dt != self.model.params.dt;
         self.model.params = params;
@@ -255,6 +260,7 @@ impl System {
 
     /// Sets the stiffness (N/m) of every spring of `kind`.
     pub fn set_spring_stiffness(&mut self, kind: SpringKind, stiffness: f64) {
+        self.budget = None;
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.stiffness = stiffness;
         }
@@ -265,6 +271,7 @@ impl System {
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
     pub fn set_spring_damping(&mut self, kind: SpringKind, damping: f64) {
+        self.budget = None;
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.damping = damping;
         }
@@ -274,6 +281,7 @@ impl System {
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
     pub fn scale_rest_lengths(&mut self, factor: f64) {
+        self.budget = None;
         if !(factor.is_finite() && factor >= 0.0) {
             return;
         }
@@ -291,7 +299,7 @@ impl System {
     /// pinned). Strains and velocities are unchanged, so no energy is injected: this
     /// is how a rest-length edit applies to a running cloth.
     pub fn rescale(&mut self, factor: f64) {
-        self.mark_changed();
+        self.mark_edited();
         if !(factor.is_finite() && factor > 0.0) {
             return;
         }
@@ -317,6 +325,7 @@ impl System {
 
     /// Sets every particle's mass (kg), keeping pins.
     pub fn set_particle_mass(&mut self, mass: f64) {
+        self.budget = None;
         if !(mass.is_finite() && mass > 0.0) {
             return;
         }
@@ -340,6 +349,7 @@ impl System {
     /// left as it is (the caller decides to reset).
     pub fn step(&mut self) -> Result<(), Divergence> {
         self.mark_changed();
+        self.budget();
         if let Some(grab) = self.grab {
             grab.hold(&mut self.state, self.model.params.dt);
         }
@@ -352,13 +362,19 @@ impl System {
         }
         self.state.time += self.model.params.dt;
         self.state.steps += 1;
-        self.check()
+        if self.state.steps % ENERGY_CHECK_STEPS == 0 {
+            self.check()
+        } else {
+            self.runaway.check(&self.state)
+        }
     }
 
-    /// Runs `n` steps, stopping at the first divergence. A model big enough for the
+    /// Runs `n` steps, stopping at the first divergence; the energy budget is
+    /// checked every [`ENERGY_CHECK_STEPS`] steps and at the end. A model big enough for the
     /// threaded force path runs its whole loop on a pool thread, so the parallel loops
     /// inside go through worker-local queues and allocate nothing per step.
     pub fn run(&mut self, n: u64) -> Result<(), Divergence> {
+        self.budget();
         if let Some(result) = self.run_on_grid(n) {
             return result;
         }
@@ -370,10 +386,15 @@ impl System {
         if forces::uses_threads(&self.model) {
             let mut result = Ok(());
             rayon::scope(|_| result = steps(self));
-            result
+            result?;
         } else {
-            steps(self)
+            steps(self)?;
         }
+        // A run ends checked in full, as the fast engines' runs do.
+        if n > 0 && self.state.steps % ENERGY_CHECK_STEPS != 0 {
+            self.check()?;
+        }
+        Ok(())
     }
 
     /// Whether anything is enforced after integration.
@@ -384,15 +405,43 @@ impl System {
             || p.sphere.is_some()
     }
 
-    /// Checks for non-finite values and runaways ([`super::divergence`]).
-    pub fn check(&self) -> Result<(), Divergence> {
-        self.runaway.check(&self.state)
+    /// Checks for non-finite values and runaways ([`super::divergence`]), then the
+    /// energy against its budget ([`super::energy_budget`]).
+    pub fn check(&mut self) -> Result<(), Divergence> {
+        self.runaway.check(&self.state)?;
+        let energy = self.energy();
+        (self.budget()).check(energy, self.state.time, self.state.steps)
+    }
+
+    /// The energy budget in effect; `None` after an edit until the next step sets
+    /// it.
+    pub fn energy_budget(&self) -> Option<EnergyBudget> {
+        self.budget
     }
 
     /// The f64 state is about to change outside the fast engines: it must be
     /// copied in again before they next run.
     pub(super) fn mark_changed(&mut self) {
         self.engines.mark_stale();
+    }
+
+    /// Something outside the run changed the system (a grab, a pin, a parameter):
+    /// the engines must take the new state, and the energy budget starts again from
+    /// it, so that the edit's own work is not counted against the run.
+    pub(super) fn mark_edited(&mut self) {
+        self.mark_changed();
+        self.budget = None;
+    }
+
+    /// The energy budget, set from the state now if an edit cleared it.
+    pub(super) fn budget(&mut self) -> EnergyBudget {
+        *self.budget.get_or_insert_with(|| {
+            let energy = self
+                .model
+                .energy(&self.state.positions, &self.state.velocities);
+            let stability = stability::estimate(&self.model);
+            EnergyBudget::new(&self.model, &self.state.positions, energy, &stability)
+        })
     }
 
     pub(super) fn prepare_integrator(&mut self) {

@@ -1,0 +1,148 @@
+//! The energy check (`sim::energy_budget`): runs past a stability limit are caught
+//! even when nothing overflows, and no stable run is flagged.
+//!
+//! The limits are derived here, not taken from the code under test: the spring
+//! scene's free mass m on a spring k (its fixed end pinned) oscillates along the
+//! spring at `w = sqrt(k/m)`; on `x'' = -w² x` RK4 is stable for `h w < 2√2`,
+//! symplectic Euler and Verlet for `h w < 2`, and explicit Euler with damping
+//! ratio `zeta` for `h w < 2 zeta`.
+
+mod common;
+
+use cloth_sandbox::scene::{Scene, builtin_scenes};
+use cloth_sandbox::sim::{Divergence, SpringKind, System};
+use common::build;
+
+const M: f64 = 0.5;
+const K: f64 = 15.0;
+
+fn omega() -> f64 {
+    (K / M).sqrt()
+}
+
+/// The spring scene with `integrator`, undamped unless `damping_ratio` is given,
+/// at `fraction` of the step limit `limit_hw / w`.
+fn spring(integrator: &str, damping_ratio: f64, limit_hw: f64, fraction: f64) -> System {
+    let dt = fraction * limit_hw / omega();
+    build(
+        "spring",
+        &[
+            &format!("integrator=\"{integrator}\""),
+            &format!("damping_ratio={damping_ratio}"),
+            &format!("dt={dt}"),
+        ],
+    )
+}
+
+/// Steps until the first divergence (`None`: none in `steps`).
+fn first_divergence(system: &mut System, steps: u64) -> Option<Divergence> {
+    (0..steps).find_map(|_| system.step().err())
+}
+
+#[test]
+fn an_undamped_spring_a_little_past_rk4s_limit_is_caught_though_nothing_overflows() {
+    for fraction in [1.01, 1.02, 1.05] {
+        let mut system = spring("rk4", 0.0, 2.0 * 2f64.sqrt(), fraction);
+        let caught = first_divergence(&mut system, 2048)
+            .unwrap_or_else(|| panic!("RK4 at {fraction} of its limit was not caught"));
+        // Nothing overflowed or ran away: only the energy says it diverged.
+        assert!(
+            matches!(caught, Divergence::EnergyGrowth { .. }),
+            "at {fraction}: {caught}"
+        );
+        assert!(system.positions().iter().all(|p| p.is_finite()));
+        assert!(
+            caught.to_string().contains("as far as its budget allows"),
+            "{caught}"
+        );
+    }
+}
+
+#[test]
+fn explicit_methods_past_their_limits_are_caught_within_a_bounded_number_of_steps() {
+    let cases = [
+        ("rk4", 0.0, 2.0 * 2f64.sqrt(), 1.01, 2048),
+        ("symplectic-euler", 0.0, 2.0, 1.01, 2048),
+        ("verlet", 0.0, 2.0, 1.01, 2048),
+        ("explicit-euler", 0.1, 0.2, 1.1, 4096),
+        ("explicit-euler", 0.0, 0.2, 1.0, 20_000), // undamped: unstable at every step
+    ];
+    for (integrator, zeta, limit_hw, fraction, within) in cases {
+        let mut system = spring(integrator, zeta, limit_hw, fraction);
+        assert!(
+            first_divergence(&mut system, within).is_some(),
+            "{integrator} at {fraction} of its limit ran {within} steps uncaught"
+        );
+    }
+}
+
+#[test]
+fn runs_at_nine_tenths_of_the_limit_are_never_flagged() {
+    let cases = [
+        ("rk4", 0.0, 2.0 * 2f64.sqrt()),
+        ("symplectic-euler", 0.0, 2.0),
+        ("verlet", 0.0, 2.0),
+        ("explicit-euler", 0.1, 0.2),
+    ];
+    for (integrator, zeta, limit_hw) in cases {
+        let mut system = spring(integrator, zeta, limit_hw, 0.9);
+        if let Some(d) = first_divergence(&mut system, 20_000) {
+            panic!("{integrator} at 0.9 of its limit was flagged: {d}");
+        }
+    }
+}
+
+#[test]
+fn no_built_in_scene_at_its_defaults_is_flagged_on_either_engine() {
+    for scene in builtin_scenes() {
+        for fast in [false, true] {
+            let mut system = Scene::load(scene.name).unwrap().build().unwrap();
+            system.set_fast_path(fast);
+            let steps = (4.0 / system.params().dt) as u64;
+            if let Err(d) = system.run(steps) {
+                panic!("{} (fast engine: {fast}) was flagged: {d}", scene.name);
+            }
+        }
+    }
+}
+
+/// A cloth at rest whose stiffness jumps 100-fold past its stable step: before
+/// the energy check this ran on with the cloth in tatters and nothing caught.
+#[test]
+fn a_cloth_whose_stiffness_jumps_past_its_stable_step_is_caught() {
+    for fast in [false, true] {
+        let mut system = build("bench", &["width=48", "height=48"]);
+        system.set_fast_path(fast);
+        system.run(960).unwrap();
+        let k = system.springs()[0].stiffness;
+        let k_unstable = 4.0 * k / system.stability().margin.powi(2);
+        for kind in [SpringKind::Structural, SpringKind::Shear, SpringKind::Bend] {
+            system.set_spring_stiffness(kind, k_unstable);
+        }
+        assert!(system.stability().margin > 1.5);
+        assert!(
+            system.run(2 * 960).is_err(),
+            "fast engine {fast}: the unstable cloth was not caught"
+        );
+    }
+}
+
+/// Dragging a particle does work on the cloth: the budget starts again after
+/// each move, so a steady drag is never flagged.
+#[test]
+fn dragging_a_particle_around_is_not_flagged() {
+    for fast in [false, true] {
+        let mut system = build("cloth", &[]);
+        system.set_fast_path(fast);
+        let i = system.particle_count() / 2;
+        let start = system.positions()[i];
+        for frame in 0..240 {
+            let phase = frame as f64 * 0.1;
+            let target = start + glam::DVec3::new(phase.sin(), 0.5 * phase.cos(), 0.3) * 0.8;
+            system.grab(i, target);
+            if let Err(d) = system.run(16) {
+                panic!("fast engine {fast}: a drag was flagged at frame {frame}: {d}");
+            }
+        }
+    }
+}
