@@ -362,7 +362,7 @@ impl System {
         }
         self.state.time += self.model.params.dt;
         self.state.steps += 1;
-        if self.state.steps % ENERGY_CHECK_STEPS == 0 {
+        if self.state.steps.is_multiple_of(ENERGY_CHECK_STEPS) {
             self.check()
         } else {
             self.runaway.check(&self.state)
@@ -391,7 +391,7 @@ impl System {
             steps(self)?;
         }
         // A run ends checked in full, as the fast engines' runs do.
-        if n > 0 && self.state.steps % ENERGY_CHECK_STEPS != 0 {
+        if n > 0 && !self.state.steps.is_multiple_of(ENERGY_CHECK_STEPS) {
             self.check()?;
         }
         Ok(())
