@@ -40,7 +40,7 @@ use super::{Divergence, Energy, Integrator, Model, Stability, bounding_sphere};
 
 /// Steps between energy checks (the fast engines check at their chunk boundaries,
 /// at most this many steps apart).
-pub const ENERGY_CHECK_STEPS: u64 = 256;
+pub const ENERGY_CHECK_STEPS: u64 = 1024;
 
 /// The margin's part that does not depend on the step (see the module doc).
 pub const SLACK: f64 = 4.0;
