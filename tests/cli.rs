@@ -116,6 +116,48 @@ fn divergence_exits_3_with_time_and_hint() {
     );
 }
 
+/// Past RK4's limit the undamped spring's growth saturates before anything
+/// overflows; the energy budget catches it, and the message says by how much.
+#[test]
+fn energy_growth_without_overflow_exits_3_naming_the_energy_check() {
+    // w = sqrt(k/m) = sqrt(30) rad/s; RK4 is stable for h w < 2 sqrt(2): h < 0.5164 s.
+    let o = cloth(&[
+        "run",
+        "--scene",
+        "spring",
+        "--set",
+        "damping_ratio=0",
+        "--integrator",
+        "rk4",
+        "--dt",
+        "0.52673",
+        "--steps",
+        "3000",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stdout(&o));
+    let err = stderr(&o);
+    assert!(err.contains("as far as its budget allows"), "{err}");
+    assert!(
+        !err.contains("non-finite") && !err.contains("km/s"),
+        "{err}"
+    );
+    // The same run at 0.9 of the limit ends normally.
+    let o = cloth(&[
+        "run",
+        "--scene",
+        "spring",
+        "--set",
+        "damping_ratio=0",
+        "--integrator",
+        "rk4",
+        "--dt",
+        "0.4648",
+        "--steps",
+        "3000",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
 #[test]
 fn bad_input_exits_2_with_a_message() {
     for (args, needle) in [
