@@ -15,7 +15,7 @@ use std::time::Instant;
 pub use crate::scene::Edit;
 use crate::scene::{Resolved, Scene, SceneError};
 use crate::sim::safe::{self, DEFAULT_SAFETY};
-use crate::sim::{Clock, Params, SpringKind, System};
+use crate::sim::{Clock, Params, SpringKind, State, System};
 
 /// Most substeps per frame safe stepping may choose; past it the simulation runs
 /// slower than real time rather than with an unsafe step.
@@ -57,6 +57,9 @@ pub struct DivergenceReport {
     pub time: f64,
     /// Stability margin `dt / dt_crit` at the time, if the estimate has one.
     pub margin: Option<f64>,
+    /// Simulated time (s) of the state on screen: the last frame that passed its
+    /// checks, put back so that the view freezes on it rather than on the wreck.
+    pub shown_time: f64,
 }
 
 /// What one frame did.
@@ -83,6 +86,8 @@ pub struct Session {
     clock: Clock,
     paused: bool,
     divergence: Option<DivergenceReport>,
+    /// The state at the end of the last frame that passed its checks.
+    last_good: State,
     /// Rest length the springs were last scaled to (m).
     rest_length: f64,
     /// Steps per 1/60 s of wall time.
@@ -129,6 +134,7 @@ impl Session {
             clock: Clock::default(),
             paused: false,
             divergence: None,
+            last_good: State::default(),
             rest_length: 0.0,
             substeps: 1,
             ms_per_step: 0.0,
@@ -156,6 +162,7 @@ impl Session {
         self.substeps = self.settings.substeps;
         self.clock.reset();
         self.divergence = None;
+        self.last_good = self.system.state().clone();
         self.choose_step();
     }
 
@@ -403,16 +410,21 @@ impl Session {
         // One call for the whole frame, so that a grid cloth runs on the fast path.
         let outcome = self.system.run(u64::from(steps));
         let done = (self.system.steps_taken() - before) as u32;
-        if let Err(d) = outcome {
-            let margin = Some(self.system.stability().margin).filter(|m| m.is_finite());
-            log::warn!("simulation diverged: {d}");
-            self.divergence = Some(DivergenceReport {
-                message: d.to_string(),
-                time: d.time(),
-                margin,
-            });
-            self.paused = true;
-            self.system.release();
+        match outcome {
+            Ok(()) => self.last_good.clone_from(self.system.state()),
+            Err(d) => {
+                let margin = Some(self.system.stability().margin).filter(|m| m.is_finite());
+                log::warn!("simulation diverged: {d}");
+                self.system.release();
+                self.system.set_state(self.last_good.clone());
+                self.divergence = Some(DivergenceReport {
+                    message: d.to_string(),
+                    time: d.time(),
+                    margin,
+                    shown_time: self.system.time(),
+                });
+                self.paused = true;
+            }
         }
         let sim_ms = start.elapsed().as_secs_f64() * 1e3;
         if done > 0 {

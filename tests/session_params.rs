@@ -116,6 +116,18 @@ fn divergence_pauses_and_reports_the_margin() {
     assert!(s.paused());
     assert!(!d.message.is_empty());
     assert!(d.margin.is_some_and(|m| m > 1.0), "{:?}", d.margin);
+    // The view freezes on the last frame that passed its checks: finite, and
+    // before the divergence.
+    assert!(d.shown_time < d.time, "{} {}", d.shown_time, d.time);
+    assert_eq!(s.system().time(), d.shown_time);
+    let state = s.system().state();
+    assert!(
+        state
+            .positions
+            .iter()
+            .chain(&state.velocities)
+            .all(|p| p.is_finite())
+    );
     // Frames do nothing until reset.
     assert_eq!(s.frame(0.1).steps, 0);
     s.reset().unwrap();

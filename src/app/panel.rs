@@ -257,6 +257,10 @@ fn contents(
             Some(m) => ui.label(format!("dt / dt_crit = {m:.2} at t = {:.3} s", d.time)),
             None => ui.label(format!("at t = {:.3} s", d.time)),
         };
+        ui.label(format!(
+            "Showing the last good frame, t = {:.3} s.",
+            d.shown_time
+        ));
         ui.label("Lower dt or the stiffness, or try another integrator, then reset.");
         if ui.button("Reset scene").clicked() {
             actions.push(Action::Reset);
