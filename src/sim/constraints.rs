@@ -1,4 +1,6 @@
 //! Position constraints enforced after integration, each optional per scene:
+//! - with XPBD, every spring: a distance constraint of compliance `1/k`, one
+//!   Gauss-Seidel pass in spring order ([`xpbd_correction`]);
 //! - rigid bars (seed 001), relaxed `bar_iterations` times per step: each pass moves
 //!   the two ends along the bar so that its length is restored, split by inverse mass;
 //! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`;
@@ -12,12 +14,25 @@
 
 use glam::DVec3;
 
-use super::{Model, Sphere, State, Workspace, forces::EPSILON_LENGTH};
+use super::{Integrator, Model, Sphere, State, Workspace, forces::EPSILON_LENGTH};
 
 /// Applies every constraint the model has, then updates velocities.
 pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let p = &model.params;
     let x = &mut state.positions;
+    if p.integrator == Integrator::Xpbd {
+        let prev = &work.step_start;
+        for s in &model.springs {
+            let (a, b) = (s.a as usize, s.b as usize);
+            let (wa, wb) = (model.inv_mass[a], model.inv_mass[b]);
+            let spring = (s.rest, s.stiffness, s.damping);
+            if let Some(c) = xpbd_correction([x[a], x[b]], [prev[a], prev[b]], wa, wb, spring, p.dt)
+            {
+                x[a] -= wa * c;
+                x[b] += wb * c;
+            }
+        }
+    }
     if p.bar_iterations > 0 {
         for _ in 0..p.bar_iterations {
             for bar in &model.bars {
@@ -93,6 +108,40 @@ pub(crate) fn length_correction(
     }
     let goal = target(l)?;
     Some((l - goal) / (l * w) * d)
+}
+
+/// XPBD's correction of a spring `(rest, k, b)` between particles now at `x = [xa,
+/// xb]` that were at `prev` at the start of the step `h`, with inverse masses `wa`,
+/// `wb`: `xa -= wa c`, `xb += wb c`, as [`length_correction`].
+///
+/// The spring is the constraint `C = l - L` with compliance `α = 1/k` (the same k,
+/// the same material), `α̃ = α / h²`, and the XPBD paper's damping `γ = α̃ β̃ / h`
+/// with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration from `λ = 0`:
+/// `Δλ = -(C + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
+/// with `n = (xa - xb) / l`. A spring with `k <= 0` constrains nothing.
+pub(crate) fn xpbd_correction(
+    x: [DVec3; 2],
+    prev: [DVec3; 2],
+    wa: f64,
+    wb: f64,
+    (rest, k, b): (f64, f64, f64),
+    h: f64,
+) -> Option<DVec3> {
+    let w = wa + wb;
+    if w == 0.0 || k <= 0.0 {
+        return None;
+    }
+    let d = x[0] - x[1];
+    let l = d.length();
+    if l <= EPSILON_LENGTH {
+        return None;
+    }
+    let n = d / l;
+    let alpha = 1.0 / (k * h * h);
+    let gamma = b / (k * h);
+    let moved = n.dot((x[0] - prev[0]) - (x[1] - prev[1]));
+    let dlambda = -((l - rest) + gamma * moved) / ((1.0 + gamma) * w + alpha);
+    Some(-dlambda * n)
 }
 
 /// Moves particles `a` and `b` along their joining line so that their distance becomes

@@ -175,7 +175,11 @@ impl Precision {
     /// of the origin: `Single` when float32 positions keep the noise under the
     /// limit, else `Mixed` when float32 spring lengths do, else `Double`.
     pub fn needed(spec: &GridSpec, reach: f64) -> Self {
-        if Self::float32_noise(spec, Some(reach)) <= Self::NOISE_LIMIT {
+        // XPBD's springs are not forces: a position's round-off moves a particle by
+        // about that much, not k times it, so float32 positions do at any k.
+        if spec.integrator == Integrator::Xpbd
+            || Self::float32_noise(spec, Some(reach)) <= Self::NOISE_LIMIT
+        {
             Self::Single
         } else if Self::float32_noise(spec, None) <= Self::NOISE_LIMIT {
             Self::Mixed
@@ -487,11 +491,21 @@ impl<E: Real> Params<E> {
     /// The constants of `spec` (the step `dt` is set by each run).
     fn of(spec: &GridSpec) -> Self {
         let hs = spec.spacing;
+        // XPBD's springs are constraints (`constrain`), not forces: the fused pass
+        // predicts with every other force.
+        let xpbd = spec.integrator == Integrator::Xpbd;
+        let force = |kind: SpringCoefficients| {
+            if xpbd {
+                SpringCoefficients::default()
+            } else {
+                kind
+            }
+        };
         // Index 0: structural (rest h), 1: bend (2h), 2: shear (h√2).
         let kinds = [
-            (spec.structural, hs),
-            (spec.bend, 2.0 * hs),
-            (spec.shear, hs * std::f64::consts::SQRT_2),
+            (force(spec.structural), hs),
+            (force(spec.bend), 2.0 * hs),
+            (force(spec.shear), hs * std::f64::consts::SQRT_2),
         ];
         Params {
             ks: kinds.map(|(kind, _)| E::of(kind.k)),
@@ -513,10 +527,11 @@ impl<E: Real> Params<E> {
             verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
             compensated: spec.precision == Precision::Mixed,
-            // With a stretch limit the sphere comes after it, in the constraint pass.
+            // With a stretch limit or XPBD the sphere comes after them, in the
+            // constraint pass.
             sphere: spec
                 .sphere
-                .filter(|_| spec.stretch_limit.is_none())
+                .filter(|_| spec.stretch_limit.is_none() && !xpbd)
                 .map(|s| {
                     let r = E::of(s.radius);
                     (s.center.to_array().map(E::of), r, r * r)
@@ -607,6 +622,10 @@ struct Kernel<E: Real> {
     /// One band per thread.
     par_bands: Vec<Band<E>>,
     simd: SimdLevel,
+    /// XPBD's scratch, per particle in cloth order: positions at the start of the
+    /// step and as the constraint pass moves them, in f64 (empty otherwise).
+    xpbd_start: Vec<DVec3>,
+    xpbd_moved: Vec<DVec3>,
 }
 
 impl<E: Real> std::fmt::Debug for Kernel<E> {
@@ -693,6 +712,8 @@ impl<E: Real> Kernel<E> {
             seq_band: make_bands(&grid, 1),
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
+            xpbd_start: Vec::new(),
+            xpbd_moved: Vec::new(),
             grid,
             spec,
         }
@@ -879,22 +900,101 @@ impl<E: Real> Kernel<E> {
     /// checked after, so skipping rows changes nothing: the result is the full
     /// Gauss-Seidel pass's.
     fn constrain(&mut self, dt: f64) {
-        let Some(tau) = self.spec.stretch_limit else {
-            return;
-        };
-        let (w, h) = (self.grid.w, self.grid.h);
+        let xpbd = self.spec.integrator == Integrator::Xpbd;
+        if xpbd {
+            self.xpbd_pass(dt);
+        }
+        if let Some(tau) = self.spec.stretch_limit {
+            self.stretch_limit_pass(tau, dt);
+        }
+        if let Some(sphere) = self.spec.sphere
+            && (xpbd || self.spec.stretch_limit.is_some())
+        {
+            for p in 0..self.grid.w * self.grid.h {
+                let i = self.grid.index(p);
+                if self.inv_mass.as_slice()[i] > E::ZERO
+                    && let Some(outside) = constraints::out_of_sphere(self.position_at(i), &sphere)
+                {
+                    self.move_particle(i, outside, dt);
+                }
+            }
+        }
+    }
+
+    /// The stencil in the order the springs sort (the f64 engine's order): (row,
+    /// column) offsets, rest lengths, whether the kind exists, and its coefficients.
+    fn stencil(&self) -> [Stencil; 6] {
         let spacing = self.spec.spacing;
-        // The stencil in the order the springs sort: (row, column) offsets, rest
-        // lengths and whether the kind exists.
         let [structural, shear, bend] = self.spec.present;
-        let stencil = [
-            ((0, 1), spacing, structural),
-            ((0, 2), 2.0 * spacing, bend),
-            ((1, -1), std::f64::consts::SQRT_2 * spacing, shear),
-            ((1, 0), spacing, structural),
-            ((1, 1), std::f64::consts::SQRT_2 * spacing, shear),
-            ((2, 0), 2.0 * spacing, bend),
-        ];
+        let (sk, hk, bk) = (self.spec.structural, self.spec.shear, self.spec.bend);
+        let diagonal = std::f64::consts::SQRT_2 * spacing;
+        [
+            ((0, 1), spacing, structural, sk),
+            ((0, 2), 2.0 * spacing, bend, bk),
+            ((1, -1), diagonal, shear, hk),
+            ((1, 0), spacing, structural, sk),
+            ((1, 1), diagonal, shear, hk),
+            ((2, 0), 2.0 * spacing, bend, bk),
+        ]
+    }
+
+    /// XPBD's springs: one Gauss-Seidel pass in the f64 engine's spring order, each
+    /// spring corrected by [`constraints::xpbd_correction`] against the positions at
+    /// the start of the step (the other state buffer, after the swap).
+    ///
+    /// The pass runs on f64 copies of the positions (cloth order) and writes each
+    /// particle back once, with its move over `dt` added to its velocity.
+    fn xpbd_pass(&mut self, dt: f64) {
+        let (w, h) = (self.grid.w, self.grid.h);
+        let n = w * h;
+        let (mut start, mut moved) = (
+            std::mem::take(&mut self.xpbd_start),
+            std::mem::take(&mut self.xpbd_moved),
+        );
+        start.resize(n, DVec3::ZERO);
+        moved.resize(n, DVec3::ZERO);
+        for p in 0..n {
+            let i = self.grid.index(p);
+            start[p] = self.start_position_at(i);
+            moved[p] = self.position_at(i);
+        }
+        let inv_mass = self.inv_mass.as_slice();
+        let inv_mass = |p: usize| inv_mass[self.grid.index(p)].f64();
+        for r in 0..h {
+            for c in 0..w {
+                for ((dr, dc), rest, present, kind) in self.stencil() {
+                    let (rb, cb) = (r + dr, c as isize + dc);
+                    if !present || rb >= h || cb < 0 || cb as usize >= w {
+                        continue;
+                    }
+                    let (a, b) = (r * w + c, rb * w + cb as usize);
+                    let (wa, wb) = (inv_mass(a), inv_mass(b));
+                    let x = [moved[a], moved[b]];
+                    let spring = (rest, kind.k, kind.b);
+                    if let Some(fix) =
+                        constraints::xpbd_correction(x, [start[a], start[b]], wa, wb, spring, dt)
+                    {
+                        moved[a] -= wa * fix;
+                        moved[b] += wb * fix;
+                    }
+                }
+            }
+        }
+        for (p, &to) in moved.iter().enumerate() {
+            let i = self.grid.index(p);
+            if to != self.position_at(i) {
+                self.move_particle(i, to, dt);
+            }
+        }
+        (self.xpbd_start, self.xpbd_moved) = (start, moved);
+    }
+
+    /// Provot's stretch limit `tau` (see [`Self::constrain`]).
+    fn stretch_limit_pass(&mut self, tau: f64, dt: f64) {
+        let (w, h) = (self.grid.w, self.grid.h);
+        let stencil = self
+            .stencil()
+            .map(|(offset, rest, present, _)| (offset, rest, present));
         let limit = 1.0 + tau;
         for r in 0..h {
             if !self.row_over_limit(r, &stencil, limit) {
@@ -921,16 +1021,6 @@ impl<E: Real> Kernel<E> {
                         self.move_particle(ia, xa - wa * fix, dt);
                         self.move_particle(ib, xb + wb * fix, dt);
                     }
-                }
-            }
-        }
-        if let Some(sphere) = self.spec.sphere {
-            for p in 0..w * h {
-                let i = self.grid.index(p);
-                if self.inv_mass.as_slice()[i] > E::ZERO
-                    && let Some(outside) = constraints::out_of_sphere(self.position_at(i), &sphere)
-                {
-                    self.move_particle(i, outside, dt);
                 }
             }
         }
@@ -1033,6 +1123,15 @@ impl<E: Real> Kernel<E> {
     /// Position of array index `i` in f64 (high plus low part).
     fn position_at(&self, i: usize) -> DVec3 {
         let (x, xl) = (&self.cur.x, &self.cur.xl);
+        DVec3::from_array(std::array::from_fn(|a| {
+            x[a].as_slice()[i].f64() + xl[a].as_slice()[i].f64()
+        }))
+    }
+
+    /// The position (m) of array index `i` at the start of the step just taken (the
+    /// other buffer, after the swap).
+    fn start_position_at(&self, i: usize) -> DVec3 {
+        let (x, xl) = (&self.next.x, &self.next.xl);
         DVec3::from_array(std::array::from_fn(|a| {
             x[a].as_slice()[i].f64() + xl[a].as_slice()[i].f64()
         }))
@@ -1223,7 +1322,10 @@ impl GridCloth {
     pub fn supports(integrator: Integrator) -> bool {
         matches!(
             integrator,
-            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet
+            Integrator::SymplecticEuler
+                | Integrator::ExplicitEuler
+                | Integrator::Verlet
+                | Integrator::Xpbd
         )
     }
 
@@ -1817,6 +1919,10 @@ mod x86 {
 }
 
 /// A particle's position (high and low parts) and velocity, one per lane.
+/// One stencil direction: (row, column) offset, rest length, whether the kind
+/// exists, and its coefficients.
+type Stencil = ((usize, isize), f64, bool, SpringCoefficients);
+
 type Particle<'a, V> = (&'a [V; 3], &'a [V; 3], &'a [V; 3]);
 
 /// Forces on the first ends of springs `i`-`j`, one per lane, times `mask` (if

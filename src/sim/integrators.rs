@@ -8,6 +8,7 @@
 //! | RK2, explicit midpoint | 2 | unstable at every `h` without damping (\|R(i y)\| > 1) |
 //! | RK4, classic (seed 003) | 4 | `h < 2 sqrt(2) / omega` |
 //! | implicit Euler, linearised (Baraff & Witkin 1998) | 1 | unconditionally stable |
+//! | XPBD, one iteration per step (Macklin et al. 2016, 2019) | 1 | no limit from the springs |
 //!
 //! Pinned and grabbed particles have zero inverse mass, so their acceleration is zero
 //! and, starting at rest, they never move.
@@ -32,17 +33,25 @@ pub enum Integrator {
     Rk4,
     /// Backward Euler linearised once per step and solved by conjugate gradients. Order 1.
     ImplicitEuler,
+    /// Extended position-based dynamics (Macklin, Müller & Chentanez 2016) with one
+    /// constraint iteration per step, the "small steps" of Macklin et al. (2019):
+    /// every force but the springs moves the particles by symplectic Euler, then
+    /// each spring is a distance constraint of compliance `1/k`
+    /// ([`super::constraints::xpbd_correction`]) and the moves become velocities.
+    /// Order 1; no step limit from the springs, at any stiffness.
+    Xpbd,
 }
 
 impl Integrator {
     /// Every integrator, in display order.
-    pub const ALL: [Integrator; 6] = [
+    pub const ALL: [Integrator; 7] = [
         Self::ExplicitEuler,
         Self::SymplecticEuler,
         Self::Verlet,
         Self::Rk2,
         Self::Rk4,
         Self::ImplicitEuler,
+        Self::Xpbd,
     ];
 
     /// The name used in scene files and on the command line.
@@ -54,6 +63,7 @@ impl Integrator {
             Self::Rk2 => "rk2",
             Self::Rk4 => "rk4",
             Self::ImplicitEuler => "implicit-euler",
+            Self::Xpbd => "xpbd",
         }
     }
 
@@ -65,7 +75,7 @@ impl Integrator {
     /// Theoretical order of accuracy (global error `O(h^order)`).
     pub fn order(self) -> u32 {
         match self {
-            Self::ExplicitEuler | Self::SymplecticEuler | Self::ImplicitEuler => 1,
+            Self::ExplicitEuler | Self::SymplecticEuler | Self::ImplicitEuler | Self::Xpbd => 1,
             Self::Verlet | Self::Rk2 => 2,
             Self::Rk4 => 4,
         }
@@ -83,7 +93,11 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
     let h = model.params.dt;
     let t = state.time;
     match model.params.integrator {
-        Integrator::ExplicitEuler | Integrator::SymplecticEuler => {
+        Integrator::ExplicitEuler | Integrator::SymplecticEuler | Integrator::Xpbd => {
+            if model.params.integrator == Integrator::Xpbd {
+                // The springs' damping is measured against the start of the step.
+                work.step_start.clone_from(&state.positions);
+            }
             let a = &mut work.accelerations;
             model.accelerations(
                 &state.positions,
@@ -92,7 +106,9 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
                 &mut work.spring_forces,
                 a,
             );
-            let symplectic = model.params.integrator == Integrator::SymplecticEuler;
+            // XPBD predicts with symplectic Euler; its springs are not a force term
+            // (`ForceTerms::springs` is off) but constraints, applied after.
+            let symplectic = model.params.integrator != Integrator::ExplicitEuler;
             for ((x, v), a) in state
                 .positions
                 .iter_mut()

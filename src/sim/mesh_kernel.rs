@@ -473,7 +473,9 @@ impl MeshKernel {
     pub fn supports(integrator: Integrator) -> bool {
         match integrator {
             Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet => true,
-            Integrator::Rk2 | Integrator::Rk4 | Integrator::ImplicitEuler => false,
+            Integrator::Rk2 | Integrator::Rk4 | Integrator::ImplicitEuler | Integrator::Xpbd => {
+                false
+            }
         }
     }
 

@@ -128,7 +128,8 @@ impl Model {
         let p = &self.params;
         self.terms = ForceTerms {
             gravity: p.gravity != DVec3::ZERO,
-            springs: !self.springs.is_empty(),
+            // XPBD treats springs as constraints, not forces.
+            springs: !self.springs.is_empty() && p.integrator != Integrator::Xpbd,
             aero: !self.triangles.is_empty() && p.air_density > 0.0 && p.drag_coefficient > 0.0,
             air_damping: p.air_damping > 0.0,
             ground: p.ground.is_some(),

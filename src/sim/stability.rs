@@ -94,7 +94,7 @@ pub fn estimate(model: &Model) -> Stability {
 /// oscillator of angular frequency `omega` and damping ratio `zeta`.
 /// `Some(inf)`: no limit; `None`: unstable at every step.
 pub fn critical_step(integrator: Integrator, omega: f64, zeta: f64) -> Option<f64> {
-    if integrator == Integrator::ImplicitEuler || omega <= 0.0 {
+    if matches!(integrator, Integrator::ImplicitEuler | Integrator::Xpbd) || omega <= 0.0 {
         return Some(f64::INFINITY);
     }
     // Undamped, explicit Euler (|1 + i y| > 1) and RK2 (|R(i y)|² = 1 + y⁴/4) grow at
@@ -139,7 +139,7 @@ pub fn spectral_radius(integrator: Integrator, omega_h: f64, zeta: f64) -> f64 {
             let (a21, a22) = (-y, 1.0 - 2.0 * z * y);
             matrix_radius(a11, a12, a21, a22)
         }
-        Integrator::ImplicitEuler => 0.0,
+        Integrator::ImplicitEuler | Integrator::Xpbd => 0.0,
         Integrator::ExplicitEuler | Integrator::Rk2 | Integrator::Rk4 => {
             // Eigenvalues of the continuous system, scaled by h.
             let disc = z * z - 1.0;

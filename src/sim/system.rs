@@ -28,6 +28,8 @@ pub struct Workspace {
     pub(crate) dx_sum: Vec<DVec3>,
     pub(crate) dv_sum: Vec<DVec3>,
     pub(crate) before_constraints: Vec<DVec3>,
+    /// Positions at the start of the step (XPBD's damping).
+    pub(crate) step_start: Vec<DVec3>,
     pub(crate) implicit: implicit::ImplicitWorkspace,
 }
 
@@ -401,6 +403,7 @@ impl System {
     pub fn has_constraints(&self) -> bool {
         let p = &self.model.params;
         (!self.model.bars.is_empty() && p.bar_iterations > 0)
+            || (p.integrator == Integrator::Xpbd && !self.model.springs.is_empty())
             || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
             || p.sphere.is_some()
     }
