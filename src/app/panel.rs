@@ -281,7 +281,14 @@ fn contents(
         .show(ui, |ui| {
             if has_springs {
                 let mut k = r.stiffness;
-                if slider(ui, &mut k, 0.01..=100_000.0, "stiffness k (N/m)", true) {
+                // XPBD is stable at any stiffness: its slider reaches the scene
+                // files' limit.
+                let k_max = if system.params().integrator == Integrator::Xpbd {
+                    1e9
+                } else {
+                    100_000.0
+                };
+                if slider(ui, &mut k, 0.01..=k_max, "stiffness k (N/m)", true) {
                     edit(Edit::Stiffness(k));
                 }
                 let mut b = r.damping;
