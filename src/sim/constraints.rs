@@ -22,7 +22,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let x = &mut state.positions;
     if p.integrator == Integrator::Xpbd {
         let prev = &work.step_start;
-        for s in &model.springs {
+        for s in model.xpbd_order.iter().map(|&i| &model.springs[i as usize]) {
             let (a, b) = (s.a as usize, s.b as usize);
             let (wa, wb) = (model.inv_mass[a], model.inv_mass[b]);
             let spring = (s.rest, s.stiffness, s.damping);
@@ -136,12 +136,24 @@ pub(crate) fn xpbd_correction(
     if l <= EPSILON_LENGTH {
         return None;
     }
-    let n = d / l;
-    let alpha = 1.0 / (k * h * h);
-    let gamma = b / (k * h);
+    let n = d * (1.0 / l);
+    let (alpha, gamma) = xpbd_coefficients(k, b, h);
     let moved = n.dot((x[0] - prev[0]) - (x[1] - prev[1]));
-    let dlambda = -((l - rest) + gamma * moved) / ((1.0 + gamma) * w + alpha);
-    Some(-dlambda * n)
+    Some(-xpbd_multiplier(l - rest, moved, w, alpha, gamma) * n)
+}
+
+/// XPBD's `(α̃, γ) = (1 / (k h²), b / (k h))` for a spring `(k, b)` at step `h`.
+#[inline]
+pub(crate) fn xpbd_coefficients(k: f64, b: f64, h: f64) -> (f64, f64) {
+    (1.0 / (k * h * h), b / (k * h))
+}
+
+/// XPBD's `Δλ = -(C + γ ∇C·(x - x_prev)) / ((1 + γ) w + α̃)` for a stretch `C`, a
+/// move along the spring since the start of the step `moved`, inverse masses
+/// summing to `w` and coefficients from [`xpbd_coefficients`].
+#[inline]
+pub(crate) fn xpbd_multiplier(stretch: f64, moved: f64, w: f64, alpha: f64, gamma: f64) -> f64 {
+    -(stretch + gamma * moved) / ((1.0 + gamma) * w + alpha)
 }
 
 /// Moves particles `a` and `b` along their joining line so that their distance becomes

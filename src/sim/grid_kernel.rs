@@ -74,6 +74,7 @@ use bytemuck::Pod;
 use glam::DVec3;
 
 use super::constraints;
+use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, Sphere, Wind};
 
 /// Squared spring length (m²) under which a spring is treated as degenerate and
@@ -622,10 +623,18 @@ struct Kernel<E: Real> {
     /// One band per thread.
     par_bands: Vec<Band<E>>,
     simd: SimdLevel,
-    /// XPBD's scratch, per particle in cloth order: positions at the start of the
-    /// step and as the constraint pass moves them, in f64 (empty otherwise).
-    xpbd_start: Vec<DVec3>,
-    xpbd_moved: Vec<DVec3>,
+    /// XPBD's scratch (empty for the other integrators).
+    xpbd: XpbdScratch,
+}
+
+/// XPBD's f64 copies, per particle in cloth order (`p = row * width + column`),
+/// structure of arrays: positions as the constraint pass moves them, at the start of
+/// the step, and inverse masses.
+#[derive(Clone, Debug, Default)]
+struct XpbdScratch {
+    x: [Vec<f64>; 3],
+    start: [Vec<f64>; 3],
+    inv_mass: Vec<f64>,
 }
 
 impl<E: Real> std::fmt::Debug for Kernel<E> {
@@ -712,8 +721,7 @@ impl<E: Real> Kernel<E> {
             seq_band: make_bands(&grid, 1),
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
-            xpbd_start: Vec::new(),
-            xpbd_moved: Vec::new(),
+            xpbd: XpbdScratch::default(),
             grid,
             spec,
         }
@@ -928,65 +936,89 @@ impl<E: Real> Kernel<E> {
         let [structural, shear, bend] = self.spec.present;
         let (sk, hk, bk) = (self.spec.structural, self.spec.shear, self.spec.bend);
         let diagonal = std::f64::consts::SQRT_2 * spacing;
+        let [right, two_right, down_left, down, down_right, two_down] = STENCIL_DIRECTIONS;
         [
-            ((0, 1), spacing, structural, sk),
-            ((0, 2), 2.0 * spacing, bend, bk),
-            ((1, -1), diagonal, shear, hk),
-            ((1, 0), spacing, structural, sk),
-            ((1, 1), diagonal, shear, hk),
-            ((2, 0), 2.0 * spacing, bend, bk),
+            (right, spacing, structural, sk),
+            (two_right, 2.0 * spacing, bend, bk),
+            (down_left, diagonal, shear, hk),
+            (down, spacing, structural, sk),
+            (down_right, diagonal, shear, hk),
+            (two_down, 2.0 * spacing, bend, bk),
         ]
     }
 
-    /// XPBD's springs: one Gauss-Seidel pass in the f64 engine's spring order, each
-    /// spring corrected by [`constraints::xpbd_correction`] against the positions at
-    /// the start of the step (the other state buffer, after the swap).
+    /// XPBD's springs: one Gauss-Seidel pass over the colour classes of
+    /// [`super::springs::xpbd_order`] (by stencil direction, then by the parity of the
+    /// spring's step along it), each spring corrected by
+    /// [`constraints::xpbd_multiplier`] against the positions at the start of the
+    /// step (the other state buffer, after the swap). No two springs of a class
+    /// share a particle, so a class's springs are independent: the rows' inner loops
+    /// have no dependency from one spring to the next (the CPU overlaps them, and
+    /// the compiler may vectorise them), and the result is the f64 engine's, which
+    /// visits the same classes one spring at a time.
     ///
-    /// The pass runs on f64 copies of the positions (cloth order) and writes each
-    /// particle back once, with its move over `dt` added to its velocity.
+    /// The pass runs on f64 copies of the positions and writes each moved particle
+    /// back once, with its move over `dt` added to its velocity.
     fn xpbd_pass(&mut self, dt: f64) {
         let (w, h) = (self.grid.w, self.grid.h);
         let n = w * h;
-        let (mut start, mut moved) = (
-            std::mem::take(&mut self.xpbd_start),
-            std::mem::take(&mut self.xpbd_moved),
-        );
-        start.resize(n, DVec3::ZERO);
-        moved.resize(n, DVec3::ZERO);
+        let mut s = std::mem::take(&mut self.xpbd);
+        for a in 0..3 {
+            s.x[a].resize(n, 0.0);
+            s.start[a].resize(n, 0.0);
+        }
+        s.inv_mass.resize(n, 0.0);
         for p in 0..n {
             let i = self.grid.index(p);
-            start[p] = self.start_position_at(i);
-            moved[p] = self.position_at(i);
+            let (now, start) = (self.position_at(i), self.start_position_at(i));
+            for a in 0..3 {
+                s.x[a][p] = now[a];
+                s.start[a][p] = start[a];
+            }
+            s.inv_mass[p] = self.inv_mass.as_slice()[i].f64();
         }
-        let inv_mass = self.inv_mass.as_slice();
-        let inv_mass = |p: usize| inv_mass[self.grid.index(p)].f64();
-        for r in 0..h {
-            for c in 0..w {
-                for ((dr, dc), rest, present, kind) in self.stencil() {
-                    let (rb, cb) = (r + dr, c as isize + dc);
-                    if !present || rb >= h || cb < 0 || cb as usize >= w {
+        for ((dr, dc), rest, present, kind) in self.stencil() {
+            if !present || kind.k <= 0.0 {
+                continue;
+            }
+            let (alpha, gamma) = constraints::xpbd_coefficients(kind.k, kind.b, dt);
+            // Columns c with both ends on the cloth: 0 <= c + dc < w.
+            let (c0, c1) = ((-dc).max(0) as usize, w.saturating_sub(dc.max(0) as usize));
+            let spring = (rest, alpha, gamma);
+            for colour in 0..2 {
+                for r in 0..h.saturating_sub(dr) {
+                    let row = r * w;
+                    if let Some(run) = r.checked_div(dr) {
+                        // Rows alternate in runs of `dr`: a class's row of springs
+                        // is one run of columns.
+                        if run % 2 == colour {
+                            let a = row + c0;
+                            let b = (a + dr * w).wrapping_add_signed(dc);
+                            s.correct_run(a, b, 1, c1 - c0, spring);
+                        }
                         continue;
                     }
-                    let (a, b) = (r * w + c, rb * w + cb as usize);
-                    let (wa, wb) = (inv_mass(a), inv_mass(b));
-                    let x = [moved[a], moved[b]];
-                    let spring = (rest, kind.k, kind.b);
-                    if let Some(fix) =
-                        constraints::xpbd_correction(x, [start[a], start[b]], wa, wb, spring, dt)
-                    {
-                        moved[a] -= wa * fix;
-                        moved[b] += wb * fix;
+                    // Along a row the springs alternate in runs of `dc` columns:
+                    // the class's springs start at columns `2 dc m + dc colour + j`.
+                    let dc = dc as usize;
+                    for j in 0..dc {
+                        let first = dc * colour + j;
+                        if first + dc < w {
+                            let count = (w - dc - first).div_ceil(2 * dc);
+                            s.correct_run(row + first, row + first + dc, 2 * dc, count, spring);
+                        }
                     }
                 }
             }
         }
-        for (p, &to) in moved.iter().enumerate() {
+        for p in 0..n {
+            let to = DVec3::new(s.x[0][p], s.x[1][p], s.x[2][p]);
             let i = self.grid.index(p);
             if to != self.position_at(i) {
                 self.move_particle(i, to, dt);
             }
         }
-        (self.xpbd_start, self.xpbd_moved) = (start, moved);
+        self.xpbd = s;
     }
 
     /// Provot's stretch limit `tau` (see [`Self::constrain`]).
@@ -1919,6 +1951,64 @@ mod x86 {
 }
 
 /// A particle's position (high and low parts) and velocity, one per lane.
+impl XpbdScratch {
+    /// Corrects `count` springs of one colour class, from particle `a + j stride`
+    /// to `b + j stride`, of `(rest length, α̃, γ)`. The springs share no particle,
+    /// so each is independent of the one before (the CPU overlaps them).
+    fn correct_run(
+        &mut self,
+        a: usize,
+        b: usize,
+        stride: usize,
+        count: usize,
+        spring: (f64, f64, f64),
+    ) {
+        let [x, y, z] = self.x.each_mut().map(Vec::as_mut_slice);
+        let [sx, sy, sz] = self.start.each_ref().map(Vec::as_slice);
+        let w = self.inv_mass.as_slice();
+        for j in 0..count {
+            let (a, b) = (a + j * stride, b + j * stride);
+            let start = [[sx[a], sy[a], sz[a]], [sx[b], sy[b], sz[b]]];
+            let (mut pa, mut pb) = ([x[a], y[a], z[a]], [x[b], y[b], z[b]]);
+            correct_pair(&mut pa, &mut pb, start, [w[a], w[b]], spring);
+            [x[a], y[a], z[a]] = pa;
+            [x[b], y[b], z[b]] = pb;
+        }
+    }
+}
+
+/// One XPBD spring correction, the arithmetic of [`constraints::xpbd_correction`] in
+/// its order: ends now at `pa`, `pb` (moved in place), at `start` when the step
+/// began, inverse masses `w`, spring `(rest length, α̃, γ)`.
+#[inline(always)]
+fn correct_pair(
+    pa: &mut [f64; 3],
+    pb: &mut [f64; 3],
+    start: [[f64; 3]; 2],
+    w: [f64; 2],
+    spring: (f64, f64, f64),
+) {
+    let (rest, alpha, gamma) = spring;
+    let [wa, wb] = w;
+    let wsum = wa + wb;
+    let d = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
+    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+    if wsum == 0.0 || l <= crate::sim::forces::EPSILON_LENGTH {
+        return;
+    }
+    let inv_l = 1.0 / l;
+    let n = d.map(|d| d * inv_l);
+    let moved = n[0] * ((pa[0] - start[0][0]) - (pb[0] - start[1][0]))
+        + n[1] * ((pa[1] - start[0][1]) - (pb[1] - start[1][1]))
+        + n[2] * ((pa[2] - start[0][2]) - (pb[2] - start[1][2]));
+    let dlambda = constraints::xpbd_multiplier(l - rest, moved, wsum, alpha, gamma);
+    for a in 0..3 {
+        let c = -dlambda * n[a];
+        pa[a] -= wa * c;
+        pb[a] += wb * c;
+    }
+}
+
 /// One stencil direction: (row, column) offset, rest length, whether the kind
 /// exists, and its coefficients.
 type Stencil = ((usize, isize), f64, bool, SpringCoefficients);

@@ -6,6 +6,8 @@
 //! vector from `b` to `a` and `l` their distance. This module only stores the
 //! springs; `forces` evaluates them.
 
+use super::GridShape;
+
 /// What a spring stands for in the cloth, so that counts and colours can be shown per kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum SpringKind {
@@ -75,6 +77,43 @@ pub fn canonicalize(springs: &mut Vec<Spring>) {
     springs.sort_by_key(|s| (s.a, s.b));
     springs.dedup_by_key(|s| (s.a, s.b));
 }
+
+/// The order XPBD's Gauss-Seidel pass visits `springs` (canonical: sorted by
+/// their ends) in, as indices. On a grid (`p = row * width + column`) the springs
+/// are grouped into colour classes in which no two share a particle, so that a
+/// class can be corrected in any order, in parallel or in SIMD lanes, with the
+/// same result: by stencil direction (in the grid kernel's order: right, two right,
+/// down-left, down, down-right, two down), then by the parity of the spring's step
+/// along its direction (column `c / dc` for rows, row `r / dr` otherwise), then by
+/// first end. Springs that are not on the stencil come last, in canonical order;
+/// without a grid the order is the canonical one.
+pub fn xpbd_order(springs: &[Spring], grid: Option<GridShape>) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..springs.len() as u32).collect();
+    let Some(GridShape { width, .. }) = grid.filter(|g| g.width > 0) else {
+        return order;
+    };
+    let key = |s: &Spring| {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let (r, c) = (a / width, a % width);
+        let (dr, dc) = (b / width - r, (b % width) as isize - c as isize);
+        let direction = STENCIL_DIRECTIONS
+            .iter()
+            .position(|&d| d == (dr, dc))
+            .unwrap_or(STENCIL_DIRECTIONS.len());
+        let colour = match r.checked_div(dr) {
+            Some(run) => run % 2,
+            None => (c / dc.unsigned_abs().max(1)) % 2,
+        };
+        (direction, colour, a)
+    };
+    order.sort_by_key(|&i| key(&springs[i as usize]));
+    order
+}
+
+/// The grid stencil's directions (row, column offsets), in the order the grid
+/// kernel and [`xpbd_order`] visit them.
+pub const STENCIL_DIRECTIONS: [(usize, isize); 6] =
+    [(0, 1), (0, 2), (1, -1), (1, 0), (1, 1), (2, 0)];
 
 /// For each particle, the springs that touch it: a compressed adjacency list
 /// (`offsets[i]..offsets[i + 1]` indexes `entries`). It lets every particle gather
