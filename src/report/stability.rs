@@ -81,7 +81,12 @@ pub fn reference_energy(scene: &Resolved, omega_max: f64, horizon: f64) -> f64 {
 
 /// Whether `integrator` at step `dt` stays stable over `horizon` seconds (and at
 /// least [`MIN_STEPS`] steps): finite, the divergence check silent, and kinetic plus
-/// elastic energy at most [`ENERGY_FACTOR`] times `reference_energy`.
+/// elastic energy at most [`ENERGY_FACTOR`] times `reference_energy`. XPBD is
+/// spared the last test: its material softens as its step grows (`Model::
+/// stiffness_in_effect`), so a large step lets the cloth sag and swing far more
+/// than the stiff reference, which says how soft it is, not that it blew up; the
+/// divergence check (its energy budget counts the stiffness XPBD simulates) still
+/// applies.
 pub fn is_stable(
     scene: &Resolved,
     integrator: Integrator,
@@ -99,7 +104,8 @@ pub fn is_stable(
         if n % 4 == 3 || n + 1 == steps {
             let e = system.energy();
             let mechanical = e.kinetic + e.elastic;
-            if mechanical.is_nan() || mechanical > bound {
+            let softened = integrator == Integrator::Xpbd;
+            if mechanical.is_nan() || (mechanical > bound && !softened) {
                 return false;
             }
         }

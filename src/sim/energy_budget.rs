@@ -82,7 +82,7 @@ impl EnergyBudget {
             0.0
         };
         let strained: f64 = (model.springs.iter())
-            .map(|s| 0.5 * s.stiffness.abs() * (0.01 * s.rest).powi(2))
+            .map(|s| 0.5 * model.stiffness_in_effect(s).abs() * (0.01 * s.rest).powi(2))
             .sum();
         let scale = falling + wind + energy.kinetic.abs() + energy.elastic.abs() + strained;
         let scale = if scale.is_finite() { scale } else { f64::MAX };

@@ -150,7 +150,8 @@ impl Model {
         }
     }
 
-    /// Energy of positions `x` and velocities `v`; gravity relative to y = 0.
+    /// Energy of positions `x` and velocities `v`; gravity relative to y = 0. With
+    /// XPBD the springs hold the energy of the stiffness it simulates at its step.
     pub fn energy(&self, x: &[DVec3], v: &[DVec3]) -> Energy {
         let mut e = Energy::default();
         for i in 0..x.len() {
@@ -169,8 +170,21 @@ impl Model {
         }
         for s in &self.springs {
             let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
-            e.elastic += 0.5 * s.stiffness * stretch * stretch;
+            e.elastic += 0.5 * self.stiffness_in_effect(s) * stretch * stretch;
         }
         e
+    }
+
+    /// The stiffness (N/m) spring `s` acts with: its own, except under XPBD, which
+    /// at step `h` moves the ends as a spring of stiffness `k / (1 + k h² w)` would
+    /// (one iteration from `λ = 0`, `w` the ends' inverse masses): that is the
+    /// material XPBD simulates, and whose energy it holds.
+    pub fn stiffness_in_effect(&self, s: &Spring) -> f64 {
+        let k = s.stiffness;
+        if self.params.integrator != Integrator::Xpbd {
+            return k;
+        }
+        let w = self.inv_mass[s.a as usize] + self.inv_mass[s.b as usize];
+        k / (1.0 + k * self.params.dt * self.params.dt * w)
     }
 }
