@@ -9,6 +9,7 @@ pub mod extreme;
 pub mod plot;
 pub mod precision;
 pub mod stability;
+pub mod stiff;
 
 mod write;
 
@@ -60,6 +61,8 @@ pub struct Report {
     pub damped: Vec<stability::Row>,
     /// Extreme cases.
     pub extreme: Vec<extreme::Result>,
+    /// The stiff-cloth study.
+    pub stiff: Vec<stiff::Row>,
     /// Wall time of each part, s.
     pub timings: Vec<(String, f64)>,
 }
@@ -221,6 +224,10 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str)) -> Result<Report, 
         .collect();
     timings.push(("extreme cases".to_string(), clock.elapsed().as_secs_f64()));
 
+    let clock = Instant::now();
+    let stiff = stiff::measure(quick, &stiff_cloth, progress)?;
+    timings.push(("stiff cloth".to_string(), clock.elapsed().as_secs_f64()));
+
     let report = Report {
         quick,
         problems,
@@ -229,6 +236,7 @@ pub fn run(options: &Options, progress: &mut dyn FnMut(&str)) -> Result<Report, 
         stability,
         damped,
         extreme,
+        stiff,
         timings,
     };
     progress(&format!("writing {}", out.display()));
@@ -293,6 +301,21 @@ fn stability_rows(
         ));
     }
     Ok(rows)
+}
+
+/// The stiff-cloth study's scene: the `cloth` scene at `side` x `side` and stiffness
+/// `k`, in still air.
+fn stiff_cloth(side: u32, k: f64) -> Result<Resolved, String> {
+    scene(
+        "cloth",
+        &[
+            format!("width={side}"),
+            format!("height={side}"),
+            format!("stiffness={k:?}"),
+            "wind=0,0,0".into(),
+            "gust=0".into(),
+        ],
+    )
 }
 
 /// Overrides that make the `cloth` scene `side` x `side`, undamped and without air.

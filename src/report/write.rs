@@ -7,7 +7,7 @@ use std::path::Path;
 use super::plot::{Series, Style, loglog};
 use super::precision::{Outcome, Point, Reference};
 use super::stability::{Measured, Row, damped_symplectic_limit};
-use super::{Report, write_file};
+use super::{Report, stiff, write_file};
 use crate::sim::Integrator;
 
 fn opt(v: Option<f64>) -> String {
@@ -151,6 +151,29 @@ fn csvs(r: &Report, out: &Path) -> Result<(), String> {
     }
     write_file(out, "extreme.csv", &s)?;
 
+    let mut s = String::from(
+        "side,stiffness_n_per_m,method,integrator,dt_s,steps,engine,wall_s_per_simulated_s,error_m,largest_strain,energy_lost_j,diverged\n",
+    );
+    for row in &r.stiff {
+        let _ = writeln!(
+            s,
+            "{},{:e},{},{},{:e},{},{},{:e},{:e},{:e},{:e},\"{}\"",
+            row.side,
+            row.stiffness,
+            row.method,
+            row.integrator,
+            row.dt,
+            row.steps,
+            row.engine,
+            row.cost,
+            row.error,
+            row.strain,
+            row.energy_lost,
+            row.diverged.as_deref().unwrap_or("").replace('"', "'")
+        );
+    }
+    write_file(out, "stiff.csv", &s)?;
+
     let mut s = String::from("part,wall_s\n");
     for (part, t) in &r.timings {
         let _ = writeln!(s, "{part},{t:.2}");
@@ -170,6 +193,7 @@ fn plotted(points: &[&Point]) -> Vec<(f64, f64)> {
 type Pick = dyn Fn(&[&Point]) -> Vec<(f64, f64)>;
 
 fn plots(r: &Report, out: &Path) -> Result<(), String> {
+    stiff_plot(r, out)?;
     for problem in &r.problems {
         let of = |i: Integrator| -> Vec<&Point> {
             (r.points.iter())
@@ -592,6 +616,8 @@ fn markdown(r: &Report) -> String {
     }
     let _ = writeln!(m);
 
+    stiff_section(r, &mut m);
+
     let _ = writeln!(m, "## Conclusions from these measurements\n");
     for line in conclusions(r) {
         let _ = writeln!(m, "- {line}");
@@ -809,4 +835,135 @@ fn conclusions(r: &Report) -> Vec<String> {
         }
     ));
     c
+}
+
+/// The families of the stiff-cloth study, for its plot and its conclusions.
+const STIFF_FAMILIES: [Integrator; 3] = [
+    Integrator::SymplecticEuler,
+    Integrator::ImplicitEuler,
+    Integrator::Xpbd,
+];
+
+fn stiff_plot(r: &Report, out: &Path) -> Result<(), String> {
+    if r.stiff.is_empty() {
+        return Ok(());
+    }
+    let best = stiff::cheapest_within_target(&r.stiff);
+    let mut sides: Vec<u32> = r.stiff.iter().map(|row| row.side).collect();
+    sides.dedup();
+    let mut series = Vec::new();
+    for (n, &side) in sides.iter().enumerate() {
+        for family in STIFF_FAMILIES {
+            let points: Vec<(f64, f64)> = (best.iter())
+                .filter(|b| b.0 == side && b.2 == family)
+                .map(|b| (b.1, b.3))
+                .collect();
+            series.push(Series {
+                label: format!("{family}, {side}x{side}"),
+                points,
+                color: color(family),
+                style: if n == 0 { Style::LineAndMarkers } else { Style::Dashed },
+            });
+        }
+    }
+    loglog(
+        &out.join("stiff-cost.svg"),
+        &format!(
+            "Stiff cloth: cheapest run within {:.1} cm of the reference at t = {} s",
+            stiff::TARGET_ERROR * 100.0,
+            stiff::HORIZON
+        ),
+        "stiffness k (N/m)",
+        "wall seconds per simulated second",
+        &series,
+    )
+}
+
+fn stiff_section(r: &Report, m: &mut String) {
+    if r.stiff.is_empty() {
+        return;
+    }
+    let _ = writeln!(m, "## Stiff cloth\n");
+    let _ = writeln!(
+        m,
+        "The `cloth` scene in still air, released flat from its top corners, run {} s on the engine \
+         `cloth run` uses, against symplectic Euler at a fifth of its critical step (see \
+         `src/report/stiff.rs`). Error: the largest distance of a particle from the reference at \
+         the end. Strain: the largest `(l - L) / L`. Energy lost: since the start, each method's own \
+         energy (XPBD's springs at the stiffness it simulates, `k / (1 + k h² w)`). Cost: wall seconds \
+         per simulated second. The plot keeps, per stiffness, the cheapest run of each family within \
+         {:.1} cm of the reference.\n",
+        stiff::HORIZON,
+        stiff::TARGET_ERROR * 100.0
+    );
+    let _ = writeln!(m, "![cost against k](stiff-cost.svg)\n");
+    let _ = writeln!(
+        m,
+        "| cloth | k (N/m) | method | dt (s) | engine | cost (s/s) | error (m) | largest strain | energy lost (J) |"
+    );
+    let _ = writeln!(m, "|---|---|---|---|---|---|---|---|---|");
+    for row in &r.stiff {
+        let error = match &row.diverged {
+            Some(why) => format!("diverged: {why}"),
+            None => format!("{:.3e}", row.error),
+        };
+        let _ = writeln!(
+            m,
+            "| {0}x{0} | {1:.0e} | {2} | {3:.3e} | {4} | {5:.3e} | {6} | {7:.3e} | {8:.3e} |",
+            row.side,
+            row.stiffness,
+            row.method,
+            row.dt,
+            row.engine,
+            row.cost,
+            error,
+            row.strain,
+            row.energy_lost
+        );
+    }
+    let _ = writeln!(m);
+    let _ = writeln!(m, "**Which solver when** (from this table):\n");
+    for line in stiff_conclusions(r) {
+        let _ = writeln!(m, "- {line}");
+    }
+    let _ = writeln!(m);
+}
+
+/// Per cloth and stiffness, which family was cheapest within the target error, and
+/// where a family never met it.
+fn stiff_conclusions(r: &Report) -> Vec<String> {
+    let best = stiff::cheapest_within_target(&r.stiff);
+    let mut lines = Vec::new();
+    let mut keys: Vec<(u32, f64)> = r.stiff.iter().map(|row| (row.side, row.stiffness)).collect();
+    keys.dedup();
+    for (side, k) in keys {
+        let mut here: Vec<_> = best.iter().filter(|b| b.0 == side && b.1 == k).collect();
+        here.sort_by(|a, b| a.3.total_cmp(&b.3));
+        let text = match here.as_slice() {
+            [] => format!("no method came within {:.1} cm", stiff::TARGET_ERROR * 100.0),
+            [first, rest @ ..] => {
+                let others: Vec<String> = rest
+                    .iter()
+                    .map(|b| format!("{} {:.1}x its cost", b.2, b.3 / first.3))
+                    .collect();
+                let missed: Vec<String> = (STIFF_FAMILIES.iter())
+                    .filter(|f| !here.iter().any(|b| b.2 == **f))
+                    .map(|f| f.to_string())
+                    .collect();
+                format!(
+                    "{} is cheapest ({:.3e} s per simulated second){}{}",
+                    first.2,
+                    first.3,
+                    if others.is_empty() { String::new() } else { format!("; then {}", others.join(", ")) },
+                    if missed.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; never within the target: {}", missed.join(", "))
+                    }
+                )
+            }
+        };
+        lines.push(format!("{side}x{side}, k = {k:.0e} N/m: {text}."));
+    }
+    lines
 }
