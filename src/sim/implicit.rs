@@ -6,7 +6,8 @@
 //! `df_a/dx_a = -k [u uᵀ + max(0, 1 - L/l)(I - u uᵀ)]` (the compressive part is
 //! dropped so the matrix stays positive definite, as Baraff & Witkin and Choi & Ko
 //! do) and `df_a/dv_a = -b u uᵀ`; air damping and ground contact add to the
-//! diagonal. It is solved by conjugate gradients with a Jacobi preconditioner;
+//! diagonal. It is solved by conjugate gradients with a 3x3 block-Jacobi
+//! preconditioner (each particle's own block of the matrix, inverted);
 //! pinned particles are filtered out (their `dv` is zero); each solve starts from the
 //! previous step's `dv`. Aerodynamic drag is
 //! treated explicitly. Unconditionally stable; first order.
@@ -30,7 +31,8 @@ pub struct ImplicitWorkspace {
     /// Per spring, the stiffness part alone (`h² k [...]`), for the `h² df/dx v` term.
     stiffness_blocks: Vec<DMat3>,
     diagonal: Vec<DMat3>,
-    preconditioner: Vec<DVec3>,
+    /// Per particle, the inverse of its 3x3 diagonal block (zero when held).
+    preconditioner: Vec<DMat3>,
     rhs: Vec<DVec3>,
     dv: Vec<DVec3>,
     residual: Vec<DVec3>,
@@ -46,7 +48,6 @@ impl ImplicitWorkspace {
     pub fn resize(&mut self, n: usize, m: usize) {
         for v in [
             &mut self.forces,
-            &mut self.preconditioner,
             &mut self.rhs,
             &mut self.dv,
             &mut self.residual,
@@ -57,6 +58,7 @@ impl ImplicitWorkspace {
             v.resize(n, DVec3::ZERO);
         }
         self.diagonal.resize(n, DMat3::ZERO);
+        self.preconditioner.resize(n, DMat3::ZERO);
         self.spring_forces.resize(m, DVec3::ZERO);
         self.blocks.resize(m, DMat3::ZERO);
         self.stiffness_blocks.resize(m, DMat3::ZERO);
@@ -117,19 +119,16 @@ pub fn step(model: &Model, state: &mut State, w: &mut ImplicitWorkspace, h: f64,
         w.rhs[b] += kv;
     }
     for i in 0..n {
-        let mut diag = DVec3::new(
-            w.diagonal[i].x_axis.x,
-            w.diagonal[i].y_axis.y,
-            w.diagonal[i].z_axis.z,
-        );
+        // The particle's block of the matrix: its diagonal plus each spring's block
+        // (positive definite: the mass term alone is).
+        let mut block = w.diagonal[i];
         for (si, _) in model.adjacency.springs_of(i) {
-            let blk = &w.blocks[si];
-            diag += DVec3::new(blk.x_axis.x, blk.y_axis.y, blk.z_axis.z);
+            block += w.blocks[si];
         }
-        w.preconditioner[i] = if model.inv_mass[i] > 0.0 {
-            diag.recip()
+        w.preconditioner[i] = if model.inv_mass[i] > 0.0 && block.determinant() > 0.0 {
+            block.inverse()
         } else {
-            DVec3::ZERO
+            DMat3::ZERO
         };
         if model.inv_mass[i] == 0.0 {
             w.rhs[i] = DVec3::ZERO;
