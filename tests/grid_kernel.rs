@@ -135,18 +135,23 @@ fn coincident_particles_stay_finite() {
     }
 }
 
-/// The same with every feature of the engine on, in each precision: Verlet, air
+/// The same with every feature of the engine on, in each precision: Verlet (and
+/// XPBD, whose spring pass splits its colour classes among the threads), air
 /// damping, a ground, a sphere, the stretch limit and gusty drag (tolerance 0).
 #[test]
 fn threads_give_bit_identical_results_with_every_feature() {
     use cloth_sandbox::sim::grid_kernel::Precision;
     use cloth_sandbox::sim::{Ground, Integrator, Sphere, Wind};
     let wind = Wind::new(DVec3::new(0.0, 0.0, 5.0), 2.0, 7);
-    for precision in [Precision::Single, Precision::Mixed, Precision::Double] {
+    let cases = [Precision::Single, Precision::Mixed, Precision::Double]
+        .map(|p| (p, Integrator::Verlet))
+        .into_iter()
+        .chain([(Precision::Single, Integrator::Xpbd)]);
+    for (precision, integrator) in cases {
         for stretch_limit in [None, Some(0.2)] {
             let state = |threads: usize| {
                 let mut spec = GridSpec::peer_bench(96, true);
-                spec.integrator = Integrator::Verlet;
+                spec.integrator = integrator;
                 spec.air_damping = 1e-5;
                 // The bottom row sags into the ground, the wind blows the cloth
                 // into the sphere.
@@ -187,11 +192,11 @@ fn threads_give_bit_identical_results_with_every_feature() {
             );
             assert!(
                 finite(&one.0) && finite(&one.1),
-                "{precision:?} {stretch_limit:?}"
+                "{precision:?} {integrator} {stretch_limit:?}"
             );
             assert!(
                 one.0 == two.0 && one.1 == two.1,
-                "{precision:?} {stretch_limit:?}"
+                "{precision:?} {integrator} {stretch_limit:?}"
             );
         }
     }

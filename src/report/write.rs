@@ -862,7 +862,11 @@ fn stiff_plot(r: &Report, out: &Path) -> Result<(), String> {
                 label: format!("{family}, {side}x{side}"),
                 points,
                 color: color(family),
-                style: if n == 0 { Style::LineAndMarkers } else { Style::Dashed },
+                style: if n == 0 {
+                    Style::LineAndMarkers
+                } else {
+                    Style::Dashed
+                },
             });
         }
     }
@@ -934,13 +938,20 @@ fn stiff_section(r: &Report, m: &mut String) {
 fn stiff_conclusions(r: &Report) -> Vec<String> {
     let best = stiff::cheapest_within_target(&r.stiff);
     let mut lines = Vec::new();
-    let mut keys: Vec<(u32, f64)> = r.stiff.iter().map(|row| (row.side, row.stiffness)).collect();
+    let mut keys: Vec<(u32, f64)> = r
+        .stiff
+        .iter()
+        .map(|row| (row.side, row.stiffness))
+        .collect();
     keys.dedup();
     for (side, k) in keys {
         let mut here: Vec<_> = best.iter().filter(|b| b.0 == side && b.1 == k).collect();
         here.sort_by(|a, b| a.3.total_cmp(&b.3));
         let text = match here.as_slice() {
-            [] => format!("no method came within {:.1} cm", stiff::TARGET_ERROR * 100.0),
+            [] => format!(
+                "no method came within {:.1} cm",
+                stiff::TARGET_ERROR * 100.0
+            ),
             [first, rest @ ..] => {
                 let others: Vec<String> = rest
                     .iter()
@@ -954,7 +965,11 @@ fn stiff_conclusions(r: &Report) -> Vec<String> {
                     "{} is cheapest ({:.3e} s per simulated second){}{}",
                     first.2,
                     first.3,
-                    if others.is_empty() { String::new() } else { format!("; then {}", others.join(", ")) },
+                    if others.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; then {}", others.join(", "))
+                    },
                     if missed.is_empty() {
                         String::new()
                     } else {

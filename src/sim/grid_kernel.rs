@@ -627,13 +627,13 @@ struct Kernel<E: Real> {
     xpbd: XpbdScratch,
 }
 
-/// XPBD's f64 copies, per particle in cloth order (`p = row * width + column`),
-/// structure of arrays: positions as the constraint pass moves them, at the start of
-/// the step, and inverse masses.
+/// XPBD's f64 copies, per particle in cloth order (`p = row * width + column`):
+/// positions as the constraint pass moves them, at the start of the step, and
+/// inverse masses.
 #[derive(Clone, Debug, Default)]
 struct XpbdScratch {
-    x: [Vec<f64>; 3],
-    start: [Vec<f64>; 3],
+    moved: Vec<DVec3>,
+    start: Vec<DVec3>,
     inv_mass: Vec<f64>,
 }
 
@@ -854,7 +854,7 @@ impl<E: Real> Kernel<E> {
                     self.set_wind(wind.at(t0 + i as f64 * dt));
                 }
                 self.one_step(parallel);
-                self.constrain(dt);
+                self.constrain(dt, parallel);
             }
         };
         match &pool {
@@ -907,10 +907,10 @@ impl<E: Real> Kernel<E> {
     /// Corrections to a row only move that row and the two below it, which are
     /// checked after, so skipping rows changes nothing: the result is the full
     /// Gauss-Seidel pass's.
-    fn constrain(&mut self, dt: f64) {
+    fn constrain(&mut self, dt: f64, parallel: bool) {
         let xpbd = self.spec.integrator == Integrator::Xpbd;
         if xpbd {
-            self.xpbd_pass(dt);
+            self.xpbd_pass(dt, parallel);
         }
         if let Some(tau) = self.spec.stretch_limit {
             self.stretch_limit_pass(tau, dt);
@@ -948,74 +948,71 @@ impl<E: Real> Kernel<E> {
     }
 
     /// XPBD's springs: one Gauss-Seidel pass over the colour classes of
-    /// [`super::springs::xpbd_order`] (by stencil direction, then by the parity of the
-    /// spring's step along it), each spring corrected by
-    /// [`constraints::xpbd_multiplier`] against the positions at the start of the
+    /// [`super::springs::xpbd_order`] (by stencil direction, then by the parity of
+    /// the spring's step along it), each spring corrected by
+    /// [`constraints::xpbd_correction`] against the positions at the start of the
     /// step (the other state buffer, after the swap). No two springs of a class
-    /// share a particle, so a class's springs are independent: the rows' inner loops
-    /// have no dependency from one spring to the next (the CPU overlaps them, and
-    /// the compiler may vectorise them), and the result is the f64 engine's, which
-    /// visits the same classes one spring at a time.
+    /// share a particle, so a class splits into blocks of rows that no spring
+    /// crosses, corrected on the pool's threads (`parallel`) with the same result
+    /// as one at a time: the f64 engine's, which visits the same classes in order.
     ///
     /// The pass runs on f64 copies of the positions and writes each moved particle
     /// back once, with its move over `dt` added to its velocity.
-    fn xpbd_pass(&mut self, dt: f64) {
+    fn xpbd_pass(&mut self, dt: f64, parallel: bool) {
         let (w, h) = (self.grid.w, self.grid.h);
         let n = w * h;
         let mut s = std::mem::take(&mut self.xpbd);
-        for a in 0..3 {
-            s.x[a].resize(n, 0.0);
-            s.start[a].resize(n, 0.0);
-        }
+        s.moved.resize(n, DVec3::ZERO);
+        s.start.resize(n, DVec3::ZERO);
         s.inv_mass.resize(n, 0.0);
         for p in 0..n {
             let i = self.grid.index(p);
-            let (now, start) = (self.position_at(i), self.start_position_at(i));
-            for a in 0..3 {
-                s.x[a][p] = now[a];
-                s.start[a][p] = start[a];
-            }
+            s.moved[p] = self.position_at(i);
+            s.start[p] = self.start_position_at(i);
             s.inv_mass[p] = self.inv_mass.as_slice()[i].f64();
         }
         for ((dr, dc), rest, present, kind) in self.stencil() {
             if !present || kind.k <= 0.0 {
                 continue;
             }
-            let (alpha, gamma) = constraints::xpbd_coefficients(kind.k, kind.b, dt);
-            // Columns c with both ends on the cloth: 0 <= c + dc < w.
-            let (c0, c1) = ((-dc).max(0) as usize, w.saturating_sub(dc.max(0) as usize));
-            let spring = (rest, alpha, gamma);
+            let class = XpbdClass {
+                width: w,
+                dr,
+                dc,
+                spring: (rest, kind.k, kind.b),
+                dt,
+            };
             for colour in 0..2 {
-                for r in 0..h.saturating_sub(dr) {
-                    let row = r * w;
-                    if let Some(run) = r.checked_div(dr) {
-                        // Rows alternate in runs of `dr`: a class's row of springs
-                        // is one run of columns.
-                        if run % 2 == colour {
-                            let a = row + c0;
-                            let b = (a + dr * w).wrapping_add_signed(dc);
-                            s.correct_run(a, b, 1, c1 - c0, spring);
-                        }
-                        continue;
-                    }
-                    // Along a row the springs alternate in runs of `dc` columns:
-                    // the class's springs start at columns `2 dc m + dc colour + j`.
-                    let dc = dc as usize;
-                    for j in 0..dc {
-                        let first = dc * colour + j;
-                        if first + dc < w {
-                            let count = (w - dc - first).div_ceil(2 * dc);
-                            s.correct_run(row + first, row + first + dc, 2 * dc, count, spring);
-                        }
-                    }
+                // Springs along rows stay in their row; the others' rows alternate
+                // in runs of `dr`, so a block of `2 dr` rows from the colour's first
+                // holds whole springs of the class.
+                let (first_row, block_rows) = if dr == 0 {
+                    (0, 1)
+                } else {
+                    (colour * dr, 2 * dr)
+                };
+                let from = (first_row * w).min(n);
+                let size = block_rows * w;
+                let blocks = s.moved[from..]
+                    .chunks_mut(size)
+                    .zip(s.start[from..].chunks(size))
+                    .zip(s.inv_mass[from..].chunks(size));
+                if parallel && n >= PARALLEL_MIN_PARTICLES {
+                    use rayon::prelude::*;
+                    let blocks = s.moved[from..]
+                        .par_chunks_mut(size)
+                        .zip(s.start[from..].par_chunks(size))
+                        .zip(s.inv_mass[from..].par_chunks(size));
+                    blocks.for_each(|((x, x0), m)| class.correct_block(x, x0, m, colour));
+                } else {
+                    blocks.for_each(|((x, x0), m)| class.correct_block(x, x0, m, colour));
                 }
             }
         }
         for p in 0..n {
-            let to = DVec3::new(s.x[0][p], s.x[1][p], s.x[2][p]);
             let i = self.grid.index(p);
-            if to != self.position_at(i) {
-                self.move_particle(i, to, dt);
+            if s.moved[p] != self.position_at(i) {
+                self.move_particle(i, s.moved[p], dt);
             }
         }
         self.xpbd = s;
@@ -1951,61 +1948,61 @@ mod x86 {
 }
 
 /// A particle's position (high and low parts) and velocity, one per lane.
-impl XpbdScratch {
-    /// Corrects `count` springs of one colour class, from particle `a + j stride`
-    /// to `b + j stride`, of `(rest length, α̃, γ)`. The springs share no particle,
-    /// so each is independent of the one before (the CPU overlaps them).
-    fn correct_run(
-        &mut self,
-        a: usize,
-        b: usize,
-        stride: usize,
-        count: usize,
-        spring: (f64, f64, f64),
-    ) {
-        let [x, y, z] = self.x.each_mut().map(Vec::as_mut_slice);
-        let [sx, sy, sz] = self.start.each_ref().map(Vec::as_slice);
-        let w = self.inv_mass.as_slice();
-        for j in 0..count {
-            let (a, b) = (a + j * stride, b + j * stride);
-            let start = [[sx[a], sy[a], sz[a]], [sx[b], sy[b], sz[b]]];
-            let (mut pa, mut pb) = ([x[a], y[a], z[a]], [x[b], y[b], z[b]]);
-            correct_pair(&mut pa, &mut pb, start, [w[a], w[b]], spring);
-            [x[a], y[a], z[a]] = pa;
-            [x[b], y[b], z[b]] = pb;
-        }
-    }
+/// One colour class of XPBD's springs on a grid: the stencil direction `(dr, dc)`
+/// and the spring `(rest length, k, b)` at step `dt`.
+#[derive(Clone, Copy, Debug)]
+struct XpbdClass {
+    width: usize,
+    dr: usize,
+    dc: isize,
+    spring: (f64, f64, f64),
+    dt: f64,
 }
 
-/// One XPBD spring correction, the arithmetic of [`constraints::xpbd_correction`] in
-/// its order: ends now at `pa`, `pb` (moved in place), at `start` when the step
-/// began, inverse masses `w`, spring `(rest length, α̃, γ)`.
-#[inline(always)]
-fn correct_pair(
-    pa: &mut [f64; 3],
-    pb: &mut [f64; 3],
-    start: [[f64; 3]; 2],
-    w: [f64; 2],
-    spring: (f64, f64, f64),
-) {
-    let (rest, alpha, gamma) = spring;
-    let [wa, wb] = w;
-    let wsum = wa + wb;
-    let d = [pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]];
-    let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
-    if wsum == 0.0 || l <= crate::sim::forces::EPSILON_LENGTH {
-        return;
-    }
-    let inv_l = 1.0 / l;
-    let n = d.map(|d| d * inv_l);
-    let moved = n[0] * ((pa[0] - start[0][0]) - (pb[0] - start[1][0]))
-        + n[1] * ((pa[1] - start[0][1]) - (pb[1] - start[1][1]))
-        + n[2] * ((pa[2] - start[0][2]) - (pb[2] - start[1][2]));
-    let dlambda = constraints::xpbd_multiplier(l - rest, moved, wsum, alpha, gamma);
-    for a in 0..3 {
-        let c = -dlambda * n[a];
-        pa[a] -= wa * c;
-        pb[a] += wb * c;
+impl XpbdClass {
+    /// Corrects the class's springs of colour `colour` inside one block of rows
+    /// (`x` positions, `x0` at the start of the step, `w` inverse masses, the block's
+    /// first row where the class's rows start): a row, for springs along rows,
+    /// else `dr` rows of springs reaching `dr` rows down. No spring leaves the block.
+    fn correct_block(&self, x: &mut [DVec3], x0: &[DVec3], w: &[f64], colour: usize) {
+        let width = self.width;
+        let rows = x.len() / width;
+        // Columns c with both ends on the cloth: 0 <= c + dc < width.
+        let (c0, c1) = (
+            (-self.dc).max(0) as usize,
+            width.saturating_sub(self.dc.max(0) as usize),
+        );
+        let mut correct = |a: usize, b: usize| {
+            let (rest, k, damping) = self.spring;
+            if let Some(c) = constraints::xpbd_correction(
+                [x[a], x[b]],
+                [x0[a], x0[b]],
+                w[a],
+                w[b],
+                (rest, k, damping),
+                self.dt,
+            ) {
+                x[a] -= w[a] * c;
+                x[b] += w[b] * c;
+            }
+        };
+        if self.dr == 0 {
+            // Along the row the springs alternate in runs of `dc` columns: the
+            // class's start at columns `2 dc m + dc colour + j`, j < dc.
+            let dc = self.dc as usize;
+            for m in (0..width).step_by(2 * dc) {
+                for c in (m + dc * colour..m + dc * colour + dc).filter(|&c| c + dc < width) {
+                    correct(c, c + dc);
+                }
+            }
+            return;
+        }
+        for r in 0..self.dr.min(rows.saturating_sub(self.dr)) {
+            for c in c0..c1 {
+                let a = r * width + c;
+                correct(a, (a + self.dr * width).wrapping_add_signed(self.dc));
+            }
+        }
     }
 }
 
