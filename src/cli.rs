@@ -440,6 +440,9 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         per_kind.insert(kind.name().to_string(), json!(n));
     }
     let mut constraints = Vec::new();
+    if p.integrator == Integrator::Xpbd && !system.springs().is_empty() {
+        constraints.push("springs as XPBD distance constraints (compliance 1/k)".to_string());
+    }
     if !system.bars().is_empty() && p.bar_iterations > 0 {
         constraints.push(format!("rigid bars ({} passes per step)", p.bar_iterations));
     }

@@ -236,6 +236,32 @@ fn info_reports_counts_terms_parameters_and_stability() {
         "float32 cannot resolve k = 1e6 N/m springs"
     );
 
+    // With XPBD the springs are constraints: no force term, no step limit, and the
+    // grid runs on float32 positions at any stiffness.
+    let xpbd = cloth(&[
+        "info",
+        "--scene",
+        "cloth",
+        "--set",
+        "integrator=\"xpbd\"",
+        "--set",
+        "stiffness=1e9",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(stdout(&xpbd).trim()).unwrap();
+    assert_eq!(v["engine"], "grid-f32");
+    assert!(
+        !v["force_terms"]
+            .as_array()
+            .unwrap()
+            .contains(&"springs".into())
+    );
+    assert!(
+        v["constraints"][0].as_str().unwrap().contains("XPBD"),
+        "{v}"
+    );
+    assert_eq!(v["stability"]["dt_over_dt_critical"], 0.0);
+
     let chain = cloth(&["info", "--scene", "chain"]);
     let text = stdout(&chain);
     assert!(
