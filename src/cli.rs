@@ -89,7 +89,7 @@ pub struct ReportArgs {
 pub struct RunArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Integrator: explicit-euler, symplectic-euler, verlet, rk2, rk4, implicit-euler.
+    /// Integrator: explicit-euler, symplectic-euler, verlet, rk2, rk4, implicit-euler, xpbd.
     #[arg(long)]
     integrator: Option<String>,
     /// Time step in seconds.
