@@ -4,7 +4,7 @@
 //! topology whose springs really are the 12-neighbour stencil (checked spring by
 //! spring, not trusted from the scene), uniform mass, one stiffness, damping and
 //! rest length per spring kind (rest `h`, `h√2`, `2h`), symplectic Euler, explicit
-//! Euler or Verlet, and no bars. Every parameter is named in `grid_spec`,
+//! Euler, Verlet or XPBD, and no bars. Every parameter is named in `grid_spec`,
 //! so a new one fails to compile until the kernel models it or refuses it. Results
 //! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
 //!

@@ -1,7 +1,9 @@
 //! The fast engine for regular grid cloths: a stencil kernel for damped springs,
 //! gravity, per-triangle aero drag, air damping and a ground, stepped with
 //! symplectic Euler, explicit Euler or position Verlet, then constrained by a sphere
-//! collider and Provot's stretch limit.
+//! collider and Provot's stretch limit. With XPBD the fused pass predicts with every
+//! force but the springs, and the springs become distance constraints corrected
+//! after it (`Kernel::xpbd_pass`, in the f64 engine's colour classes).
 //!
 //! Units are SI (m, s, kg, N). The cloth is a `width x height` grid of particles,
 //! `p = r * width + c` (row `r` from the top). Every particle is joined to its
