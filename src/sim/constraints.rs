@@ -1,6 +1,6 @@
 //! Position constraints enforced after integration, each optional per scene:
 //! - with XPBD, every spring: a distance constraint of compliance `1/k`, one
-//!   Gauss-Seidel pass in spring order ([`xpbd_correction`]);
+//!   Gauss-Seidel pass in spring order (`xpbd_correction`);
 //! - rigid bars (seed 001), relaxed `bar_iterations` times per step: each pass moves
 //!   the two ends along the bar so that its length is restored, split by inverse mass;
 //! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`;

@@ -37,7 +37,7 @@ pub enum Integrator {
     /// constraint iteration per step, the "small steps" of Macklin et al. (2019):
     /// every force but the springs moves the particles by symplectic Euler, then
     /// each spring is a distance constraint of compliance `1/k`
-    /// ([`super::constraints::xpbd_correction`]) and the moves become velocities.
+    /// (`constraints::xpbd_correction`) and the moves become velocities.
     /// Order 1; no step limit from the springs, at any stiffness.
     Xpbd,
 }
