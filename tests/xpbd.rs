@@ -117,11 +117,11 @@ fn xpbd_has_no_step_limit_from_the_springs() {
 fn xpbd_visits_a_grid_in_twelve_classes_of_independent_springs() {
     let system = cloth("xpbd", 100.0, 16);
     let model = system.model();
-    assert_eq!(model.xpbd_order.len(), model.springs.len());
+    assert_eq!(model.constraint_order.len(), model.springs.len());
     let mut seen = vec![false; model.springs.len()];
     let mut touched = vec![usize::MAX; system.particle_count()];
     let mut classes = 0;
-    for &i in &model.xpbd_order {
+    for &i in &model.constraint_order {
         assert!(
             !std::mem::replace(&mut seen[i as usize], true),
             "spring {i} twice"

@@ -1,9 +1,11 @@
 //! Position constraints enforced after integration, each optional per scene:
 //! - with XPBD, every spring: a distance constraint of compliance `1/k`, one
-//!   Gauss-Seidel pass in spring order (`xpbd_correction`);
+//!   Gauss-Seidel pass in the model's constraint order (`xpbd_correction`);
 //! - rigid bars (seed 001), relaxed `bar_iterations` times per step: each pass moves
 //!   the two ends along the bar so that its length is restored, split by inverse mass;
-//! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`;
+//! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`,
+//!   one Gauss-Seidel pass in the model's constraint order (by colour on a grid:
+//!   in particle order a single pass can diverge, see `springs::constraint_order`);
 //! - the sphere collider (seed 003): particles inside are projected onto its surface.
 //!
 //! Moving a position by `dx` in a velocity-based integrator also changes the velocity
@@ -22,7 +24,11 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let x = &mut state.positions;
     if p.integrator == Integrator::Xpbd {
         let prev = &work.step_start;
-        for s in model.xpbd_order.iter().map(|&i| &model.springs[i as usize]) {
+        for s in model
+            .constraint_order
+            .iter()
+            .map(|&i| &model.springs[i as usize])
+        {
             let (a, b) = (s.a as usize, s.b as usize);
             let (wa, wb) = (model.inv_mass[a], model.inv_mass[b]);
             let spring = (s.rest, s.stiffness, s.damping);
@@ -43,7 +49,11 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
         }
     }
     if let Some(tau) = p.stretch_limit {
-        for s in &model.springs {
+        for s in model
+            .constraint_order
+            .iter()
+            .map(|&i| &model.springs[i as usize])
+        {
             let longest = (1.0 + tau) * s.rest;
             restore_length(x, &model.inv_mass, s.a as usize, s.b as usize, |l| {
                 (l > longest).then_some(longest)

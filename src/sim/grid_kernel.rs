@@ -25,7 +25,7 @@
 //! the forces see `v = u + h/2 a`. A particle with inverse mass 0 is pinned or held
 //! (its velocity is 0). After the step, particles inside the sphere are projected
 //! onto it (fused into the step when there is no stretch limit) and the stretch limit
-//! runs a Gauss-Seidel pass in the f64 engine's spring order; a move `δ` adds `δ/h`
+//! runs a Gauss-Seidel pass in the f64 engine's colour order; a move `δ` adds `δ/h`
 //! to the velocity, as in `super::constraints`.
 //!
 //! # Precision
@@ -589,6 +589,16 @@ struct State<E> {
     u: [Buf<E>; 3],
 }
 
+impl<E: Real> State<E> {
+    /// Every array, whole (ghost rows included), as [`Out`] rows from row 0.
+    fn rows(&mut self) -> Out<'_, E> {
+        let State { x, xl, v, u } = self;
+        let [[x0, x1, x2], [l0, l1, l2], [v0, v1, v2], [u0, u1, u2]] =
+            [x, xl, v, u].map(|a| a.each_mut().map(Buf::as_mut_slice));
+        Out([x0, x1, x2, l0, l1, l2, v0, v1, v2, u0, u1, u2])
+    }
+}
+
 /// Output rows of a band (or of several consecutive bands): `x`, `y`, `z`, their
 /// low parts, `vx`, `vy`, `vz`, and (Verlet only, else empty) `ux`, `uy`, `uz`, each
 /// starting at the band's first row.
@@ -627,6 +637,9 @@ struct Kernel<E: Real> {
     simd: SimdLevel,
     /// XPBD's scratch (empty for the other integrators).
     xpbd: XpbdScratch,
+    /// The stretch limit's corrections along one row, per axis (`nv + PL` floats),
+    /// for each of two threads.
+    stretch_fix: [[Vec<E>; 3]; 2],
 }
 
 /// XPBD's f64 copies, per particle in cloth order (`p = row * width + column`):
@@ -724,6 +737,9 @@ impl<E: Real> Kernel<E> {
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
             xpbd: XpbdScratch::default(),
+            stretch_fix: std::array::from_fn(|_| {
+                std::array::from_fn(|_| vec![E::ZERO; grid.nv + PL])
+            }),
             grid,
             spec,
         }
@@ -899,23 +915,16 @@ impl<E: Real> Kernel<E> {
         std::mem::swap(&mut self.cur, &mut self.next);
     }
 
-    /// The constraints the fused row pass leaves to after the step: Provot's stretch
-    /// limit, a Gauss-Seidel pass over the springs in the f64 engine's order (sorted
-    /// by their ends), then, with a stretch limit, the sphere. A move `δ` of a
-    /// particle also adds `δ / h` to its velocity, as in the f64 engine.
-    ///
-    /// Most rows of a cloth have no spring over its limit: a row is first checked
-    /// with one vectorisable pass per stencil direction and skipped if it has none.
-    /// Corrections to a row only move that row and the two below it, which are
-    /// checked after, so skipping rows changes nothing: the result is the full
-    /// Gauss-Seidel pass's.
+    /// The constraints the fused row pass leaves to after the step: XPBD's springs,
+    /// Provot's stretch limit, then (with either) the sphere, as in the f64 engine.
+    /// A move `δ` of a particle also adds `δ / h` to its velocity.
     fn constrain(&mut self, dt: f64, parallel: bool) {
         let xpbd = self.spec.integrator == Integrator::Xpbd;
         if xpbd {
             self.xpbd_pass(dt, parallel);
         }
         if let Some(tau) = self.spec.stretch_limit {
-            self.stretch_limit_pass(tau, dt);
+            self.stretch_limit_pass(tau, dt, parallel);
         }
         if let Some(sphere) = self.spec.sphere
             && (xpbd || self.spec.stretch_limit.is_some())
@@ -950,7 +959,7 @@ impl<E: Real> Kernel<E> {
     }
 
     /// XPBD's springs: one Gauss-Seidel pass over the colour classes of
-    /// [`super::springs::xpbd_order`] (by stencil direction, then by the parity of
+    /// [`super::springs::constraint_order`] (by stencil direction, then by the parity of
     /// the spring's step along it), each spring corrected by
     /// [`constraints::xpbd_correction`] against the positions at the start of the
     /// step (the other state buffer, after the swap). No two springs of a class
@@ -1020,91 +1029,69 @@ impl<E: Real> Kernel<E> {
         self.xpbd = s;
     }
 
-    /// Provot's stretch limit `tau` (see [`Self::constrain`]).
-    fn stretch_limit_pass(&mut self, tau: f64, dt: f64) {
-        let (w, h) = (self.grid.w, self.grid.h);
-        let stencil = self
-            .stencil()
-            .map(|(offset, rest, present, _)| (offset, rest, present));
-        let limit = 1.0 + tau;
-        for r in 0..h {
-            if !self.row_over_limit(r, &stencil, limit) {
+    /// Provot's stretch limit `tau` (see [`Self::constrain`]): one Gauss-Seidel pass
+    /// over the colour classes of [`super::springs::constraint_order`], the f64
+    /// engine's order, each spring corrected as [`constraints::length_correction`]
+    /// does. No two springs of a class share a particle, so a class's springs from
+    /// one row are corrected together ([`stretch_limit_line`]), and its rows split
+    /// between two threads (`parallel`) with the same result as on one.
+    fn stretch_limit_pass(&mut self, tau: f64, dt: f64, parallel: bool) {
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
+        let inv_dt = E::of(1.0 / dt);
+        let compensated = self.params.compensated;
+        for ((dr, dc), rest, present, _) in self.stencil() {
+            // Columns c with both ends on the cloth: 0 <= c + dc < w.
+            let c0 = (-dc).max(0) as usize;
+            let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
+            if !present || len == 0 || dr >= h {
                 continue;
             }
-            for c in 0..w {
-                for &((dr, dc), rest, present) in &stencil {
-                    let (rb, cb) = (r + dr, c as isize + dc);
-                    if !present || rb >= h || cb < 0 || cb as usize >= w {
-                        continue;
-                    }
-                    let longest = limit * rest;
-                    let (a, b) = (r * w + c, rb * w + cb as usize);
-                    let (ia, ib) = (self.grid.index(a), self.grid.index(b));
-                    if !self.may_be_longer(ia, ib, longest) {
-                        continue;
-                    }
-                    let inv_mass = self.inv_mass.as_slice();
-                    let (wa, wb) = (inv_mass[ia].f64(), inv_mass[ib].f64());
-                    let (xa, xb) = (self.position_at(ia), self.position_at(ib));
-                    if let Some(fix) = constraints::length_correction(xa, xb, wa, wb, |l| {
-                        (l > longest).then_some(longest)
-                    }) {
-                        self.move_particle(ia, xa - wa * fix, dt);
-                        self.move_particle(ib, xb + wb * fix, dt);
-                    }
+            let longest = E::of((1.0 + tau) * rest);
+            for colour in 0..2 {
+                // Springs along rows alternate in runs of `dc` columns, the others'
+                // rows in runs of `dr` rows: rows `2 dr m + dr colour + j`, j < dr.
+                let line = |r: usize| StretchLine {
+                    a: r * st + c0,
+                    b: ((r + dr) * st + c0).wrapping_add_signed(dc),
+                    len,
+                    c0,
+                    colour: (dr == 0).then(|| (colour, dc.unsigned_abs().trailing_zeros())),
+                    longest,
+                    inv_dt,
+                    compensated,
+                };
+                let in_class = |r: &usize| dr == 0 || (r / dr) % 2 == colour;
+                // A split at the start of a run of the colour's rows (or past the
+                // last row): the rows above it move only rows above it.
+                let split = if dr == 0 {
+                    h / 2
+                } else {
+                    (h / 2).next_multiple_of(2 * dr) + colour * dr
+                }
+                .min(h);
+                let rows = |range: std::ops::Range<usize>| range.start..range.end.min(h - dr);
+                let inv_mass = self.inv_mass.as_slice();
+                let out = self.cur.rows();
+                let [fix_lo, fix_hi] = &mut self.stretch_fix;
+                let simd = self.simd;
+                let run =
+                    |out: &mut Out<E>, base: usize, fix: &mut _, rows: std::ops::Range<usize>| {
+                        for r in rows.filter(in_class) {
+                            stretch_limit_line_dispatch(simd, out, base, inv_mass, fix, &line(r));
+                        }
+                    };
+                if parallel {
+                    let (mut lo, mut hi) = out.split_at(split * st);
+                    rayon::join(
+                        || run(&mut lo, 0, fix_lo, rows(0..split)),
+                        || run(&mut hi, split * st, fix_hi, rows(split..h)),
+                    );
+                } else {
+                    run(&mut { out }, 0, fix_lo, rows(0..h));
                 }
             }
         }
-    }
-
-    /// Whether any spring starting on row `r` may be longer than `limit` times its
-    /// rest length (a conservative float32 check: a margin of 1e-4 covers round-off).
-    fn row_over_limit(
-        &self,
-        r: usize,
-        stencil: &[((usize, isize), f64, bool); 6],
-        limit: f64,
-    ) -> bool {
-        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
-        let [xl, yl, zl] = self.cur.xl.each_ref().map(Buf::as_slice);
-        let mut over = 0u32;
-        for &((dr, dc), rest, present) in stencil {
-            // Columns c with both ends on the cloth: 0 <= c + dc < w.
-            let c0 = (-dc).max(0) as usize;
-            let c1 = w.saturating_sub(dc.max(0) as usize);
-            if !present || r + dr >= h || c1 <= c0 {
-                continue;
-            }
-            let longest2 = E::of((limit * rest).powi(2) * (1.0 - 1e-4));
-            let (a, len) = (r * st + c0, c1 - c0);
-            let b = ((r + dr) * st + c0).wrapping_add_signed(dc);
-            fn ends<E>(p: &[E], a: usize, b: usize, len: usize) -> (&[E], &[E]) {
-                (&p[a..a + len], &p[b..b + len])
-            }
-            let ends = |p| ends(p, a, b, len);
-            let ((xa, xb), (ya, yb), (za, zb)) = (ends(x), ends(y), ends(z));
-            let ((la, lb), (ma, mb), (na, nb)) = (ends(xl), ends(yl), ends(zl));
-            for j in 0..len {
-                let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
-                let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
-                let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
-                over += u32::from(dx * dx + dy * dy + dz * dz > longest2);
-            }
-        }
-        over > 0
-    }
-
-    /// Whether particles at array indices `i` and `j` may be farther apart than
-    /// `longest` (m): the conservative check of [`Self::row_over_limit`] for one pair.
-    fn may_be_longer(&self, i: usize, j: usize, longest: f64) -> bool {
-        let (x, xl) = (&self.cur.x, &self.cur.xl);
-        let d = |a: usize| {
-            let (p, l) = (x[a].as_slice(), xl[a].as_slice());
-            (p[i] - p[j]) + (l[i] - l[j])
-        };
-        let (dx, dy, dz) = (d(0), d(1), d(2));
-        dx * dx + dy * dy + dz * dz > E::of(longest * longest * (1.0 - 1e-4))
     }
 
     /// Moves the particle at array index `i` to `to` (m) after a step of `dt`,
@@ -1713,7 +1700,9 @@ mod x86 {
     //! AVX2 and AVX-512 versions of [`Simd`], and the entry points compiled for them.
     use std::arch::x86_64::*;
 
-    use super::{Band, Ctx, Out, Portable, Simd, row_variant};
+    use super::{
+        Band, Ctx, Out, Portable, Real, Simd, StretchLine, row_variant, stretch_limit_line,
+    };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
     #[derive(Clone, Copy)]
@@ -1738,6 +1727,22 @@ mod x86 {
         own: bool,
     ) {
         row_variant(Avx512(()), ctx, band, row, out, lo, own);
+    }
+
+    /// The stretch limit's `stretch_limit_line`, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn stretch_limit_line_avx2<E: Real>(
+        out: &mut Out<E>,
+        base: usize,
+        inv_mass: &[E],
+        fix: &mut [Vec<E>; 3],
+        line: &StretchLine<E>,
+    ) {
+        stretch_limit_line(out, base, inv_mass, fix, line);
     }
 
     /// One row in float64 with the portable lanes, compiled for the same features
@@ -1944,6 +1949,142 @@ mod x86 {
                     _mm256_castps_si256(cur),
                     _mm256_castps_si256(t),
                 ))
+            }
+        }
+    }
+}
+
+/// One row's springs of one colour class of the stretch limit: the first ends at
+/// array indices `a .. a + len`, the second ends at `b .. b + len`.
+struct StretchLine<E> {
+    a: usize,
+    b: usize,
+    len: usize,
+    /// Column of the first spring.
+    c0: usize,
+    /// For springs along rows: the colour and `log2 dc`; only the springs starting
+    /// at columns `c` with `(c >> log2 dc) % 2 == colour` are in the class.
+    colour: Option<(usize, u32)>,
+    longest: E,
+    inv_dt: E,
+    compensated: bool,
+}
+
+/// [`stretch_limit_line`] with the best code this CPU has.
+fn stretch_limit_line_dispatch<E: Real>(
+    simd: SimdLevel,
+    out: &mut Out<E>,
+    base: usize,
+    inv_mass: &[E],
+    fix: &mut [Vec<E>; 3],
+    line: &StretchLine<E>,
+) {
+    match simd {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
+        SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
+            x86::stretch_limit_line_avx2(out, base, inv_mass, fix, line)
+        },
+        _ => stretch_limit_line(out, base, inv_mass, fix, line),
+    }
+}
+
+/// Corrects the springs of `line` that are longer than `line.longest` as
+/// [`constraints::length_correction`] does, in `out` (the state's arrays from array
+/// index `base` on): first every correction, lane by lane into the scratch rows
+/// `fix` (a loop the compiler vectorises; a line with no spring over the limit
+/// stops there), then the moves of the first ends, then those of the second ends.
+/// Each particle has at most one spring in a class, so the moves do not interact.
+/// A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`). The lanes are
+/// whole portable blocks: lanes past `len` reach ghost columns inside the row's
+/// padding and are given no correction.
+#[inline(always)]
+fn stretch_limit_line<E: Real>(
+    out: &mut Out<E>,
+    base: usize,
+    inv_mass: &[E],
+    fix: &mut [Vec<E>; 3],
+    line: &StretchLine<E>,
+) {
+    let &StretchLine {
+        len,
+        c0,
+        colour,
+        longest,
+        inv_dt,
+        compensated,
+        ..
+    } = line;
+    let (a, b) = (line.a - base, line.b - base);
+    let inv_mass = &inv_mass[base..];
+    let lanes = len.next_multiple_of(PL);
+    // Both ends' arrays cut to `lanes` floats, so that the loops have no bounds checks.
+    fn ends<E>(p: &[E], a: usize, b: usize, lanes: usize) -> (&[E], &[E]) {
+        (&p[a..a + lanes], &p[b..b + lanes])
+    }
+    let [x, y, z, xl, yl, zl, ..] = &out.0;
+    {
+        let [(xa, xb), (ya, yb), (za, zb)] = [x, y, z].map(|p| ends(p, a, b, lanes));
+        let [(la, lb), (ma, mb), (na, nb)] = [xl, yl, zl].map(|p| ends(p, a, b, lanes));
+        let (wa, wb) = ends(inv_mass, a, b, lanes);
+        let [fx, fy, fz] = fix.each_mut().map(|f| &mut f[..lanes]);
+        let (own_colour, shift) = colour.unwrap_or((0, 0));
+        let every_column = colour.is_none();
+        let longest2 = longest * longest;
+        let mut any = false;
+        for j in 0..lanes {
+            let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
+            let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
+            let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
+            let l2 = dx * dx + dy * dy + dz * dz;
+            let w = wa[j] + wb[j];
+            let in_class = every_column || ((c0 + j) >> shift) & 1 == own_colour;
+            let over = j < len && in_class && l2 > longest2 && w > E::ZERO;
+            let l = l2.sqrt();
+            let scale = if over {
+                (l - longest) / (l * w)
+            } else {
+                E::ZERO
+            };
+            any |= over;
+            (fx[j], fy[j], fz[j]) = (scale * dx, scale * dy, scale * dz);
+        }
+        if !any {
+            return;
+        }
+    }
+    let pl = Portable::<E>::default();
+    let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
+    let verlet = !ux.is_empty();
+    let mut axes = [(x, xl, vx, ux), (y, yl, vy, uy), (z, zl, vz, uz)];
+    for (start, sign) in [(a, E::ZERO - E::ONE), (b, E::ONE)] {
+        let w = &inv_mass[start..start + lanes];
+        for ((x, xl, v, u), f) in axes.iter_mut().zip(fix.iter()) {
+            let f = &f[..lanes];
+            let range = start..start + lanes;
+            let (x, xl, v) = (
+                &mut x[range.clone()],
+                &mut xl[range.clone()],
+                &mut v[range.clone()],
+            );
+            let blocks = x.chunks_exact_mut(PL).zip(xl.chunks_exact_mut(PL));
+            let blocks = blocks.zip(v.chunks_exact_mut(PL)).zip(w.chunks_exact(PL));
+            for ((((x, xl), v), w), f) in blocks.zip(f.chunks_exact(PL)) {
+                let t: [E; PL] = std::array::from_fn(|l| sign * w[l] * f[l]);
+                if compensated {
+                    let old = (x[..].try_into().unwrap(), xl[..].try_into().unwrap());
+                    let (hi, lo) = add_double(pl, old, t);
+                    x.copy_from_slice(&hi);
+                    xl.copy_from_slice(&lo);
+                } else {
+                    x.iter_mut().zip(t).for_each(|(x, t)| *x += t);
+                }
+                v.iter_mut().zip(t).for_each(|(v, t)| *v += t * inv_dt);
+            }
+            if verlet {
+                for ((u, &w), &f) in u[range].iter_mut().zip(w).zip(f) {
+                    *u += sign * w * f * inv_dt;
+                }
             }
         }
     }

@@ -106,9 +106,9 @@ pub struct Model {
     pub springs: Vec<Spring>,
     /// For each particle, the springs touching it.
     pub adjacency: Adjacency,
-    /// The order XPBD's Gauss-Seidel pass visits the springs in
-    /// ([`super::springs::xpbd_order`]): indices into `springs`.
-    pub xpbd_order: Vec<u32>,
+    /// The order the Gauss-Seidel passes over the springs (XPBD, stretch limit)
+    /// visit them in ([`super::springs::constraint_order`]): indices into `springs`.
+    pub constraint_order: Vec<u32>,
     /// Rigid bars, relaxed after each step.
     pub bars: Vec<Bar>,
     /// Surface triangles (empty for scenes without a surface).

@@ -76,7 +76,7 @@ impl System {
             }
         }
         let adjacency = Adjacency::new(n, &springs);
-        let xpbd_order = springs::xpbd_order(&springs, grid);
+        let constraint_order = springs::constraint_order(&springs, grid);
         let wind = Wind::new(params.wind, params.gust, params.seed);
         let mut model = Model {
             inv_mass: vec![0.0; n],
@@ -84,7 +84,7 @@ impl System {
             pinned: pinned_flags,
             springs,
             adjacency,
-            xpbd_order,
+            constraint_order,
             bars,
             triangles,
             uvs,
