@@ -31,6 +31,7 @@ impl Offscreen {
         let adapter_name = gpu::describe(&adapter);
         log::info!("off-screen adapter: {adapter_name}");
         let (device, queue) = pollster::block_on(gpu::device(&adapter))?;
+        check_image_size(&device.limits(), width, height)?;
         let samples = super::pick_sample_count(&adapter, FORMAT);
         let renderer = Renderer::new(&device, &queue, FORMAT, samples, (width, height));
         let texture = device.create_texture(&wgpu::TextureDescriptor {
@@ -132,6 +133,27 @@ impl Offscreen {
         readback.unmap();
         Ok(pixels)
     }
+}
+
+/// Refuses an image the device cannot hold: a side over its largest texture, or
+/// a read-back buffer (rows padded for the copy) over its largest buffer.
+fn check_image_size(limits: &wgpu::Limits, width: u32, height: u32) -> anyhow::Result<()> {
+    let max_side = limits.max_texture_dimension_2d;
+    if width > max_side || height > max_side {
+        bail!(
+            "image size {width}x{height} is too large for this graphics adapter: each side must be at most {max_side} pixels"
+        );
+    }
+    let padded = u64::from(width * 4).div_ceil(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT))
+        * u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let bytes = padded * u64::from(height);
+    if bytes > limits.max_buffer_size {
+        bail!(
+            "image size {width}x{height} needs a {bytes}-byte read-back buffer, over this graphics adapter's largest buffer of {} bytes: choose a smaller --size",
+            limits.max_buffer_size
+        );
+    }
+    Ok(())
 }
 
 /// Writes RGBA8 pixels as a PNG file.
