@@ -156,26 +156,20 @@ fn check_image_size(limits: &wgpu::Limits, width: u32, height: u32) -> anyhow::R
     Ok(())
 }
 
-/// Writes RGBA8 pixels as a PNG file.
+/// Writes RGBA8 pixels as a PNG file into the prepared output file, then renames
+/// it over the target (never a half-written picture).
 pub fn write_png(
-    path: &std::path::Path,
+    mut out: cloth_sandbox::limits::PendingFile,
     width: u32,
     height: u32,
     rgba: &[u8],
 ) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    let mut encoder = png::Encoder::new(out.writer(), width, height);
     encoder.set_color(png::ColorType::Rgba);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder
-        .write_header()
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    writer
-        .write_image_data(rgba)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    writer
-        .finish()
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgba)?;
+    writer.finish()?;
+    out.commit()?;
     Ok(())
 }
