@@ -147,7 +147,10 @@ pub struct PendingFile {
 impl PendingFile {
     /// Prepares to write `target`; the error says why it cannot be written.
     pub fn create(target: &Path) -> Result<Self, String> {
-        if let Ok(meta) = std::fs::metadata(target) {
+        let mut target = target.to_path_buf();
+        if std::fs::symlink_metadata(&target).is_ok() {
+            let meta = std::fs::metadata(&target)
+                .map_err(|e| format!("cannot be written: {e} (a broken link?)"))?;
             if meta.is_dir() {
                 return Err("is a folder: give a file name".to_string());
             }
@@ -156,7 +159,17 @@ impl PendingFile {
                     "is not a regular file (a device or a pipe): give a file name".to_string(),
                 );
             }
+            if is_standard_output(&meta) {
+                return Err(
+                    "is the standard output or error, where the summary goes: give a file name"
+                        .to_string(),
+                );
+            }
+            // Through a link, the file it names is replaced and the link kept.
+            target =
+                std::fs::canonicalize(&target).map_err(|e| format!("cannot be written: {e}"))?;
         }
+        let target = target.as_path();
         let name = target
             .file_name()
             .ok_or_else(|| "has no file name: give a file name".to_string())?;
@@ -200,6 +213,23 @@ impl Drop for PendingFile {
         // After a commit the temporary file is gone and this does nothing.
         self.file = None;
         let _ = std::fs::remove_file(&self.temporary);
+    }
+}
+
+/// Whether `meta` is the file this process writes its standard output or error
+/// to (`--dump /dev/stdout` with the output redirected to a file).
+fn is_standard_output(meta: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        ["/dev/stdout", "/dev/stderr"].iter().any(|stream| {
+            std::fs::metadata(stream).is_ok_and(|s| s.dev() == meta.dev() && s.ino() == meta.ino())
+        })
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        false
     }
 }
 

@@ -154,3 +154,34 @@ fn a_diverged_run_dumps_its_last_finite_state_and_says_so() {
         "the dumped state is the one before the runaway: {far} m"
     );
 }
+
+#[test]
+fn a_link_to_the_redirected_standard_output_is_refused_and_kept() {
+    // `--dump /dev/stdout --json > out.txt`: the link leads to the file the JSON
+    // goes to. Here with a link of the test's own, so that nothing outside the
+    // test folder is at stake.
+    let dir = folder("stdout-link");
+    let out = dir.join("out.txt");
+    let link = dir.join("stdout");
+    let file = std::fs::File::create(&out).unwrap();
+    std::os::unix::fs::symlink(&out, &link).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_cloth"))
+        .args(["run", "--steps", "1", "--json", "--dump"])
+        .arg(&link)
+        .stdout(file)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("standard output"), "{}", stderr(&o));
+    assert!(
+        std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink()
+    );
+    assert_eq!(
+        std::fs::read_to_string(&out).unwrap(),
+        "",
+        "no CSV in the JSON's file"
+    );
+}
