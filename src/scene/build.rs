@@ -9,6 +9,7 @@ use super::values::{PinPreset, Pins};
 use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
 use crate::limits::number as shown;
 use crate::sim::GridShape;
+use crate::sim::constraints::out_of_sphere;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 
 /// Largest grid side (particles), so a typo cannot ask for billions of particles.
@@ -499,7 +500,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         }
         Pins::Preset(p) => preset_pins(p, layout, width as usize, height as usize, particles),
     };
-    let resolved = Resolved {
+    Ok(Resolved {
         layout,
         orientation: spec.orientation.unwrap_or_default(),
         width,
@@ -522,9 +523,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         )?,
         stretch: ranged(o, "stretch", spec.stretch.unwrap_or(1.0), -1e3, false, 1e3)?,
         params,
-    };
-    resolved.check_sphere_clear(o)?;
-    Ok(resolved)
+    })
 }
 
 /// Position of the layout's anchor in m: the spec's `origin`, or by default a
@@ -631,8 +630,25 @@ impl Resolved {
         (self.width * self.height * self.depth) as usize
     }
 
-    /// The particles' start positions (m), in index order.
+    /// The particles' start positions (m), in index order: the layout, with any
+    /// particle inside the sphere collider moved out onto its surface, as the
+    /// collider itself would move it, so that the run starts from a state that
+    /// satisfies it (pushed out by the first step instead, the particles would
+    /// gain at once an energy the divergence check cannot tell from a blow-up).
     pub fn positions(&self) -> Vec<DVec3> {
+        let mut positions = self.layout_positions();
+        if let Some(sphere) = &self.params.sphere {
+            for x in &mut positions {
+                if let Some(outside) = out_of_sphere(*x, sphere) {
+                    *x = outside;
+                }
+            }
+        }
+        positions
+    }
+
+    /// The layout's positions (m), before any collider.
+    fn layout_positions(&self) -> Vec<DVec3> {
         let l = self.rest_length;
         let (w, h, d) = (
             self.width as usize,
@@ -672,36 +688,6 @@ impl Resolved {
                 positions
             }
         }
-    }
-
-    /// Refuses a sphere collider that holds particles at the start: pushed out all
-    /// at once, they would diverge with every integrator.
-    fn check_sphere_clear(&self, origin: &str) -> Result<(), SceneError> {
-        let Some(sphere) = self.params.sphere else {
-            return Ok(());
-        };
-        let positions = self.positions();
-        let inside = positions
-            .iter()
-            .filter(|p| p.distance_squared(sphere.center) < sphere.radius * sphere.radius)
-            .count();
-        if inside == 0 {
-            return Ok(());
-        }
-        let c = sphere.center;
-        Err(invalid(
-            origin,
-            "sphere_center",
-            format!(
-                "= ({}, {}, {}) with `sphere_radius` = {} holds {inside} of the {} particles at the start: \
-                 the sphere must start clear of every particle; move it (or the cloth's `origin`) or make it smaller",
-                shown(c.x),
-                shown(c.y),
-                shown(c.z),
-                shown(sphere.radius),
-                positions.len()
-            ),
-        ))
     }
 
     /// Lays out the system.
