@@ -4,15 +4,19 @@
 //! simulation diverged (with the time and a hint).
 
 use std::io::Write;
+use std::path::Path;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use clap::{Parser, Subcommand};
+use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::safe::{
     DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, added_stretch_limit, safe_step,
 };
-use cloth_sandbox::sim::{Divergence, Engine, Integrator, SpringKind, System, bounding_sphere};
+use cloth_sandbox::sim::{
+    Divergence, Engine, Integrator, SpringKind, System, bounding_sphere, max_speed,
+};
 use glam::DVec3;
 use serde_json::json;
 
@@ -82,6 +86,10 @@ pub struct ReportArgs {
     /// Smaller problems: a smoke run for CI (under 2 minutes).
     #[arg(long)]
     quick: bool,
+    /// Write into an output folder that is not empty, replacing files of the same
+    /// names (without it, a non-empty folder is refused before the study starts).
+    #[arg(long)]
+    force: bool,
 }
 
 /// `cloth run`.
@@ -140,9 +148,14 @@ pub fn run_command(command: Command) -> ExitCode {
             scenes();
             Ok(ExitCode::SUCCESS)
         }
-        Command::Screenshot(args) => crate::app::screenshot::run(&args)
-            .map(|()| ExitCode::SUCCESS)
-            .map_err(|e| format!("{e:#}")),
+        Command::Screenshot(args) => match crate::app::screenshot::run(&args) {
+            Ok(()) => Ok(ExitCode::SUCCESS),
+            Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
+                eprintln!("error: {e:#}");
+                return ExitCode::from(EXIT_DIVERGED);
+            }
+            Err(e) => Err(format!("{e:#}")),
+        },
         Command::Report(args) => report(args),
     };
     result.unwrap_or_else(|message| {
@@ -152,6 +165,9 @@ pub fn run_command(command: Command) -> ExitCode {
 }
 
 fn report(args: ReportArgs) -> Result<ExitCode, String> {
+    // Checked before the study, which takes minutes: a folder that cannot take
+    // the results, or one holding other files, is refused now.
+    limits::prepare_output_folder(&args.out, args.force).map_err(|e| format!("--out: {e}"))?;
     let options = cloth_sandbox::report::Options {
         out: args.out,
         quick: args.quick,
@@ -196,11 +212,11 @@ fn load_run_scene(args: &RunArgs) -> Result<Scene, String> {
             &mut scene,
             "integrator",
             &format!("\"{integrator}\""),
-            &format!("integrator {integrator}"),
+            &format!("integrator {}", limits::echo(integrator)),
         )?;
     }
     if let Some(dt) = &args.dt {
-        flag(&mut scene, "dt", dt, &format!("dt {dt}"))?;
+        flag(&mut scene, "dt", dt, &format!("dt {}", limits::echo(dt)))?;
     }
     Ok(scene)
 }
@@ -209,16 +225,15 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     let scene = load_run_scene(&args)?;
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;
-    let mut steps = match (args.steps, args.duration) {
+    let steps = match (args.steps, args.duration) {
         (Some(n), _) => n,
-        (None, Some(d)) if d.is_finite() && d >= 0.0 => (d / dt).round() as u64,
         (None, Some(d)) => {
-            return Err(format!(
-                "--duration {d} must be a finite number of seconds >= 0"
-            ));
+            limits::steps_for_duration(d, dt).map_err(|e| format!("--duration: {e}"))?
         }
-        (None, None) => (1.0 / dt).round() as u64,
+        (None, None) => limits::steps_for_duration(1.0, dt)
+            .map_err(|e| format!("the default --duration of 1 s: {e}"))?,
     };
+    let mut substeps = 1;
     if args.safe {
         let choice = safe_step(system.model(), dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
         let mut params = *system.params();
@@ -232,7 +247,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
                 100.0 * tau
             );
         }
-        steps *= choice.substeps as u64;
+        substeps = u64::from(choice.substeps);
         eprintln!(
             "safe stepping: {} substeps of {:.4e} s per step of {dt:.4e} s{}",
             choice.substeps,
@@ -244,6 +259,16 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
             }
         );
     }
+    // The whole run is checked before any of it starts: nothing the user asks for
+    // may run for ever, and the results must have somewhere to go.
+    let particles = system.particle_count();
+    let steps = limits::total_steps(steps, substeps, particles)
+        .map_err(|e| format!("run too long: {e}"))?;
+    limits::total_steps(args.warmup, 1, particles).map_err(|e| format!("--warmup: {e}"))?;
+    let mut dump = match &args.dump {
+        Some(path) => Some(prepare_dump(path, &args.scene.scene)?),
+        None => None,
+    };
     system.set_fast_path(!args.exact);
     let engine = system.engine();
     // Setup is not timed: zero steps build the engine's buffers (and thread pool),
@@ -252,19 +277,32 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     if system.run(args.warmup).is_err() {
         system.set_state(start_state.clone());
     }
-    system.set_state(start_state);
+    system.set_state(start_state.clone());
     let start = Instant::now();
     let outcome = system.run(steps);
     let wall = start.elapsed().as_secs_f64();
     let summary = Summary::of(&system, wall, engine);
-    if let Some(path) = &args.dump {
-        dump_csv(&system, path).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let mut dumped = None;
+    if let (Some(file), Some(path)) = (dump.take(), &args.dump) {
+        if let Err(d) = &outcome {
+            // The state at the divergence is not finite (or ran away): the CSV
+            // holds the last state before it, which the run then replays to.
+            system.set_state(start_state);
+            let _ = system.run(d.step().saturating_sub(1));
+            dumped = Some((system.steps_taken(), system.time()));
+        }
+        write_csv(&system, file).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
     }
     if args.json {
         let mut value = summary.to_json();
         if let Err(d) = &outcome {
-            value["diverged"] =
-                json!({ "time": d.time(), "message": d.to_string(), "hint": hint(&system) });
+            value["diverged"] = json!({
+                "time": d.time(),
+                "step": d.step(),
+                "message": d.to_string(),
+                "hint": hint(&system),
+                "dump": dumped.map(|(step, time)| json!({ "step": step, "time": time })),
+            });
         }
         println!("{value}");
     } else {
@@ -274,29 +312,81 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         Ok(()) => Ok(ExitCode::SUCCESS),
         Err(divergence) => {
             report_divergence(&system, &divergence);
+            if let (Some((step, time)), Some(path)) = (dumped, &args.dump) {
+                eprintln!(
+                    "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s){}",
+                    path.display(),
+                    if system.positions().iter().all(|p| p.is_finite()) {
+                        ""
+                    } else {
+                        ", and even it is not finite"
+                    }
+                );
+            }
             Ok(ExitCode::from(EXIT_DIVERGED))
         }
     }
 }
 
+/// The `--dump` file made ready before the run, so that a path that cannot be
+/// written is found before the work rather than after it: not the scene file being
+/// run, not a folder, not a device or pipe (`/dev/stdout` would mix the CSV into
+/// the summary), in a folder that can be written.
+fn prepare_dump(path: &Path, scene: &str) -> Result<PendingFile, String> {
+    let shown = path.display();
+    if Path::new(scene).is_file() && limits::same_file(path, Path::new(scene)) {
+        return Err(format!(
+            "--dump {shown} is the scene file being run: refusing to overwrite it; give another file name"
+        ));
+    }
+    PendingFile::create(path).map_err(|e| format!("--dump {shown}: {e}"))
+}
+
 fn hint(system: &System) -> String {
     let stability = system.stability();
-    let margin = if stability.margin.is_finite() {
-        format!("dt / dt_crit = {:.3}", stability.margin)
+    let integrator = system.params().integrator;
+    let other_integrator = if integrator == Integrator::ImplicitEuler {
+        ""
     } else {
-        format!(
-            "{} has no stable step without damping",
-            system.params().integrator
-        )
+        ", or --integrator implicit-euler"
     };
-    let safe_dt = stability
-        .dt_critical
-        .filter(|c| c.is_finite())
-        .map(|c| format!(" (e.g. --dt {:.3e})", 0.5 * c))
-        .unwrap_or_default();
-    format!(
-        "{margin}; try a smaller dt{safe_dt}, a lower stiffness, or --integrator implicit-euler"
-    )
+    match stability.dt_critical {
+        None => {
+            let why = if stability.zeta > 0.0 {
+                "here"
+            } else {
+                "without damping"
+            };
+            let others: Vec<_> = [
+                Integrator::SymplecticEuler,
+                Integrator::Rk4,
+                Integrator::ImplicitEuler,
+            ]
+            .into_iter()
+            .filter(|&i| i != integrator)
+            .map(|i| i.name())
+            .collect();
+            format!(
+                "{integrator} has no stable step {why}; try --integrator {}",
+                others.join(" or ")
+            )
+        }
+        Some(c) if stability.margin >= 1.0 => format!(
+            "dt / dt_crit = {:.3}: the step is over the stability limit; try a smaller dt (e.g. --dt {:.3e}), a lower stiffness or damping{other_integrator}",
+            stability.margin,
+            0.5 * c
+        ),
+        Some(_) => format!(
+            "dt / dt_crit = {:.3}: the step is within the estimated stability limit, so it is not the step alone; \
+             look at what pushes hardest (stiffness, wind, gravity, a collider, constraints){}",
+            stability.margin,
+            if other_integrator.is_empty() {
+                ""
+            } else {
+                ", or try --safe or --integrator implicit-euler"
+            }
+        ),
+    }
 }
 
 fn report_divergence(system: &System, divergence: &Divergence) {
@@ -304,13 +394,17 @@ fn report_divergence(system: &System, divergence: &Divergence) {
     eprintln!("hint: {}", hint(system));
 }
 
-fn dump_csv(system: &System, path: &std::path::Path) -> std::io::Result<()> {
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+/// Writes the positions as CSV `index,x,y,z` into the prepared file and renames it
+/// over the target.
+fn write_csv(system: &System, mut file: PendingFile) -> std::io::Result<()> {
+    let mut out = std::io::BufWriter::new(file.writer());
     writeln!(out, "index,x,y,z")?;
     for (i, p) in system.positions().iter().enumerate() {
         writeln!(out, "{i},{},{},{}", p.x, p.y, p.z)?;
     }
-    out.flush()
+    out.flush()?;
+    drop(out);
+    file.commit()
 }
 
 /// What `cloth run` prints.
@@ -338,11 +432,14 @@ impl Summary {
             .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
                 (lo.min(p), hi.max(p))
             });
-        let max_speed = system
-            .velocities()
-            .iter()
-            .map(|v| v.length())
-            .fold(0.0, f64::max);
+        // A state with a non-finite value has no finite maximum or bounds: NaN
+        // (JSON null), never a number that looks like one.
+        let max_speed = max_speed(system.velocities());
+        let (min, max) = if positions.iter().all(|p| p.is_finite()) {
+            (min, max)
+        } else {
+            (DVec3::NAN, DVec3::NAN)
+        };
         Self {
             steps: system.steps_taken(),
             time: system.time(),

@@ -182,8 +182,12 @@ fn bad_values_are_refused_with_the_field_and_range_and_change_nothing() {
     let bad = [
         (Edit::Stiffness(f64::NAN), "stiffness", "[0, 1000000000]"),
         (Edit::Stiffness(-1.0), "stiffness", "[0, 1000000000]"),
-        (Edit::ParticleMass(-0.001), "particle_mass", "(0, 1000000]"),
-        (Edit::ParticleMass(0.0), "particle_mass", "(0, 1000000]"),
+        (
+            Edit::ParticleMass(-0.001),
+            "particle_mass",
+            "[1e-12, 1000000]",
+        ),
+        (Edit::ParticleMass(0.0), "particle_mass", "[1e-12, 1000000]"),
         (Edit::Damping(f64::INFINITY), "damping", "[0, 1000000000]"),
         (Edit::RestLength(f64::NAN), "rest_length", "[0, 1000]"),
         (

@@ -69,12 +69,13 @@ impl Gfx {
             .or_else(|| caps.formats.first().copied())
             .context("the graphics adapter cannot present to this window")?;
         let size = window.inner_size();
+        let (width, height) = surface_size(&device, size.width, size.height);
         let config = wgpu::SurfaceConfiguration {
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
             format,
             color_space: wgpu::SurfaceColorSpace::Auto,
-            width: size.width.max(1),
-            height: size.height.max(1),
+            width: width.max(1),
+            height: height.max(1),
             present_mode: wgpu::PresentMode::AutoVsync,
             desired_maximum_frame_latency: 2,
             alpha_mode: caps
@@ -120,6 +121,7 @@ impl Gfx {
         if width == 0 || height == 0 {
             return;
         }
+        let (width, height) = surface_size(&self.device, width, height);
         self.config.width = width;
         self.config.height = height;
         self.surface.configure(&self.device, &self.config);
@@ -148,7 +150,7 @@ impl Gfx {
             free_textures(&mut self.egui_renderer, delta);
             return FrameOutcome::Skipped;
         }
-        if (size.width, size.height) != self.size() {
+        if surface_size(&self.device, size.width, size.height) != self.size() {
             self.resize(size.width, size.height);
         }
         let texture = match self.surface.get_current_texture() {
@@ -225,4 +227,12 @@ fn free_textures(renderer: &mut egui_wgpu::Renderer, mut delta: egui::TexturesDe
     for id in delta.free.drain() {
         renderer.free_texture(&id);
     }
+}
+
+/// A window size clamped to the device's largest texture side: a window larger
+/// than that is drawn at that size (stretched by the compositor) rather than
+/// refused by the device.
+fn surface_size(device: &wgpu::Device, width: u32, height: u32) -> (u32, u32) {
+    let max = device.limits().max_texture_dimension_2d;
+    (width.min(max), height.min(max))
 }

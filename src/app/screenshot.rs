@@ -8,6 +8,7 @@ use anyhow::Context as _;
 use super::frame::{self, FrameData};
 use crate::render::ViewOptions;
 use crate::render::offscreen::{Offscreen, write_png};
+use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::session::Session;
 use cloth_sandbox::view::OrbitCamera;
 
@@ -74,19 +75,35 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// The simulation diverged before the picture could be taken (exit code 3, as
+/// `cloth run`).
+#[derive(Debug, thiserror::Error)]
+#[error("the simulation diverged before step {steps}: {message}")]
+pub struct Diverged {
+    /// Steps asked for.
+    pub steps: u64,
+    /// The core's description (what and when).
+    pub message: String,
+}
+
 /// Runs the scene and writes the picture.
 pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let (width, height) = args.size;
     let mut session =
         Session::load_with(&args.scene, &args.set).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let particles = session.system().particle_count();
+    limits::total_steps(args.steps, 1, particles).map_err(|e| anyhow::anyhow!("--steps: {e}"))?;
+    // The output file is checked before the steps, which may take long.
+    let out = PendingFile::create(&args.out)
+        .map_err(|e| anyhow::anyhow!("--out {}: {e}", args.out.display()))?;
     for _ in 0..args.steps {
         session.single_step();
         if let Some(d) = session.divergence() {
-            anyhow::bail!(
-                "the simulation diverged before step {}: {}",
-                args.steps,
-                d.message
-            );
+            return Err(Diverged {
+                steps: args.steps,
+                message: d.message.clone(),
+            }
+            .into());
         }
     }
     // Scenes without a surface (spring, chain, rope) draw as springs and particles.
@@ -113,7 +130,7 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let frame = data.scene_frame(session.system(), None);
     let mut off = Offscreen::new(width, height)?;
     let pixels = off.render(&frame, &camera, &options)?;
-    write_png(&args.out, width, height, &pixels)
+    write_png(out, width, height, &pixels)
         .with_context(|| format!("writing the screenshot to {}", args.out.display()))?;
     eprintln!(
         "wrote {} ({width}x{height}, adapter {})",

@@ -93,10 +93,13 @@ struct Globals {
     viewport: [f32; 4],
 }
 
-/// A GPU buffer that grows (by doubling) when the data outgrows it.
+/// A GPU buffer that grows (by doubling) when the data outgrows it, never past
+/// the device's largest buffer (`max_buffer_size`).
 struct DynBuffer {
     buffer: wgpu::Buffer,
     capacity: u64,
+    /// The device's largest buffer in bytes.
+    limit: u64,
     usage: wgpu::BufferUsages,
     label: &'static str,
 }
@@ -114,16 +117,27 @@ impl DynBuffer {
         Self {
             buffer,
             capacity,
+            limit: device.limits().max_buffer_size,
             usage,
             label,
         }
     }
 
-    /// Uploads `bytes` (a multiple of 4 long) from offset 0, reallocating if too small.
-    fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, bytes: &[u8]) {
+    /// Most whole elements of `stride` bytes one buffer can hold on this device.
+    fn max_elements(&self, stride: usize) -> usize {
+        usize::try_from(self.limit / stride as u64).unwrap_or(usize::MAX)
+    }
+
+    /// Uploads `items` from offset 0, reallocating if too small, and returns how
+    /// many were uploaded: all of them, or as many as the device's largest buffer
+    /// holds (the caller draws that many and says what was left out).
+    fn write<T: Pod>(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, items: &[T]) -> usize {
+        let stride = std::mem::size_of::<T>().max(1);
+        let count = items.len().min(self.max_elements(stride));
+        let bytes: &[u8] = bytemuck::cast_slice(&items[..count]);
         let len = bytes.len() as u64;
         if len > self.capacity {
-            self.capacity = len.next_power_of_two();
+            self.capacity = len.next_power_of_two().min(self.limit);
             self.buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(self.label),
                 size: self.capacity,
@@ -134,7 +148,69 @@ impl DynBuffer {
         if len > 0 {
             queue.write_buffer(&self.buffer, 0, bytes);
         }
+        if count < items.len() {
+            log::warn!(
+                "{}: {} of {} items fit in the device's largest buffer ({} bytes); the rest are not drawn",
+                self.label,
+                count,
+                items.len(),
+                self.limit
+            );
+        }
+        count
     }
+}
+
+/// Line vertices split over as many buffers as the device's buffer size limit
+/// needs, each drawn with its own call: every line is drawn, however many.
+struct LineBuffers {
+    chunks: Vec<DynBuffer>,
+    /// Vertices in each chunk, in order.
+    counts: Vec<u32>,
+}
+
+impl LineBuffers {
+    fn new(device: &wgpu::Device) -> Self {
+        Self {
+            chunks: vec![DynBuffer::new(
+                device,
+                "line vertices",
+                wgpu::BufferUsages::VERTEX,
+            )],
+            counts: Vec::new(),
+        }
+    }
+
+    /// Uploads `vertices` (pairs, one line each) in chunks of whole lines.
+    fn write(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, vertices: &[LineVertex]) {
+        let per_chunk =
+            lines_per_buffer(self.chunks[0].max_elements(std::mem::size_of::<LineVertex>()));
+        self.counts.clear();
+        for (i, chunk) in vertices.chunks(per_chunk.max(2)).enumerate() {
+            if i == self.chunks.len() {
+                self.chunks.push(DynBuffer::new(
+                    device,
+                    "line vertices",
+                    wgpu::BufferUsages::VERTEX,
+                ));
+            }
+            let written = self.chunks[i].write(device, queue, chunk);
+            self.counts.push(draw_count(written));
+        }
+        // Buffers no longer needed are given back (one stays for next time).
+        self.chunks.truncate(self.counts.len().max(1));
+    }
+}
+
+/// Vertices of whole lines (an even number, and at most `u32::MAX`) that fit in
+/// a buffer of `max_vertices` vertices.
+fn lines_per_buffer(max_vertices: usize) -> usize {
+    max_vertices.min(u32::MAX as usize) & !1
+}
+
+/// A count for a draw call: counts past `u32::MAX` draw `u32::MAX`.
+fn draw_count(n: usize) -> u32 {
+    u32::try_from(n).unwrap_or(u32::MAX)
 }
 
 /// Render targets that depend on the output size.
@@ -166,8 +242,7 @@ pub struct Renderer {
     extra_vertices: DynBuffer,
     extra_indices: DynBuffer,
     extra_index_count: u32,
-    lines: DynBuffer,
-    line_vertex_count: u32,
+    lines: LineBuffers,
     points: DynBuffer,
     point_count: u32,
     background: wgpu::Color,
@@ -440,8 +515,7 @@ impl Renderer {
             extra_vertices: DynBuffer::new(device, "collider vertices", vertex),
             extra_indices: DynBuffer::new(device, "collider indices", index),
             extra_index_count: 0,
-            lines: DynBuffer::new(device, "line vertices", vertex),
-            line_vertex_count: 0,
+            lines: LineBuffers::new(device),
             points: DynBuffer::new(device, "point instances", vertex),
             point_count: 0,
             background: wgpu::Color::BLACK,
@@ -552,9 +626,8 @@ impl Renderer {
                     .filter(|t| t.iter().all(|&i| (i as usize) < n))
                     .flatten(),
             );
-            self.cloth_indices
-                .write(device, queue, bytemuck::cast_slice(&self.usable));
-            self.cloth_index_count = self.usable.len() as u32;
+            let written = self.cloth_indices.write(device, queue, &self.usable);
+            self.cloth_index_count = draw_count(written - written % 3);
         }
         let all_valid = valid.iter().all(|&v| v);
         self.mesh_visible = options.mesh && self.cloth_index_count > 0;
@@ -562,8 +635,10 @@ impl Renderer {
             let normals = geometry::vertex_normals(&positions, &self.wound, &valid);
             let mut mesh = std::mem::take(&mut self.scratch_mesh);
             geometry::cloth_vertices(&positions, &normals, frame.uvs, options.textured, &mut mesh);
-            self.cloth_vertices
-                .write(device, queue, bytemuck::cast_slice(&mesh));
+            if self.cloth_vertices.write(device, queue, &mesh) < mesh.len() {
+                // Indices would reach past the vertices uploaded: no surface.
+                self.mesh_visible = false;
+            }
             self.scratch_mesh = mesh;
             if !all_valid {
                 // Rare: drop triangles touching a non-finite particle this frame.
@@ -574,9 +649,8 @@ impl Renderer {
                     .flatten()
                     .copied()
                     .collect();
-                self.cloth_indices
-                    .write(device, queue, bytemuck::cast_slice(&idx));
-                self.cloth_index_count = idx.len() as u32;
+                let written = self.cloth_indices.write(device, queue, &idx);
+                self.cloth_index_count = draw_count(written - written % 3);
                 self.topology = None;
             }
         }
@@ -601,11 +675,13 @@ impl Renderer {
             // inside it, through which the full-size sphere would show.
             geometry::sphere_mesh(c, SPHERE_SKIN * r.min(1e4), &mut extra, &mut extra_idx);
         }
-        self.extra_vertices
-            .write(device, queue, bytemuck::cast_slice(&extra));
-        self.extra_indices
-            .write(device, queue, bytemuck::cast_slice(&extra_idx));
-        self.extra_index_count = extra_idx.len() as u32;
+        let extra_index_count = if self.extra_vertices.write(device, queue, &extra) < extra.len() {
+            0
+        } else {
+            let written = self.extra_indices.write(device, queue, &extra_idx);
+            written - written % 3
+        };
+        self.extra_index_count = draw_count(extra_index_count);
 
         // Lines: springs, then wireframe.
         let mut lines = std::mem::take(&mut self.scratch_lines);
@@ -629,9 +705,7 @@ impl Renderer {
                 &mut lines,
             );
         }
-        self.lines
-            .write(device, queue, bytemuck::cast_slice(&lines));
-        self.line_vertex_count = lines.len() as u32;
+        self.lines.write(device, queue, &lines);
         self.scratch_lines = lines;
 
         // Points: free particles, then pins and the highlight on top.
@@ -663,9 +737,7 @@ impl Renderer {
         }
         // Draw order = depth ties: later instances win, so put highlights last.
         points.sort_by(|a, b| a.size.total_cmp(&b.size));
-        self.points
-            .write(device, queue, bytemuck::cast_slice(&points));
-        self.point_count = points.len() as u32;
+        self.point_count = draw_count(self.points.write(device, queue, &points));
         self.scratch_points = points;
 
         self.scratch_positions = positions;
@@ -727,10 +799,12 @@ impl Renderer {
             );
             pass.draw_indexed(0..self.extra_index_count, 0, 0..1);
         }
-        if self.line_vertex_count > 0 {
+        if self.lines.counts.iter().any(|&n| n > 0) {
             pass.set_pipeline(&self.line_pipeline);
-            pass.set_vertex_buffer(0, self.lines.buffer.slice(..));
-            pass.draw(0..self.line_vertex_count, 0..1);
+            for (chunk, &count) in self.lines.chunks.iter().zip(&self.lines.counts) {
+                pass.set_vertex_buffer(0, chunk.buffer.slice(..));
+                pass.draw(0..count, 0..1);
+            }
         }
         if self.point_count > 0 {
             pass.set_pipeline(&self.point_pipeline);

@@ -31,6 +31,7 @@ impl Offscreen {
         let adapter_name = gpu::describe(&adapter);
         log::info!("off-screen adapter: {adapter_name}");
         let (device, queue) = pollster::block_on(gpu::device(&adapter))?;
+        check_image_size(&device.limits(), width, height)?;
         let samples = super::pick_sample_count(&adapter, FORMAT);
         let renderer = Renderer::new(&device, &queue, FORMAT, samples, (width, height));
         let texture = device.create_texture(&wgpu::TextureDescriptor {
@@ -134,26 +135,41 @@ impl Offscreen {
     }
 }
 
-/// Writes RGBA8 pixels as a PNG file.
+/// Refuses an image the device cannot hold: a side over its largest texture, or
+/// a read-back buffer (rows padded for the copy) over its largest buffer.
+fn check_image_size(limits: &wgpu::Limits, width: u32, height: u32) -> anyhow::Result<()> {
+    let max_side = limits.max_texture_dimension_2d;
+    if width > max_side || height > max_side {
+        bail!(
+            "image size {width}x{height} is too large for this graphics adapter: each side must be at most {max_side} pixels"
+        );
+    }
+    let padded = u64::from(width * 4).div_ceil(u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT))
+        * u64::from(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
+    let bytes = padded * u64::from(height);
+    if bytes > limits.max_buffer_size {
+        bail!(
+            "image size {width}x{height} needs a {bytes}-byte read-back buffer, over this graphics adapter's largest buffer of {} bytes: choose a smaller --size",
+            limits.max_buffer_size
+        );
+    }
+    Ok(())
+}
+
+/// Writes RGBA8 pixels as a PNG file into the prepared output file, then renames
+/// it over the target (never a half-written picture).
 pub fn write_png(
-    path: &std::path::Path,
+    mut out: cloth_sandbox::limits::PendingFile,
     width: u32,
     height: u32,
     rgba: &[u8],
 ) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    let mut encoder = png::Encoder::new(out.writer(), width, height);
     encoder.set_color(png::ColorType::Rgba);
     encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder
-        .write_header()
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    writer
-        .write_image_data(rgba)
-        .with_context(|| format!("cannot write {}", path.display()))?;
-    writer
-        .finish()
-        .with_context(|| format!("cannot write {}", path.display()))?;
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(rgba)?;
+    writer.finish()?;
+    out.commit()?;
     Ok(())
 }

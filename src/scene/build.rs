@@ -7,7 +7,9 @@ use glam::{DMat3, DVec2, DVec3};
 use super::edit::EDIT_ORIGIN;
 use super::values::{PinPreset, Pins};
 use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
+use crate::limits::number as shown;
 use crate::sim::GridShape;
+use crate::sim::constraints::out_of_sphere;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 
 /// Largest grid side (particles), so a typo cannot ask for billions of particles.
@@ -96,7 +98,12 @@ impl NumberRange<'_> {
         Err(invalid(
             origin,
             field,
-            format!("= {value} is out of range: must be a finite number in {bracket}{lo}, {hi}]"),
+            format!(
+                "= {} is out of range: must be a finite number in {bracket}{}, {}]",
+                shown(value),
+                shown(lo),
+                shown(hi)
+            ),
         ))
     }
 }
@@ -146,8 +153,9 @@ const fn number(field: &'static str, lo: f64, lo_open: bool, hi: f64) -> NumberR
 
 /// `rest_length` in m.
 pub const REST_LENGTH: NumberRange<'static> = number("rest_length", 0.0, false, 1e3);
-/// `particle_mass` in kg.
-pub const PARTICLE_MASS: NumberRange<'static> = number("particle_mass", 0.0, true, 1e6);
+/// `particle_mass` in kg. The floor (a picogram) keeps 1/m and k/m finite in
+/// f32, which the fast engines step in; a mass that underflows is refused.
+pub const PARTICLE_MASS: NumberRange<'static> = number("particle_mass", 1e-12, false, 1e6);
 /// `stiffness` in N/m.
 pub const STIFFNESS: NumberRange<'static> = number("stiffness", 0.0, false, 1e9);
 /// `damping` in N·s/m.
@@ -241,8 +249,11 @@ fn vector(origin: &str, field: &str, v: DVec3, max_norm: f64) -> Result<DVec3, S
             origin,
             field,
             format!(
-                "= ({}, {}, {}) is out of range: components must be finite, length at most {max_norm}",
-                v.x, v.y, v.z
+                "= ({}, {}, {}) is out of range: components must be finite, length at most {}",
+                shown(v.x),
+                shown(v.y),
+                shown(v.z),
+                shown(max_norm)
             ),
         ))
     }
@@ -346,7 +357,21 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         ],
     )? {
         Some((k, v)) if k == "total_mass" => {
-            ranged(o, "total_mass", v, 0.0, true, 1e9)? / particles as f64
+            let total = ranged(o, "total_mass", v, 0.0, true, 1e9)?;
+            let each = total / particles as f64;
+            PARTICLE_MASS.check(o, each).map_err(|_| {
+                invalid(
+                    o,
+                    "total_mass",
+                    format!(
+                        "= {} kg over {particles} particles is {} kg each, out of range: each particle must have a mass in [{}, {}] kg",
+                        shown(total),
+                        shown(each),
+                        shown(PARTICLE_MASS.lo),
+                        shown(PARTICLE_MASS.hi)
+                    ),
+                )
+            })?
         }
         Some((_, v)) => PARTICLE_MASS.check(o, v)?,
         None => 0.01,
@@ -377,7 +402,8 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
                 o,
                 "integrator",
                 format!(
-                    "`{name}` is not an integrator: expected one of {}",
+                    "`{}` is not an integrator: expected one of {}",
+                    crate::limits::echo(name),
                     names.join(", ")
                 ),
             )
@@ -604,6 +630,66 @@ impl Resolved {
         (self.width * self.height * self.depth) as usize
     }
 
+    /// The particles' start positions (m), in index order: the layout, with any
+    /// particle inside the sphere collider moved out onto its surface, as the
+    /// collider itself would move it, so that the run starts from a state that
+    /// satisfies it (pushed out by the first step instead, the particles would
+    /// gain at once an energy the divergence check cannot tell from a blow-up).
+    pub fn positions(&self) -> Vec<DVec3> {
+        let mut positions = self.layout_positions();
+        if let Some(sphere) = &self.params.sphere {
+            for x in &mut positions {
+                if let Some(outside) = out_of_sphere(*x, sphere) {
+                    *x = outside;
+                }
+            }
+        }
+        positions
+    }
+
+    /// The layout's positions (m), before any collider.
+    fn layout_positions(&self) -> Vec<DVec3> {
+        let l = self.rest_length;
+        let (w, h, d) = (
+            self.width as usize,
+            self.height as usize,
+            self.depth as usize,
+        );
+        match self.layout {
+            Layout::Grid => (0..h)
+                .flat_map(|r| (0..w).map(move |c| (c as f64 * l, r as f64 * l)))
+                .map(|(u, v)| {
+                    self.origin
+                        + match self.orientation {
+                            Orientation::Vertical => DVec3::new(u, -v, 0.0),
+                            Orientation::Horizontal => DVec3::new(u, 0.0, v),
+                        }
+                })
+                .collect(),
+            Layout::Spring => vec![self.origin, self.origin - DVec3::Y * (l + self.stretch)],
+            Layout::Chain | Layout::Rope => (0..w)
+                .map(|i| self.origin + DVec3::X * (i as f64 * l))
+                .collect(),
+            Layout::Lattice => {
+                let rad = self.rotation * (std::f64::consts::PI / 180.0);
+                let rotation = DMat3::from_rotation_y(rad.y)
+                    * DMat3::from_rotation_x(rad.x)
+                    * DMat3::from_rotation_z(rad.z);
+                let centre = DVec3::new((w - 1) as f64, (h - 1) as f64, (d - 1) as f64) * (0.5 * l);
+                let mut positions = Vec::with_capacity(w * h * d);
+                for z in 0..d {
+                    for y in 0..h {
+                        for x in 0..w {
+                            let local = DVec3::new(x as f64, y as f64, z as f64) * l - centre;
+                            positions.push(self.origin + rotation * local);
+                        }
+                    }
+                }
+                positions
+            }
+        }
+    }
+
     /// Lays out the system.
     pub fn build(&self) -> System {
         let n = self.particle_count();
@@ -616,22 +702,15 @@ impl Resolved {
             damping: self.damping * self.spring_scale(kind),
             kind,
         };
-        let (mut positions, mut springs, mut bars, mut triangles, mut uvs) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let positions = self.positions();
+        let (mut springs, mut bars, mut triangles, mut uvs) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let l = self.rest_length;
         match self.layout {
             Layout::Grid => {
                 let (w, h) = (self.width as usize, self.height as usize);
                 for r in 0..h {
                     for c in 0..w {
-                        let (u, v) = (c as f64 * l, r as f64 * l);
-                        positions.push(
-                            self.origin
-                                + match self.orientation {
-                                    Orientation::Vertical => DVec3::new(u, -v, 0.0),
-                                    Orientation::Horizontal => DVec3::new(u, 0.0, v),
-                                },
-                        );
                         uvs.push(DVec2::new(
                             c as f64 / (w.max(2) - 1) as f64,
                             r as f64 / (h.max(2) - 1) as f64,
@@ -677,13 +756,10 @@ impl Resolved {
                 }
             }
             Layout::Spring => {
-                positions.push(self.origin);
-                positions.push(self.origin - DVec3::Y * (l + self.stretch));
                 springs.push(spring(0, 1, l, SpringKind::Other));
             }
             Layout::Chain | Layout::Rope => {
                 for i in 0..self.width as usize {
-                    positions.push(self.origin + DVec3::X * (i as f64 * l));
                     if i > 0 {
                         if self.layout == Layout::Chain {
                             springs.push(spring(i - 1, i, l, SpringKind::Other));
@@ -703,20 +779,7 @@ impl Resolved {
                     self.height as usize,
                     self.depth as usize,
                 );
-                let rad = self.rotation * (std::f64::consts::PI / 180.0);
-                let rotation = DMat3::from_rotation_y(rad.y)
-                    * DMat3::from_rotation_x(rad.x)
-                    * DMat3::from_rotation_z(rad.z);
-                let centre = DVec3::new((w - 1) as f64, (h - 1) as f64, (d - 1) as f64) * (0.5 * l);
                 let index = |x: usize, y: usize, z: usize| (z * h + y) * w + x;
-                for z in 0..d {
-                    for y in 0..h {
-                        for x in 0..w {
-                            let local = DVec3::new(x as f64, y as f64, z as f64) * l - centre;
-                            positions.push(self.origin + rotation * local);
-                        }
-                    }
-                }
                 // Every neighbour within one cell: axis (structural), face diagonal
                 // (shear) and body diagonal (other), as in seed 002's cube.
                 for z in 0..d {

@@ -20,6 +20,7 @@ use build::{
 pub use edit::Edit;
 pub use values::{Pins, Vector};
 
+use crate::limits::echo;
 use crate::sim::System;
 
 /// How the particles are laid out and connected.
@@ -153,8 +154,8 @@ pub struct SceneSpec {
     /// Steps per displayed frame.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub substeps: Option<u32>,
-    /// Random seed (gusts).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// Random seed (gusts): 0 to 2^64 - 1 (from 2^63 on, written as text).
+    #[serde(skip_serializing_if = "Option::is_none", with = "values::seed")]
     pub seed: Option<u64>,
     /// Position of particle 0 in m (grid, chain, rope: the first particle; lattice:
     /// the block's centre; spring: the fixed end).
@@ -236,6 +237,15 @@ pub enum SceneError {
     },
 }
 
+/// A line of a parser's message, which quotes the input, at most 200 characters.
+fn clip(line: &str) -> String {
+    const MAX: usize = 200;
+    match line.char_indices().nth(MAX) {
+        Some((cut, _)) => format!("{}…", &line[..cut]),
+        None => line.to_string(),
+    }
+}
+
 /// A built-in scene: its name and TOML text.
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinScene {
@@ -286,7 +296,13 @@ impl Scene {
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
         let spec: SceneSpec = toml::from_str(text).map_err(|e| SceneError::Parse {
             origin: origin.to_string(),
-            message: e.to_string().trim().replace('\n', " "),
+            message: e
+                .to_string()
+                .trim()
+                .lines()
+                .map(clip)
+                .collect::<Vec<_>>()
+                .join(" "),
         })?;
         let scene = Self {
             spec,
@@ -309,15 +325,16 @@ impl Scene {
                 .collect::<Vec<_>>()
                 .join(", ");
             return Err(SceneError::UnknownScene {
-                name: name_or_path.to_string(),
+                name: echo(name_or_path),
                 builtins,
             });
         }
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Read {
-            path: name_or_path.to_string(),
-            source,
-        })?;
-        Self::parse(&text, &format!("scene file {name_or_path}"))
+        let text = crate::limits::read_text_file(path, crate::limits::MAX_SCENE_FILE_BYTES)
+            .map_err(|why| SceneError::Read {
+                path: echo(name_or_path),
+                source: std::io::Error::other(why),
+            })?;
+        Self::parse(&text, &format!("scene file {}", echo(name_or_path)))
     }
 
     /// Sets one key from text, as `--set key=value` does: the value is read as TOML
@@ -325,7 +342,17 @@ impl Scene {
     /// `1,0,0`). Setting one of a group of alternative keys clears the others. On
     /// error the scene is unchanged.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
-        let origin = format!("--set {key}={value}");
+        let origin = format!("--set {}={}", echo(key), echo(value));
+        if let Some(c) = value.chars().find(|c| c.is_control() && *c != '\t') {
+            return Err(SceneError::Invalid {
+                origin,
+                field: echo(key),
+                message: format!(
+                    "value holds a control character ({}): give one value on one line, and one --set per key",
+                    c.escape_default()
+                ),
+            });
+        }
         let mut table = toml::Table::try_from(&self.spec).map_err(|e| SceneError::Parse {
             origin: origin.clone(),
             message: e.to_string(),
@@ -344,7 +371,7 @@ impl Scene {
             .try_into()
             .map_err(|e: toml::de::Error| SceneError::Parse {
                 origin: origin.clone(),
-                message: e.message().trim().to_string(),
+                message: clip(e.message().trim()),
             })?;
         let candidate = Self {
             spec,

@@ -31,7 +31,8 @@ impl<'de> Deserialize<'de> for Vector {
                     Ok(n) if n.len() == 3 => Ok(Vector(DVec3::new(n[0], n[1], n[2]))),
                     Ok(n) if n.len() == 1 => Ok(Vector(DVec3::new(0.0, n[0], 0.0))),
                     _ => Err(E::custom(format!(
-                        "`{s}` is not a vector: write \"x,y,z\" in numbers"
+                        "`{}` is not a vector: write \"x,y,z\" in numbers",
+                        crate::limits::echo(s)
                     ))),
                 }
             }
@@ -123,11 +124,30 @@ impl<'de> Deserialize<'de> for Pins {
                 f.write_str("one of corners, top-corners, top-edge, left-edge, first, none, or a list of particle indices")
             }
             fn visit_str<E: de::Error>(self, s: &str) -> Result<Pins, E> {
+                // `--set pins=[18446744073709551615]`: a list TOML cannot hold as
+                // integers arrives as text; read it here so that resolving can say
+                // which index is out of range.
+                if let Some(list) = s.trim().strip_prefix('[').and_then(|r| r.strip_suffix(']')) {
+                    return list
+                        .split(',')
+                        .map(str::trim)
+                        .filter(|i| !i.is_empty())
+                        .map(|i| {
+                            i.parse::<usize>().map_err(|_| {
+                                E::custom(format!(
+                                    "pin index `{}` is not a particle index: indices are whole numbers from 0 to one less than the number of particles",
+                                    crate::limits::echo(i)
+                                ))
+                            })
+                        })
+                        .collect::<Result<Vec<_>, E>>()
+                        .map(Pins::Indices);
+                }
                 PinPreset::ALL
                     .iter()
                     .find(|(name, _)| *name == s)
                     .map(|(_, p)| Pins::Preset(*p))
-                    .ok_or_else(|| E::custom(format!("unknown pin set `{s}`: expected one of corners, top-corners, top-edge, left-edge, first, none, or a list of indices")))
+                    .ok_or_else(|| E::custom(format!("unknown pin set `{}`: expected one of corners, top-corners, top-edge, left-edge, first, none, or a list of indices", crate::limits::echo(s))))
             }
             fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Pins, A::Error> {
                 let mut indices = Vec::new();
@@ -138,5 +158,53 @@ impl<'de> Deserialize<'de> for Pins {
             }
         }
         d.deserialize_any(V)
+    }
+}
+
+/// The random seed (`seed`): any whole number from 0 to 2^64 - 1. TOML integers
+/// stop at 2^63 - 1, so larger seeds are written (and may be given) as text.
+pub mod seed {
+    use serde::de::{self, Deserializer, Visitor};
+    use serde::ser::Serializer;
+
+    const EXPECTED: &str = "a whole number from 0 to 18446744073709551615";
+
+    /// Writes a seed: an integer where TOML can hold it, else text.
+    pub fn serialize<S: Serializer>(seed: &Option<u64>, s: S) -> Result<S::Ok, S::Error> {
+        match *seed {
+            Some(n) => match i64::try_from(n) {
+                Ok(i) => s.serialize_some(&i),
+                Err(_) => s.serialize_some(&n.to_string()),
+            },
+            None => s.serialize_none(),
+        }
+    }
+
+    /// Reads a seed from an integer or from text holding one.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<u64>, D::Error> {
+        struct V;
+        impl Visitor<'_> for V {
+            type Value = u64;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str(EXPECTED)
+            }
+            fn visit_i64<E: de::Error>(self, n: i64) -> Result<u64, E> {
+                u64::try_from(n).map_err(|_| {
+                    E::custom(format!("seed = {n} is out of range: must be {EXPECTED}"))
+                })
+            }
+            fn visit_u64<E: de::Error>(self, n: u64) -> Result<u64, E> {
+                Ok(n)
+            }
+            fn visit_str<E: de::Error>(self, s: &str) -> Result<u64, E> {
+                s.trim().parse().map_err(|_| {
+                    E::custom(format!(
+                        "seed = `{}` is not a seed: must be {EXPECTED}",
+                        crate::limits::echo(s)
+                    ))
+                })
+            }
+        }
+        d.deserialize_any(V).map(Some)
     }
 }

@@ -45,6 +45,15 @@ pub enum Divergence {
 }
 
 impl Divergence {
+    /// Step count at which it happened.
+    pub fn step(&self) -> u64 {
+        match *self {
+            Self::NonFinite { step, .. }
+            | Self::Runaway { step, .. }
+            | Self::EnergyGrowth { step, .. } => step,
+        }
+    }
+
     /// Simulated time at which it happened, in s.
     pub fn time(&self) -> f64 {
         match *self {
@@ -112,6 +121,16 @@ impl Runaway {
             return Err(Divergence::Runaway { time, step, what });
         }
         Ok(())
+    }
+}
+
+/// The largest speed (m/s) among `velocities`; NaN when any is not finite, so
+/// that a broken state never reads as a plausible number (0 when empty).
+pub fn max_speed(velocities: &[DVec3]) -> f64 {
+    if velocities.iter().all(|v| v.is_finite()) {
+        velocities.iter().map(|v| v.length()).fold(0.0, f64::max)
+    } else {
+        f64::NAN
     }
 }
 

@@ -444,10 +444,16 @@ impl System {
     /// of the engine's own arrays; the f64 state and the full check (with the
     /// energy budget, and the message) at the end, every [`ENERGY_CHECK_STEPS`]
     /// steps, or when the scan finds trouble.
+    ///
+    /// When the scan finds a non-finite or runaway state, the steps since the last
+    /// full check are run again one at a time from the state of that check (still
+    /// the f64 state), so that the divergence is reported at the step where it
+    /// happened rather than at the end of its chunk.
     fn run_in_chunks(&mut self, n: u64, engine: &mut impl FastEngine) -> Result<(), Divergence> {
         let dt = self.model.params.dt;
         let mut done = 0;
         let mut unchecked = 0;
+        let mut checked = (self.state.time, self.state.steps);
         while done < n {
             let chunk = CHUNK.min(n - done);
             engine.advance(self, chunk as usize);
@@ -458,16 +464,38 @@ impl System {
             }
             self.state.steps += chunk;
             let (speed2, dist2) = engine.extremes(self.runaway.center);
-            if done == n
-                || unchecked >= ENERGY_CHECK_STEPS
-                || !self.runaway.plausible(speed2, dist2)
-            {
+            let plausible = self.runaway.plausible(speed2, dist2);
+            if !plausible && unchecked > 1 {
+                self.replay_one_by_one(engine, checked);
+            }
+            if done == n || unchecked >= ENERGY_CHECK_STEPS || !plausible {
                 unchecked = 0;
                 engine.copy_back(self);
                 self.check()?;
+                checked = (self.state.time, self.state.steps);
             }
         }
         Ok(())
+    }
+
+    /// Runs the steps from the last full check (`checked`: its time and step count,
+    /// with its positions and velocities still in the f64 state) up to the current
+    /// step again, one at a time, stopping at the first whose scan fails: the
+    /// engine and the step count are left at that step.
+    fn replay_one_by_one(&mut self, engine: &mut impl FastEngine, checked: (f64, u64)) {
+        let dt = self.model.params.dt;
+        let last = self.state.steps;
+        (self.state.time, self.state.steps) = checked;
+        engine.load(self);
+        while self.state.steps < last {
+            engine.advance(self, 1);
+            self.state.time += dt;
+            self.state.steps += 1;
+            let (speed2, dist2) = engine.extremes(self.runaway.center);
+            if !self.runaway.plausible(speed2, dist2) {
+                break;
+            }
+        }
     }
 
     /// Position Verlet's update velocities `(x - x_prev) / h` for a fast engine
@@ -501,6 +529,8 @@ trait FastEngine {
     fn extremes(&self, center: DVec3) -> (f64, f64);
     /// The engine's state into the system's f64 state.
     fn copy_back(&self, system: &mut System);
+    /// The system's f64 state into the engine (the reverse of `copy_back`).
+    fn load(&mut self, system: &System);
 }
 
 impl FastEngine for FastPath {
@@ -523,6 +553,13 @@ impl FastEngine for FastPath {
         }
         system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
     }
+    fn load(&mut self, system: &System) {
+        let state = &system.state;
+        self.kernel.set_state(&state.positions, &state.velocities);
+        if let Some(u) = system.verlet_update_velocities() {
+            self.kernel.set_update_velocities(&u);
+        }
+    }
 }
 
 impl FastEngine for MeshPath {
@@ -536,5 +573,12 @@ impl FastEngine for MeshPath {
         self.kernel.positions_into(&mut system.state.positions);
         self.kernel.velocities_into(&mut system.state.velocities);
         system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
+    }
+    fn load(&mut self, system: &System) {
+        let state = &system.state;
+        self.kernel.set_state(&state.positions, &state.velocities);
+        if let Some(u) = system.verlet_update_velocities() {
+            self.kernel.set_update_velocities(&u);
+        }
     }
 }

@@ -36,7 +36,7 @@ pub mod verlet;
 pub mod wind;
 
 pub use clock::Clock;
-pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere};
+pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere, max_speed};
 pub use energy_budget::EnergyBudget;
 pub use fast_path::{Engine, GridShape};
 pub use forces::ForceTerms;

@@ -1,0 +1,185 @@
+//! Issue 13, honest diagnostics: a divergence on the grid kernel is reported at the
+//! step where it happened (as the f64 engine reports it), not at the end of the
+//! kernel's 32-step chunk; `max_speed` of a non-finite state is not a number;
+//! `cloth screenshot` exits 3 when the simulation diverges; and the hints are true
+//! for the case at hand (heavy damping has a small stable step; a sphere holding
+//! particles at the start is refused with a message).
+
+use std::process::{Command, Output};
+
+use cloth_sandbox::scene::Scene;
+use cloth_sandbox::sim::max_speed;
+use glam::DVec3;
+
+fn cloth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cloth"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn diverged(args: &[&str]) -> serde_json::Value {
+    let o = cloth(args);
+    assert_eq!(o.status.code(), Some(3), "{args:?}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).expect("one JSON object")
+}
+
+#[test]
+fn the_grid_kernel_reports_the_true_divergence_step() {
+    let base = ["run", "--set", "dt=1", "--steps", "50", "--json"];
+    let fast = diverged(&base);
+    let engine = fast["engine"].as_str().unwrap();
+    assert!(
+        engine.starts_with("grid-"),
+        "the grid kernel runs it: {engine}"
+    );
+    let exact = diverged(&[&base[..], &["--exact"]].concat());
+    assert_eq!(fast["diverged"]["step"], exact["diverged"]["step"]);
+    assert_eq!(fast["steps"], exact["steps"]);
+    assert!(fast["diverged"]["step"].as_u64().unwrap() < 32, "{fast}");
+    assert_eq!(fast["diverged"]["time"], exact["diverged"]["time"]);
+}
+
+#[test]
+fn the_grid_kernel_finds_a_divergence_late_in_a_long_run_at_its_step() {
+    // Explicit Euler runs away after a few dozen steps: the step found between
+    // full checks must match the f64 engine's.
+    let base = [
+        "run",
+        "--integrator",
+        "explicit-euler",
+        "--steps",
+        "5000",
+        "--json",
+    ];
+    let fast = diverged(&base);
+    let exact = diverged(&[&base[..], &["--exact"]].concat());
+    let (a, b) = (
+        fast["diverged"]["step"].as_i64().unwrap(),
+        exact["diverged"]["step"].as_i64().unwrap(),
+    );
+    // f32 against f64 may differ by the round-off of a step, never by a chunk.
+    assert!((a - b).abs() <= 1, "grid kernel step {a}, f64 step {b}");
+}
+
+#[test]
+fn max_speed_of_a_non_finite_state_is_not_a_number() {
+    assert!(max_speed(&[DVec3::ONE, DVec3::new(f64::NAN, 0.0, 0.0)]).is_nan());
+    assert!(max_speed(&[DVec3::new(0.0, f64::INFINITY, 0.0)]).is_nan());
+    assert_eq!(max_speed(&[DVec3::new(3.0, 4.0, 0.0)]), 5.0);
+}
+
+#[test]
+fn screenshot_exits_3_when_the_simulation_diverges() {
+    let out = std::env::temp_dir().join(format!("cloth-013-div-{}.png", std::process::id()));
+    // Explicit Euler without any damping has no stable step, so safe stepping (on
+    // in the screenshot, as in the app) cannot save it.
+    let o = cloth(&[
+        "screenshot",
+        "--set",
+        "stiffness=1e9",
+        "--set",
+        "damping=0",
+        "--set",
+        "air_damping=0",
+        "--set",
+        "drag_coefficient=0",
+        "--set",
+        "integrator=explicit-euler",
+        "--steps",
+        "50",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert!(stderr(&o).contains("diverged"), "{}", stderr(&o));
+    assert!(!out.exists(), "no picture of a diverged run");
+}
+
+#[test]
+fn heavy_damping_has_a_small_stable_step_and_the_hint_says_so() {
+    let o = cloth(&["info", "--json", "--set", "damping=1e9"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let critical = v["stability"]["dt_critical"].as_f64();
+    assert!(
+        critical.is_some_and(|c| c > 0.0 && c < 1e-9),
+        "a finite, small critical step: {v}"
+    );
+    let o = cloth(&["run", "--set", "damping=1e9", "--steps", "10"]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(!err.contains("no stable step"), "{err}");
+    assert!(err.contains("smaller dt"), "{err}");
+    // The smaller step the hint points to is stable.
+    let o = cloth(&[
+        "run",
+        "--set",
+        "damping=1e9",
+        "--steps",
+        "10",
+        "--dt",
+        "1e-14",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+}
+
+#[test]
+fn the_hint_does_not_suggest_the_integrator_in_use() {
+    // A free fall under a huge gravity runs away with any integrator.
+    let o = cloth(&[
+        "run",
+        "--integrator",
+        "implicit-euler",
+        "--set",
+        "pins=none",
+        "--set",
+        "gravity=0,-1e4,0",
+        "--set",
+        "dt=1",
+        "--steps",
+        "100",
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("hint:"), "{err}");
+    assert!(!err.contains("implicit-euler"), "{err}");
+    assert!(
+        err.contains("within the estimated stability limit"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_sphere_overlapping_the_cloth_at_the_start_pushes_it_out_at_build_time() {
+    let mut scene = Scene::load("drape").unwrap();
+    scene.set("sphere_center", "0,1,0").unwrap();
+    let system = scene.build().unwrap();
+    let sphere = system.params().sphere.unwrap();
+    let inside = system
+        .positions()
+        .iter()
+        .filter(|x| x.distance(sphere.center) < sphere.radius * (1.0 - 1e-12))
+        .count();
+    assert_eq!(inside, 0, "every particle starts on or outside the sphere");
+    // Used to diverge with every integrator, the hint suggesting implicit Euler
+    // even to implicit Euler.
+    for integrator in ["implicit-euler", "symplectic-euler", "xpbd"] {
+        let o = cloth(&[
+            "run",
+            "--scene",
+            "drape",
+            "--set",
+            "sphere_center=0,1,0",
+            "--integrator",
+            integrator,
+            "--duration",
+            "0.5",
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{integrator}: {}", stderr(&o));
+    }
+}
