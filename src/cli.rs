@@ -548,9 +548,21 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
     }
     if let Some(s) = p.sphere {
         constraints.push(format!(
-            "sphere collider (centre {:?}, radius {} m)",
+            "sphere collider (centre {:?}, radius {} m, touched at {} m)",
             s.center.to_array(),
+            s.radius - p.thickness,
             s.radius
+        ));
+    }
+    if p.friction > 0.0 && (p.sphere.is_some() || p.ground.is_some()) {
+        constraints.push(format!(
+            "Coulomb friction (mu = {}) on the {}",
+            p.friction,
+            match (p.sphere.is_some(), p.ground.is_some()) {
+                (true, true) => "sphere and the ground",
+                (true, false) => "sphere",
+                _ => "ground",
+            }
         ));
     }
     let stability = system.stability();
@@ -584,7 +596,10 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             "air_density": p.air_density,
             "drag_coefficient": p.drag_coefficient,
             "air_damping": p.air_damping,
-            "ground": p.ground.map(|g| json!({"height": g.height, "stiffness": g.stiffness, "damping": g.damping})),
+            "ground": p.ground.map(|g| json!({"height": g.height - p.thickness, "stiffness": g.stiffness, "damping": g.damping})),
+            "sphere": p.sphere.map(|s| json!({"center": s.center.to_array(), "radius": s.radius - p.thickness})),
+            "friction": p.friction,
+            "thickness": p.thickness,
             "integrator": p.integrator.name(),
             "dt": p.dt,
             "substeps": resolved.substeps,

@@ -119,6 +119,7 @@ fn a_bigger_jelly_agrees_feature_by_feature() {
         .sum::<DVec3>()
         / (12.0 * 12.0 * 12.0);
     let sphere_center = format!("sphere_center=\"{},{},{}\"", centre.x, centre.y, centre.z);
+    let tilted = String::from("gravity=\"3,-9.81,0\"");
     let cases: Vec<Vec<String>> = vec![
         vec![],
         vec![ground.clone()],
@@ -126,7 +127,15 @@ fn a_bigger_jelly_agrees_feature_by_feature() {
         vec![sphere_center, "sphere_radius=2.5".into()],
         vec!["integrator=\"verlet\"".into(), ground.clone()],
         vec!["integrator=\"explicit-euler\"".into()],
-        vec!["stretch_limit=0.0001".into(), ground],
+        vec!["stretch_limit=0.0001".into(), ground.clone()],
+        // Friction on a tilted gravity, so that the cube slides or grips.
+        vec![ground.clone(), "friction=0.3".into(), tilted.clone()],
+        vec![
+            "integrator=\"verlet\"".into(),
+            ground,
+            "friction=0.3".into(),
+            tilted,
+        ],
     ];
     for extra in cases {
         let overrides: Vec<&str> = big

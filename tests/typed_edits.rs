@@ -38,6 +38,8 @@ fn live_edits() -> Vec<Edit> {
         Edit::Integrator(Integrator::Verlet),
         Edit::BarIterations(5),
         Edit::StretchLimit(0.2),
+        Edit::Friction(0.4),
+        Edit::Thickness(0.01),
     ]
 }
 
@@ -79,6 +81,8 @@ fn assert_applied(s: &Session, edit: Edit) {
         Edit::Integrator(i) => assert_eq!(p.integrator, i),
         Edit::BarIterations(n) => assert_eq!(p.bar_iterations, n),
         Edit::StretchLimit(t) => assert_eq!(p.stretch_limit, Some(t)),
+        Edit::Friction(mu) => assert_eq!(p.friction, mu),
+        Edit::Thickness(t) => assert_eq!(p.thickness, t),
         Edit::Width(w) => assert_eq!(r.width, w),
         Edit::Height(h) => assert_eq!(r.height, h),
         Edit::Depth(d) => assert_eq!(r.depth, d),
@@ -264,7 +268,9 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::Gust(x)
         | Edit::AirDamping(x)
         | Edit::Dt(x)
-        | Edit::StretchLimit(x) => x.to_string(),
+        | Edit::StretchLimit(x)
+        | Edit::Friction(x)
+        | Edit::Thickness(x) => x.to_string(),
         Edit::Gravity(v) | Edit::Wind(v) => vec3(v),
         Edit::Substeps(n)
         | Edit::BarIterations(n)

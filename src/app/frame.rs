@@ -94,8 +94,10 @@ impl FrameData {
             line_colors: &self.colors,
             pinned: &self.pinned,
             highlight,
-            ground: params.ground.map(|g| g.height as f32),
-            sphere: params.sphere.map(|s| (s.center.as_vec3(), s.radius as f32)),
+            // The solids, under the contact surfaces the cloth rests on.
+            ground: params.ground.map(|g| (g.height - params.thickness) as f32),
+            sphere: (params.sphere)
+                .map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32)),
         }
     }
 }

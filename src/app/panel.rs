@@ -370,6 +370,16 @@ fn contents(
                     edit(Edit::StretchLimit(l));
                 }
             }
+            if p.ground.is_some() || p.sphere.is_some() {
+                let mut mu = p.friction;
+                if slider(ui, &mut mu, 0.0..=2.0, "friction μ", false) {
+                    edit(Edit::Friction(mu));
+                }
+                let mut t = p.thickness;
+                if slider(ui, &mut t, 0.0..=0.1, "thickness (m)", false) {
+                    edit(Edit::Thickness(t));
+                }
+            }
         });
 
     // Stats.

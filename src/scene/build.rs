@@ -168,6 +168,10 @@ pub const AIR_DAMPING: NumberRange<'static> = number("air_damping", 0.0, false, 
 pub const DT: NumberRange<'static> = number("dt", 0.0, true, 1.0);
 /// `stretch_limit` (a fraction of the rest length).
 pub const STRETCH_LIMIT: NumberRange<'static> = number("stretch_limit", 0.0, false, 100.0);
+/// `friction`, the Coulomb coefficient μ of the colliders.
+pub const FRICTION: NumberRange<'static> = number("friction", 0.0, false, 10.0);
+/// `thickness` in m: contact thickness of the cloth on the colliders.
+pub const THICKNESS: NumberRange<'static> = number("thickness", 0.0, false, 10.0);
 /// `gravity` in m/s².
 pub const GRAVITY: VectorRange = VectorRange {
     field: "gravity",
@@ -409,10 +413,11 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
             )
         })?,
     };
+    let thickness = THICKNESS.check(o, spec.thickness.unwrap_or(0.0))?;
     let ground = match spec.ground_height {
         None => None,
         Some(h) => Some(Ground {
-            height: ranged(o, "ground_height", h, -1e6, false, 1e6)?,
+            height: ranged(o, "ground_height", h, -1e6, false, 1e6)? + thickness,
             stiffness: ranged(
                 o,
                 "ground_stiffness",
@@ -442,7 +447,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
                 0.0,
                 true,
                 1e6,
-            )?,
+            )? + thickness,
         }),
     };
     let stretch_limit = match spec.stretch_limit {
@@ -472,6 +477,8 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         air_damping: AIR_DAMPING.check(o, spec.air_damping.unwrap_or(0.0))?,
         ground,
         sphere,
+        friction: FRICTION.check(o, spec.friction.unwrap_or(0.0))?,
+        thickness,
         integrator,
         dt: DT.check(o, spec.dt.unwrap_or(1.0 / 960.0))?,
         bar_iterations: BAR_ITERATIONS.check(o, spec.bar_iterations.unwrap_or(0))?,
@@ -620,6 +627,18 @@ impl Resolved {
             Edit::Integrator(i) => p.integrator = i,
             Edit::BarIterations(n) => p.bar_iterations = n,
             Edit::StretchLimit(t) => p.stretch_limit = Some(t),
+            Edit::Friction(mu) => p.friction = mu,
+            Edit::Thickness(t) => {
+                // The contact surfaces move with the thickness; the solids stay.
+                let change = t - p.thickness;
+                if let Some(g) = &mut p.ground {
+                    g.height += change;
+                }
+                if let Some(s) = &mut p.sphere {
+                    s.radius += change;
+                }
+                p.thickness = t;
+            }
             Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) => *self = scene.resolve()?,
         }
         Ok(())

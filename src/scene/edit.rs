@@ -42,6 +42,10 @@ pub enum Edit {
     BarIterations(u32),
     /// Maximum stretch tau (`stretch_limit`): springs no longer than (1 + tau) L.
     StretchLimit(f64),
+    /// Coulomb friction coefficient μ of the ground and the sphere (`friction`).
+    Friction(f64),
+    /// Contact thickness in m on the ground and the sphere (`thickness`).
+    Thickness(f64),
     /// Particles across a grid or lattice, or along a chain or rope (`width`): rebuilds.
     Width(u32),
     /// Particles down a grid or lattice (`height`): rebuilds.
@@ -67,6 +71,8 @@ impl Edit {
             Self::Integrator(_) => "integrator",
             Self::BarIterations(_) => "bar_iterations",
             Self::StretchLimit(_) => "stretch_limit",
+            Self::Friction(_) => "friction",
+            Self::Thickness(_) => "thickness",
             Self::Width(_) => "width",
             Self::Height(_) => "height",
             Self::Depth(_) => "depth",

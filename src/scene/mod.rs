@@ -14,8 +14,8 @@ use serde::{Deserialize, Serialize};
 
 pub use build::GRID_MAX_SIDE;
 use build::{
-    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, GRAVITY, GUST, PARTICLE_MASS, REST_LENGTH, STIFFNESS,
-    STRETCH_LIMIT, SUBSTEPS, WIND, side_ranges,
+    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, FRICTION, GRAVITY, GUST, PARTICLE_MASS, REST_LENGTH,
+    STIFFNESS, STRETCH_LIMIT, SUBSTEPS, THICKNESS, WIND, side_ranges,
 };
 pub use edit::Edit;
 pub use values::{Pins, Vector};
@@ -182,6 +182,13 @@ pub struct SceneSpec {
     /// Sphere radius in m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sphere_radius: Option<f64>,
+    /// Coulomb friction coefficient of the ground and the sphere.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+    /// Contact thickness in m: how far above the ground and outside the sphere the
+    /// cloth rests.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<f64>,
     /// Rigid-bar relaxation passes per step (rope).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bar_iterations: Option<u32>,
@@ -434,6 +441,8 @@ impl Scene {
             Edit::Integrator(i) => spec.integrator = Some(i.name().to_string()),
             Edit::BarIterations(n) => spec.bar_iterations = Some(BAR_ITERATIONS.check(o, n)?),
             Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
+            Edit::Friction(mu) => spec.friction = Some(FRICTION.check(o, mu)?),
+            Edit::Thickness(t) => spec.thickness = Some(THICKNESS.check(o, t)?),
             Edit::Width(n) => spec.width = Some(side(0, n)?),
             Edit::Height(n) => spec.height = Some(side(1, n)?),
             Edit::Depth(n) => spec.depth = Some(side(2, n)?),

@@ -6,7 +6,8 @@
 //! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`,
 //!   one Gauss-Seidel pass in the model's constraint order (by colour on a grid:
 //!   in particle order a single pass can diverge, see `springs::constraint_order`);
-//! - the sphere collider (seed 003): particles inside are projected onto its surface.
+//! - the sphere collider (seed 003): particles inside are projected onto its surface;
+//! - Coulomb friction on the sphere and the ground ([`Contact::resolve`]).
 //!
 //! Moving a position by `dx` in a velocity-based integrator also changes the velocity
 //! by `dx / h` (as position-based dynamics does), so a corrected particle does not
@@ -16,7 +17,8 @@
 
 use glam::DVec3;
 
-use super::{Integrator, Model, Sphere, State, Workspace, forces::EPSILON_LENGTH};
+use super::forces::{EPSILON_LENGTH, ground_force};
+use super::{Ground, Integrator, Model, Params, Sphere, State, Workspace};
 
 /// Applies every constraint the model has, then updates velocities.
 pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
@@ -60,23 +62,96 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
             });
         }
     }
-    if let Some(sphere) = p.sphere {
-        for (xi, &w) in x.iter_mut().zip(&model.inv_mass) {
-            if w > 0.0
-                && let Some(outside) = out_of_sphere(*xi, &sphere)
-            {
-                *xi = outside;
+    let h = p.dt;
+    let contact = Contact::of(p);
+    let active = contact.is_active();
+    let verlet = &mut state.verlet.positions;
+    for (i, (v, x)) in state.velocities.iter_mut().zip(x.iter_mut()).enumerate() {
+        *v += (*x - work.before_constraints[i]) / h;
+        let w = model.inv_mass[i];
+        if active && w > 0.0 {
+            let (x_in, v_in) = (*x, *v);
+            (*x, *v) = contact.resolve(x_in, v_in, w);
+            // Verlet reads the push from the positions; the friction's change of
+            // velocity goes into its previous position.
+            if let Some(prev) = verlet.get_mut(i) {
+                *prev -= h * (*v - v_in) - (*x - x_in);
             }
         }
     }
-    let h = p.dt;
-    for ((v, x), before) in state
-        .velocities
-        .iter_mut()
-        .zip(x.iter())
-        .zip(&work.before_constraints)
-    {
-        *v += (*x - *before) / h;
+}
+
+/// The colliders and their friction, as every engine resolves them after a step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Contact {
+    pub sphere: Option<Sphere>,
+    pub ground: Option<Ground>,
+    /// Coulomb coefficient μ.
+    pub friction: f64,
+    /// The step in s.
+    pub dt: f64,
+}
+
+impl Contact {
+    /// The colliders of `p`.
+    pub fn of(p: &Params) -> Self {
+        Self {
+            sphere: p.sphere,
+            ground: p.ground,
+            friction: p.friction,
+            dt: p.dt,
+        }
+    }
+
+    /// Whether a step has contact to resolve after it: a sphere, or a ground with
+    /// friction (the ground's push is its penalty force).
+    pub fn is_active(&self) -> bool {
+        self.sphere.is_some() || (self.friction > 0.0 && self.ground.is_some())
+    }
+
+    /// The contact of a free particle at `x` with velocity `v` (every other
+    /// constraint's move already added to it) and inverse mass `w`, after a step
+    /// `h`: the particle is projected out of the sphere, its move over the step
+    /// added to its velocity; then Coulomb friction takes from the velocity along
+    /// each surface up to μ times the velocity the contact gave along its normal in
+    /// the step (the sphere's push over `h`; the ground's penalty impulse `h N w`),
+    /// stopping the particle there when that is more. Returns the new position and
+    /// velocity.
+    pub fn resolve(&self, x: DVec3, v: DVec3, w: f64) -> (DVec3, DVec3) {
+        let (h, mu) = (self.dt, self.friction);
+        let (mut x, mut v) = (x, v);
+        if let Some(sphere) = self.sphere
+            && let Some(outside) = out_of_sphere(x, &sphere)
+        {
+            let push = outside - x;
+            x = outside;
+            v += push / h;
+            if mu > 0.0 {
+                let normal = (outside - sphere.center) / sphere.radius;
+                v = coulomb(v, normal, mu * push.length() / h);
+            }
+        }
+        if mu > 0.0
+            && let Some(ground) = self.ground
+        {
+            let support = ground_force(&ground, x, v);
+            if support > 0.0 {
+                v = coulomb(v, DVec3::Y, mu * h * support * w);
+            }
+        }
+        (x, v)
+    }
+}
+
+/// `v` with its part along the surface of unit normal `normal` shortened by
+/// `most` (m/s), or removed when it is slower than that.
+fn coulomb(v: DVec3, normal: DVec3, most: f64) -> DVec3 {
+    let along = v - v.dot(normal) * normal;
+    let speed = along.length();
+    if speed <= most {
+        v - along
+    } else {
+        v - along * (most / speed)
     }
 }
 

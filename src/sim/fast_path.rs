@@ -335,7 +335,9 @@ impl System {
             dt: _,             // given to each run
             bar_iterations: _, // bars are refused below
             stretch_limit,
-            seed: _, // only the gusts use it
+            friction,
+            thickness: _, // already in `ground` and `sphere`
+            seed: _,      // only the gusts use it
         } = model.params;
         let super::ForceTerms {
             gravity: gravity_on,
@@ -372,6 +374,7 @@ impl System {
             air_damping: if air_damping_on { air_damping } else { 0.0 },
             ground,
             sphere,
+            friction,
             stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
             integrator,
             present: springs.present,

@@ -138,6 +138,10 @@ pub struct GridSpec {
     pub ground: Option<Ground>,
     /// Sphere collider, if any: particles inside are projected onto its surface.
     pub sphere: Option<Sphere>,
+    /// Coulomb friction coefficient μ of the ground and the sphere (see
+    /// [`constraints::Contact::resolve`]); with friction the sphere is resolved
+    /// after the step rather than inside it.
+    pub friction: f64,
     /// Provot's stretch limit `tau`, if any: no spring longer than `(1 + tau) L`.
     pub stretch_limit: Option<f64>,
     /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
@@ -240,6 +244,7 @@ impl GridSpec {
             air_damping: 0.0,
             ground: None,
             sphere: None,
+            friction: 0.0,
             stretch_limit: None,
             integrator: Integrator::SymplecticEuler,
             present: [true; 3],
@@ -531,10 +536,10 @@ impl<E: Real> Params<E> {
             verlet: spec.integrator == Integrator::Verlet,
             compensated: spec.precision == Precision::Mixed,
             // With a stretch limit or XPBD the sphere comes after them, in the
-            // constraint pass.
+            // constraint pass, and so with friction.
             sphere: spec
                 .sphere
-                .filter(|_| spec.stretch_limit.is_none() && !xpbd)
+                .filter(|_| spec.stretch_limit.is_none() && !xpbd && spec.friction == 0.0)
                 .map(|s| {
                     let r = E::of(s.radius);
                     (s.center.to_array().map(E::of), r, r * r)
@@ -916,8 +921,8 @@ impl<E: Real> Kernel<E> {
     }
 
     /// The constraints the fused row pass leaves to after the step: XPBD's springs,
-    /// Provot's stretch limit, then (with either) the sphere, as in the f64 engine.
-    /// A move `δ` of a particle also adds `δ / h` to its velocity.
+    /// Provot's stretch limit, then the colliders' contact with friction, as in the
+    /// f64 engine. A move `δ` of a particle also adds `δ / h` to its velocity.
     fn constrain(&mut self, dt: f64, parallel: bool) {
         let xpbd = self.spec.integrator == Integrator::Xpbd;
         if xpbd {
@@ -926,15 +931,54 @@ impl<E: Real> Kernel<E> {
         if let Some(tau) = self.spec.stretch_limit {
             self.stretch_limit_pass(tau, dt, parallel);
         }
-        if let Some(sphere) = self.spec.sphere
-            && (xpbd || self.spec.stretch_limit.is_some())
-        {
-            for p in 0..self.grid.w * self.grid.h {
-                let i = self.grid.index(p);
-                if self.inv_mass.as_slice()[i] > E::ZERO
-                    && let Some(outside) = constraints::out_of_sphere(self.position_at(i), &sphere)
-                {
-                    self.move_particle(i, outside, dt);
+        let contact = constraints::Contact {
+            sphere: self.spec.sphere,
+            ground: self.spec.ground,
+            friction: self.spec.friction,
+            dt,
+        };
+        // Without friction, stretch limit or XPBD the step itself projected the
+        // particles out of the sphere.
+        if contact.is_active() && self.params.sphere.is_none() {
+            self.resolve_contact(&contact);
+        }
+    }
+
+    /// The colliders' contact of every free particle that touches one, as the f64
+    /// engine resolves it ([`constraints::Contact::resolve`]).
+    fn resolve_contact(&mut self, contact: &constraints::Contact) {
+        let verlet = self.params.verlet;
+        // Cheap float checks first: below the ground or inside the sphere's box.
+        let ground = contact.ground.map_or(E::LOWEST, |g| E::of(g.height));
+        let sphere = contact.sphere.map(|s| {
+            let slack = 1e-4 * s.radius + 1e-6;
+            (
+                s.center.to_array().map(|c| E::of(c)),
+                E::of(s.radius + slack),
+            )
+        });
+        for p in 0..self.grid.w * self.grid.h {
+            let i = self.grid.index(p);
+            let w = self.inv_mass.as_slice()[i];
+            let [x, y, z] = self.cur.x.each_ref().map(|a| a.as_slice()[i]);
+            let near_sphere = sphere.is_some_and(|([cx, cy, cz], r)| {
+                let d = [x - cx, y - cy, z - cz];
+                d.iter().all(|&d| d < r && E::ZERO - d < r)
+            });
+            if w <= E::ZERO || !(y < ground || near_sphere) {
+                continue;
+            }
+            let x = self.position_at(i);
+            let v = DVec3::from_array(std::array::from_fn(|a| self.cur.v[a].as_slice()[i].f64()));
+            let (to, v_new) = contact.resolve(x, v, w.f64());
+            if to != x {
+                self.set_position_at(i, to);
+            }
+            let dv = v_new - v;
+            for a in 0..3 {
+                self.cur.v[a].as_mut_slice()[i] += E::of(dv[a]);
+                if verlet {
+                    self.cur.u[a].as_mut_slice()[i] += E::of(dv[a]);
                 }
             }
         }

@@ -30,7 +30,7 @@
 
 use glam::DVec3;
 
-use super::constraints::{length_correction, out_of_sphere};
+use super::constraints::{Contact, length_correction};
 use super::forces::{ground_force, spring_force};
 use super::integrators::euler_update;
 use super::{Bar, Ground, Integrator, Model, Sphere, Spring};
@@ -70,6 +70,8 @@ pub struct MeshParams {
     pub bar_iterations: u32,
     /// Maximum stretch `tau` of springs, if any.
     pub stretch_limit: Option<f64>,
+    /// Coulomb friction coefficient of the ground and the sphere.
+    pub friction: f64,
 }
 
 impl MeshParams {
@@ -92,7 +94,9 @@ impl MeshParams {
             dt,
             bar_iterations,
             stretch_limit,
-            seed: _, // only the gusts use it
+            friction,
+            thickness: _, // already in `ground` and `sphere`
+            seed: _,      // only the gusts use it
         } = model.params;
         let super::ForceTerms {
             gravity: gravity_on,
@@ -113,6 +117,7 @@ impl MeshParams {
             dt,
             bar_iterations,
             stretch_limit,
+            friction,
         })
     }
 }
@@ -142,6 +147,8 @@ pub struct MeshKernel {
     springs: SpringArrays,
     /// The model's springs, canonical (for the stretch limit and to notice edits).
     model_springs: Vec<Spring>,
+    /// The order the stretch limit visits `model_springs` in (the model's).
+    constraint_order: Vec<u32>,
     bars: Vec<Bar>,
     threads: usize,
     pool: Option<rayon::ThreadPool>,
@@ -457,6 +464,7 @@ impl MeshKernel {
             links,
             springs,
             model_springs: model.springs.clone(),
+            constraint_order: model.constraint_order.clone(),
             bars: model.bars.clone(),
             threads: 1,
             pool: None,
@@ -534,7 +542,18 @@ impl MeshKernel {
         let p = &self.params;
         (p.bar_iterations > 0 && !self.bars.is_empty())
             || (p.stretch_limit.is_some() && !self.model_springs.is_empty())
-            || p.sphere.is_some()
+            || self.contact().is_active()
+    }
+
+    /// The colliders and their friction.
+    fn contact(&self) -> Contact {
+        let p = &self.params;
+        Contact {
+            sphere: p.sphere,
+            ground: p.ground,
+            friction: p.friction,
+            dt: p.dt,
+        }
     }
 
     fn size_before(&mut self) {
@@ -711,8 +730,8 @@ impl MeshKernel {
         }
     }
 
-    /// Bars, stretch limit and sphere, in the f64 engine's order, then `v += δ/h`
-    /// (and `u` for Verlet).
+    /// Bars, stretch limit, then `v += δ/h` (and `u` for Verlet) and the colliders'
+    /// contact with friction, in the f64 engine's order.
     fn constrain(&mut self) {
         let p = self.params;
         for k in 0..3 {
@@ -728,35 +747,35 @@ impl MeshKernel {
             }
         }
         if let Some(tau) = p.stretch_limit {
-            for s in &self.model_springs {
+            for s in self
+                .constraint_order
+                .iter()
+                .map(|&i| &self.model_springs[i as usize])
+            {
                 let longest = (1.0 + tau) * s.rest;
                 restore_length(x, inv_mass, s.a as usize, s.b as usize, |l| {
                     (l > longest).then_some(longest)
                 });
             }
         }
-        if let Some(sphere) = p.sphere {
-            for (i, &w) in inv_mass.iter().enumerate() {
-                let xi = DVec3::new(x[0][i], x[1][i], x[2][i]);
-                if w > 0.0
-                    && let Some(outside) = out_of_sphere(xi, &sphere)
-                {
-                    for (k, axis) in x.iter_mut().enumerate() {
-                        axis[i] = outside[k];
-                    }
-                }
-            }
-        }
         let h = p.dt;
+        let contact = self.contact();
+        let active = contact.is_active();
         let verlet = !self.u[0].is_empty();
-        for k in 0..3 {
-            let (x, before) = (&self.x[k], &self.before[k]);
-            for i in 0..x.len() {
-                let dv = (x[i] - before[i]) / h;
-                self.v[k][i] += dv;
-                if verlet {
-                    self.u[k][i] += dv;
-                }
+        for i in 0..self.inv_mass.len() {
+            let before = load(self.before.each_ref().map(Vec::as_slice), i);
+            let x = load(self.x.each_ref().map(Vec::as_slice), i);
+            let v_old = load(self.v.each_ref().map(Vec::as_slice), i);
+            let mut v = v_old + (x - before) / h;
+            if active && self.inv_mass[i] > 0.0 {
+                let x_new;
+                (x_new, v) = contact.resolve(x, v, self.inv_mass[i]);
+                store(&mut self.x.each_mut().map(Vec::as_mut_slice), i, x_new);
+            }
+            store(&mut self.v.each_mut().map(Vec::as_mut_slice), i, v);
+            if verlet {
+                let u = load(self.u.each_ref().map(Vec::as_slice), i) + (v - v_old);
+                store(&mut self.u.each_mut().map(Vec::as_mut_slice), i, u);
             }
         }
     }

@@ -41,10 +41,18 @@ pub struct Params {
     pub drag_coefficient: f64,
     /// Viscous air damping `c` in `-c v`, N·s/m (default: 0).
     pub air_damping: f64,
-    /// Ground plane, if any.
+    /// Ground plane the particles touch, if any: its height is the floor's plus the
+    /// contact `thickness`.
     pub ground: Option<Ground>,
-    /// Sphere collider, if any.
+    /// Sphere collider the particles touch, if any: its radius is the solid's plus
+    /// the contact `thickness`.
     pub sphere: Option<Sphere>,
+    /// Coulomb friction coefficient μ of the ground and the sphere (0: frictionless).
+    pub friction: f64,
+    /// Contact thickness in m: the cloth rests this far above the floor and outside
+    /// the solid sphere (already added to `ground` and `sphere`, which are where the
+    /// particles touch; the renderer draws the solids themselves).
+    pub thickness: f64,
     /// Integration method.
     pub integrator: Integrator,
     /// Time step in s.
@@ -68,6 +76,8 @@ impl Default for Params {
             air_damping: 0.0,
             ground: None,
             sphere: None,
+            friction: 0.0,
+            thickness: 0.0,
             integrator: Integrator::default(),
             dt: 1.0 / 960.0,
             bar_iterations: 0,

@@ -407,7 +407,7 @@ impl System {
         (!self.model.bars.is_empty() && p.bar_iterations > 0)
             || (p.integrator == Integrator::Xpbd && !self.model.springs.is_empty())
             || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
-            || p.sphere.is_some()
+            || constraints::Contact::of(p).is_active()
     }
 
     /// Checks for non-finite values and runaways ([`super::divergence`]), then the
