@@ -554,6 +554,12 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             s.radius
         ));
     }
+    if p.self_collision && p.thickness > 0.0 {
+        constraints.push(format!(
+            "self-collision (particles {} m apart, friction {})",
+            p.thickness, p.friction
+        ));
+    }
     if p.friction > 0.0 && (p.sphere.is_some() || p.ground.is_some()) {
         constraints.push(format!(
             "Coulomb friction (mu = {}) on the {}",
@@ -600,6 +606,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             "sphere": p.sphere.map(|s| json!({"center": s.center.to_array(), "radius": s.radius - p.thickness})),
             "friction": p.friction,
             "thickness": p.thickness,
+            "self_collision": p.self_collision,
             "integrator": p.integrator.name(),
             "dt": p.dt,
             "substeps": resolved.substeps,

@@ -111,15 +111,17 @@ fn friction_holds_the_drape_on_the_sphere_and_without_it_the_cloth_slides_off() 
 #[test]
 fn the_cloth_rests_at_its_thickness_on_the_ground_and_on_the_sphere() {
     // The floor is at -0.9 m and the solid sphere's radius 0.5 m; the thickness is
-    // 0.025 m. The penalty ground lets a particle resting under its own weight sink
+    // the scene's (0.04 m). The penalty ground lets a particle resting under its own weight sink
     // by m g / k_c = 0.0005 * 9.81 / 200 = 2.5e-5 m; one pulled down by cloth
     // hanging from the sphere sinks further (measured: 0.3 mm). Nothing may sink a
     // visible part of the thickness: 1 mm, 4% of it.
     for friction in [0.0, 0.5] {
         let (_, lowest, system) = drape(friction, true, 6.0);
-        assert!(lowest > -0.9 + 0.025 - 1e-3, "{lowest}");
+        let t = system.params().thickness;
+        assert!(t > 0.02, "the drape's thickness: {t}");
+        assert!(lowest > -0.9 + t - 1e-3, "{lowest}");
         let sphere = system.params().sphere.unwrap();
-        assert!((sphere.radius - 0.525).abs() < 1e-12);
+        assert!((sphere.radius - (0.5 + t)).abs() < 1e-12);
         let nearest = system
             .positions()
             .iter()
@@ -128,7 +130,7 @@ fn the_cloth_rests_at_its_thickness_on_the_ground_and_on_the_sphere() {
         // Projected onto the contact sphere after every step, up to the grid
         // engine's float32 arithmetic.
         println!("friction {friction}: nearest {nearest}, lowest {lowest}");
-        assert!(nearest > 0.525 - 1e-5, "friction {friction}: {nearest}");
+        assert!(nearest > 0.5 + t - 1e-5, "friction {friction}: {nearest}");
     }
 }
 

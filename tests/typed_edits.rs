@@ -40,6 +40,7 @@ fn live_edits() -> Vec<Edit> {
         Edit::StretchLimit(0.2),
         Edit::Friction(0.4),
         Edit::Thickness(0.01),
+        Edit::SelfCollision(true),
     ]
 }
 
@@ -83,6 +84,7 @@ fn assert_applied(s: &Session, edit: Edit) {
         Edit::StretchLimit(t) => assert_eq!(p.stretch_limit, Some(t)),
         Edit::Friction(mu) => assert_eq!(p.friction, mu),
         Edit::Thickness(t) => assert_eq!(p.thickness, t),
+        Edit::SelfCollision(on) => assert_eq!(p.self_collision, on),
         Edit::Width(w) => assert_eq!(r.width, w),
         Edit::Height(h) => assert_eq!(r.height, h),
         Edit::Depth(d) => assert_eq!(r.depth, d),
@@ -278,6 +280,7 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::Height(n)
         | Edit::Depth(n) => n.to_string(),
         Edit::Integrator(i) => i.name().to_string(),
+        Edit::SelfCollision(on) => on.to_string(),
     };
     (edit.key(), value)
 }

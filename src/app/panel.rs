@@ -370,7 +370,8 @@ fn contents(
                     edit(Edit::StretchLimit(l));
                 }
             }
-            if p.ground.is_some() || p.sphere.is_some() {
+            let surface = !system.triangles().is_empty();
+            if p.ground.is_some() || p.sphere.is_some() || surface {
                 let mut mu = p.friction;
                 if slider(ui, &mut mu, 0.0..=2.0, "friction μ", false) {
                     edit(Edit::Friction(mu));
@@ -378,6 +379,19 @@ fn contents(
                 let mut t = p.thickness;
                 if slider(ui, &mut t, 0.0..=0.1, "thickness (m)", false) {
                     edit(Edit::Thickness(t));
+                }
+            }
+            if surface {
+                let mut on = p.self_collision;
+                if ui
+                    .checkbox(&mut on, "self-collision")
+                    .on_hover_text(
+                        "Keep the cloth's particles a thickness apart, so that its layers \
+                         fold onto each other instead of passing through",
+                    )
+                    .changed()
+                {
+                    edit(Edit::SelfCollision(on));
                 }
             }
         });
@@ -439,6 +453,12 @@ fn contents(
                          above the {:.3e} J it had at the start or the last edit",
                     budget.limit() - budget.base,
                     budget.base
+                ));
+            }
+            if p.self_collision {
+                ui.label(format!(
+                    "self-collision contacts {}",
+                    system.self_collision_contacts()
                 ));
             }
             ui.label(format!("engine {}", system.engine().name()));

@@ -479,6 +479,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         sphere,
         friction: FRICTION.check(o, spec.friction.unwrap_or(0.0))?,
         thickness,
+        self_collision: spec.self_collision.unwrap_or(false),
         integrator,
         dt: DT.check(o, spec.dt.unwrap_or(1.0 / 960.0))?,
         bar_iterations: BAR_ITERATIONS.check(o, spec.bar_iterations.unwrap_or(0))?,
@@ -628,6 +629,7 @@ impl Resolved {
             Edit::BarIterations(n) => p.bar_iterations = n,
             Edit::StretchLimit(t) => p.stretch_limit = Some(t),
             Edit::Friction(mu) => p.friction = mu,
+            Edit::SelfCollision(on) => p.self_collision = on,
             Edit::Thickness(t) => {
                 // The contact surfaces move with the thickness; the solids stay.
                 let change = t - p.thickness;

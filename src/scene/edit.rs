@@ -46,6 +46,8 @@ pub enum Edit {
     Friction(f64),
     /// Contact thickness in m on the ground and the sphere (`thickness`).
     Thickness(f64),
+    /// Whether the particles keep `thickness` apart (`self_collision`).
+    SelfCollision(bool),
     /// Particles across a grid or lattice, or along a chain or rope (`width`): rebuilds.
     Width(u32),
     /// Particles down a grid or lattice (`height`): rebuilds.
@@ -73,6 +75,7 @@ impl Edit {
             Self::StretchLimit(_) => "stretch_limit",
             Self::Friction(_) => "friction",
             Self::Thickness(_) => "thickness",
+            Self::SelfCollision(_) => "self_collision",
             Self::Width(_) => "width",
             Self::Height(_) => "height",
             Self::Depth(_) => "depth",

@@ -189,6 +189,9 @@ pub struct SceneSpec {
     /// cloth rests.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub thickness: Option<f64>,
+    /// Whether the cloth's particles keep `thickness` apart from each other.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub self_collision: Option<bool>,
     /// Rigid-bar relaxation passes per step (rope).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bar_iterations: Option<u32>,
@@ -276,6 +279,7 @@ const BUILTINS: &[BuiltinScene] = &[
     builtin!("flag"),
     builtin!("sheet"),
     builtin!("drape"),
+    builtin!("fold"),
     builtin!("spring"),
     builtin!("chain"),
     builtin!("jelly"),
@@ -443,6 +447,7 @@ impl Scene {
             Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
             Edit::Friction(mu) => spec.friction = Some(FRICTION.check(o, mu)?),
             Edit::Thickness(t) => spec.thickness = Some(THICKNESS.check(o, t)?),
+            Edit::SelfCollision(on) => spec.self_collision = Some(on),
             Edit::Width(n) => spec.width = Some(side(0, n)?),
             Edit::Height(n) => spec.height = Some(side(1, n)?),
             Edit::Depth(n) => spec.depth = Some(side(2, n)?),

@@ -7,6 +7,7 @@
 //!   one Gauss-Seidel pass in the model's constraint order (by colour on a grid:
 //!   in particle order a single pass can diverge, see `springs::constraint_order`);
 //! - the sphere collider (seed 003): particles inside are projected onto its surface;
+//! - self-collision ([`super::self_collision`]), particles kept `thickness` apart;
 //! - Coulomb friction on the sphere and the ground ([`Contact::resolve`]).
 //!
 //! Moving a position by `dx` in a velocity-based integrator also changes the velocity
@@ -61,6 +62,11 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
                 (l > longest).then_some(longest)
             });
         }
+    }
+    if p.self_collision {
+        let joined = |i, j| model.adjacency.joins(&model.springs, i, j);
+        let (start, w) = (&work.step_start, &model.inv_mass);
+        (work.self_collision).apply(x, start, w, p.thickness, p.friction, joined);
     }
     let h = p.dt;
     let contact = Contact::of(p);

@@ -264,6 +264,15 @@ impl System {
         self.engines.builds
     }
 
+    /// Pairs of particles the last self-collision pass pushed apart, on whichever
+    /// engine ran the last step.
+    pub fn self_collision_contacts(&self) -> usize {
+        match (&self.engines.grid, self.engine()) {
+            (Some(fast), Engine::Grid(_)) => fast.kernel.self_collision_contacts(),
+            _ => self.work.self_collision.contacts(),
+        }
+    }
+
     /// The engine [`System::run`] would use now.
     pub fn engine(&self) -> Engine {
         if !self.engines.allowed {
@@ -336,8 +345,9 @@ impl System {
             bar_iterations: _, // bars are refused below
             stretch_limit,
             friction,
-            thickness: _, // already in `ground` and `sphere`
-            seed: _,      // only the gusts use it
+            thickness,
+            self_collision,
+            seed: _, // only the gusts use it
         } = model.params;
         let super::ForceTerms {
             gravity: gravity_on,
@@ -375,6 +385,7 @@ impl System {
             ground,
             sphere,
             friction,
+            self_collision: self_collision.then_some(thickness).filter(|&t| t > 0.0),
             stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
             integrator,
             present: springs.present,

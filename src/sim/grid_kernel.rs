@@ -77,7 +77,7 @@ use glam::DVec3;
 
 use super::constraints;
 use super::springs::STENCIL_DIRECTIONS;
-use super::{Ground, Integrator, Sphere, Wind};
+use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
@@ -142,6 +142,9 @@ pub struct GridSpec {
     /// [`constraints::Contact::resolve`]); with friction the sphere is resolved
     /// after the step rather than inside it.
     pub friction: f64,
+    /// Self-collision's thickness `h_c` in m, if the particles keep it apart
+    /// ([`super::self_collision`]).
+    pub self_collision: Option<f64>,
     /// Provot's stretch limit `tau`, if any: no spring longer than `(1 + tau) L`.
     pub stretch_limit: Option<f64>,
     /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
@@ -245,6 +248,7 @@ impl GridSpec {
             ground: None,
             sphere: None,
             friction: 0.0,
+            self_collision: None,
             stretch_limit: None,
             integrator: Integrator::SymplecticEuler,
             present: [true; 3],
@@ -640,8 +644,10 @@ struct Kernel<E: Real> {
     /// One band per thread.
     par_bands: Vec<Band<E>>,
     simd: SimdLevel,
-    /// XPBD's scratch (empty for the other integrators).
+    /// XPBD's and self-collision's scratch (empty without them).
     xpbd: XpbdScratch,
+    /// Self-collision's candidate pairs.
+    self_collision: SelfCollision,
     /// The stretch limit's corrections along one row, per axis (`nv + PL` floats),
     /// for each of two threads.
     stretch_fix: [[Vec<E>; 3]; 2],
@@ -742,6 +748,7 @@ impl<E: Real> Kernel<E> {
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
             xpbd: XpbdScratch::default(),
+            self_collision: SelfCollision::default(),
             stretch_fix: std::array::from_fn(|_| {
                 std::array::from_fn(|_| vec![E::ZERO; grid.nv + PL])
             }),
@@ -931,6 +938,9 @@ impl<E: Real> Kernel<E> {
         if let Some(tau) = self.spec.stretch_limit {
             self.stretch_limit_pass(tau, dt, parallel);
         }
+        if let Some(thickness) = self.spec.self_collision {
+            self.self_collision_pass(thickness, dt);
+        }
         let contact = constraints::Contact {
             sphere: self.spec.sphere,
             ground: self.spec.ground,
@@ -1016,16 +1026,7 @@ impl<E: Real> Kernel<E> {
     fn xpbd_pass(&mut self, dt: f64, parallel: bool) {
         let (w, h) = (self.grid.w, self.grid.h);
         let n = w * h;
-        let mut s = std::mem::take(&mut self.xpbd);
-        s.moved.resize(n, DVec3::ZERO);
-        s.start.resize(n, DVec3::ZERO);
-        s.inv_mass.resize(n, 0.0);
-        for p in 0..n {
-            let i = self.grid.index(p);
-            s.moved[p] = self.position_at(i);
-            s.start[p] = self.start_position_at(i);
-            s.inv_mass[p] = self.inv_mass.as_slice()[i].f64();
-        }
+        let mut s = self.f64_copies();
         for ((dr, dc), rest, present, kind) in self.stencil() {
             if !present || kind.k <= 0.0 {
                 continue;
@@ -1064,13 +1065,63 @@ impl<E: Real> Kernel<E> {
                 }
             }
         }
+        self.write_back(s, dt);
+    }
+
+    /// f64 copies of the positions, those at the start of the step and the inverse
+    /// masses, in cloth order (the scratch taken out of `self`; see
+    /// [`Self::write_back`]).
+    fn f64_copies(&mut self) -> XpbdScratch {
+        let n = self.grid.w * self.grid.h;
+        let mut s = std::mem::take(&mut self.xpbd);
+        s.moved.resize(n, DVec3::ZERO);
+        s.start.resize(n, DVec3::ZERO);
+        s.inv_mass.resize(n, 0.0);
         for p in 0..n {
             let i = self.grid.index(p);
-            if s.moved[p] != self.position_at(i) {
-                self.move_particle(i, s.moved[p], dt);
+            s.moved[p] = self.position_at(i);
+            s.start[p] = self.start_position_at(i);
+            s.inv_mass[p] = self.inv_mass.as_slice()[i].f64();
+        }
+        s
+    }
+
+    /// Moves each particle to its copy's position (adding the move over `dt` to
+    /// its velocity) and puts the scratch back.
+    fn write_back(&mut self, s: XpbdScratch, dt: f64) {
+        for (p, &to) in s.moved.iter().enumerate() {
+            let i = self.grid.index(p);
+            if to != self.position_at(i) {
+                self.move_particle(i, to, dt);
             }
         }
         self.xpbd = s;
+    }
+
+    /// Self-collision ([`super::self_collision`]) at thickness `h_c`, on f64 copies
+    /// of the positions; springs are the stencil's kinds that exist.
+    fn self_collision_pass(&mut self, h_c: f64, dt: f64) {
+        let mut s = self.f64_copies();
+        let width = self.grid.w;
+        let present = self.spec.present;
+        // The stencil directions and their kinds (structural, shear, bend).
+        let kinds = [0, 2, 1, 0, 1, 2];
+        let joined = |i: usize, j: usize| {
+            let (a, b) = (i.min(j), i.max(j));
+            let (dr, dc) = (
+                b / width - a / width,
+                (b % width) as isize - (a % width) as isize,
+            );
+            (STENCIL_DIRECTIONS.iter().zip(kinds)).any(|(&d, kind)| d == (dr, dc) && present[kind])
+        };
+        let (friction, pass) = (self.spec.friction, &mut self.self_collision);
+        pass.apply(&mut s.moved, &s.start, &s.inv_mass, h_c, friction, joined);
+        self.write_back(s, dt);
+    }
+
+    /// Pairs pushed apart by the last self-collision pass.
+    fn self_collision_contacts(&self) -> usize {
+        self.self_collision.contacts()
     }
 
     /// Provot's stretch limit `tau` (see [`Self::constrain`]): one Gauss-Seidel pass
@@ -1520,6 +1571,10 @@ impl GridCloth {
     forward!(
         /// Pin (`true`: inverse mass 0, velocity 0) or free particle `i`.
         fn set_pinned(&mut self, i: usize, pinned: bool)
+    );
+    forward!(
+        /// Pairs of particles the last self-collision pass pushed apart.
+        fn self_collision_contacts(&self) -> usize
     );
 }
 

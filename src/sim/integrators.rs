@@ -92,12 +92,13 @@ impl std::fmt::Display for Integrator {
 pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
     let h = model.params.dt;
     let t = state.time;
+    let p = &model.params;
+    if p.integrator == Integrator::Xpbd || p.self_collision {
+        // XPBD's damping and self-collision's friction measure the step's moves.
+        work.step_start.clone_from(&state.positions);
+    }
     match model.params.integrator {
         Integrator::ExplicitEuler | Integrator::SymplecticEuler | Integrator::Xpbd => {
-            if model.params.integrator == Integrator::Xpbd {
-                // The springs' damping is measured against the start of the step.
-                work.step_start.clone_from(&state.positions);
-            }
             let a = &mut work.accelerations;
             model.accelerations(
                 &state.positions,

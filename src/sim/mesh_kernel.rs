@@ -96,7 +96,8 @@ impl MeshParams {
             stretch_limit,
             friction,
             thickness: _, // already in `ground` and `sphere`
-            seed: _,      // only the gusts use it
+            self_collision,
+            seed: _, // only the gusts use it
         } = model.params;
         let super::ForceTerms {
             gravity: gravity_on,
@@ -105,7 +106,8 @@ impl MeshParams {
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
         } = model.terms;
-        if aero || !MeshKernel::supports(integrator) {
+        // Self-collision runs on the f64 engine for topologies other than grids.
+        if aero || self_collision || !MeshKernel::supports(integrator) {
             return None;
         }
         Some(Self {

@@ -7,6 +7,7 @@
 //!   (the f64 general engine, the reference);
 //! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook
 //!   into [`System::run`];
+//! - [`self_collision`]: particles of a cloth kept a thickness apart, with friction;
 //! - [`divergence`], [`energy_budget`], [`stability`], [`safe`]: when a run has
 //!   blown up (runaways, and energy past its budget), the stable step, and safe
 //!   stepping;
@@ -28,6 +29,7 @@ pub mod integrators;
 pub mod mesh_kernel;
 pub mod model;
 pub mod safe;
+pub mod self_collision;
 pub mod springs;
 pub mod stability;
 pub mod state;
@@ -44,6 +46,7 @@ pub use grab::Grab;
 pub use integrators::Integrator;
 pub use model::{Ground, Model, Params, Sphere, Topology};
 pub use safe::{SafeStep, safe_step, safe_substeps};
+pub use self_collision::SelfCollision;
 pub use springs::{Adjacency, Bar, Spring, SpringKind};
 pub use stability::Stability;
 pub use state::{Energy, State};

@@ -53,6 +53,9 @@ pub struct Params {
     /// the solid sphere (already added to `ground` and `sphere`, which are where the
     /// particles touch; the renderer draws the solids themselves).
     pub thickness: f64,
+    /// Whether the particles keep `thickness` apart from each other (those joined
+    /// by a spring excepted): [`super::self_collision`].
+    pub self_collision: bool,
     /// Integration method.
     pub integrator: Integrator,
     /// Time step in s.
@@ -78,6 +81,7 @@ impl Default for Params {
             sphere: None,
             friction: 0.0,
             thickness: 0.0,
+            self_collision: false,
             integrator: Integrator::default(),
             dt: 1.0 / 960.0,
             bar_iterations: 0,

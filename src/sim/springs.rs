@@ -158,6 +158,15 @@ impl Adjacency {
         Self { offsets, entries }
     }
 
+    /// Whether one of `springs` (the ones this adjacency was built from) joins
+    /// particles `i` and `j`.
+    pub fn joins(&self, springs: &[Spring], i: usize, j: usize) -> bool {
+        self.springs_of(i).any(|(s, _)| {
+            let s = &springs[s];
+            (s.a as usize == j) || (s.b as usize == j)
+        })
+    }
+
     /// The springs touching particle `i`, each with the sign of its force on `i`
     /// (`+1` at the `a` end, `-1` at the `b` end).
     pub fn springs_of(&self, i: usize) -> impl Iterator<Item = (usize, f64)> + '_ {

@@ -28,8 +28,10 @@ pub struct Workspace {
     pub(crate) dx_sum: Vec<DVec3>,
     pub(crate) dv_sum: Vec<DVec3>,
     pub(crate) before_constraints: Vec<DVec3>,
-    /// Positions at the start of the step (XPBD's damping).
+    /// Positions at the start of the step (XPBD's damping, self-collision's friction).
     pub(crate) step_start: Vec<DVec3>,
+    /// The self-collision pass's candidate pairs.
+    pub(crate) self_collision: super::SelfCollision,
     pub(crate) implicit: implicit::ImplicitWorkspace,
 }
 
@@ -408,6 +410,7 @@ impl System {
             || (p.integrator == Integrator::Xpbd && !self.model.springs.is_empty())
             || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
             || constraints::Contact::of(p).is_active()
+            || (p.self_collision && p.thickness > 0.0)
     }
 
     /// Checks for non-finite values and runaways ([`super::divergence`]), then the
