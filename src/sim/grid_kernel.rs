@@ -653,12 +653,14 @@ struct Kernel<E: Real> {
     stretch_fix: [[Vec<E>; 3]; 2],
 }
 
-/// XPBD's f64 copies, per particle in cloth order (`p = row * width + column`):
-/// positions as the constraint pass moves them, at the start of the step, and
-/// inverse masses.
+/// XPBD's and self-collision's f64 copies, per particle in cloth order (`p = row *
+/// width + column`): positions as the constraint pass moves them, before it, at the
+/// start of the step, and inverse masses.
 #[derive(Clone, Debug, Default)]
 struct XpbdScratch {
     moved: Vec<DVec3>,
+    /// The positions before the pass.
+    before: Vec<DVec3>,
     start: Vec<DVec3>,
     inv_mass: Vec<f64>,
 }
@@ -1072,27 +1074,49 @@ impl<E: Real> Kernel<E> {
     /// masses, in cloth order (the scratch taken out of `self`; see
     /// [`Self::write_back`]).
     fn f64_copies(&mut self) -> XpbdScratch {
-        let n = self.grid.w * self.grid.h;
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let mut s = std::mem::take(&mut self.xpbd);
-        s.moved.resize(n, DVec3::ZERO);
-        s.start.resize(n, DVec3::ZERO);
-        s.inv_mass.resize(n, 0.0);
-        for p in 0..n {
-            let i = self.grid.index(p);
-            s.moved[p] = self.position_at(i);
-            s.start[p] = self.start_position_at(i);
-            s.inv_mass[p] = self.inv_mass.as_slice()[i].f64();
+        s.moved.resize(w * h, DVec3::ZERO);
+        s.start.resize(w * h, DVec3::ZERO);
+        s.inv_mass.resize(w * h, 0.0);
+        // Row by row, each array's row read as a slice.
+        fn rows<E: Real>(
+            out: &mut [DVec3],
+            hi: &[Buf<E>; 3],
+            lo: &[Buf<E>; 3],
+            w: usize,
+            st: usize,
+        ) {
+            for (r, out) in out.chunks_exact_mut(w).enumerate() {
+                let at = r * st..r * st + w;
+                let [x, y, z] = hi.each_ref().map(|a| &a.as_slice()[at.clone()]);
+                let [xl, yl, zl] = lo.each_ref().map(|a| &a.as_slice()[at.clone()]);
+                for (c, p) in out.iter_mut().enumerate() {
+                    *p = DVec3::new(
+                        x[c].f64() + xl[c].f64(),
+                        y[c].f64() + yl[c].f64(),
+                        z[c].f64() + zl[c].f64(),
+                    );
+                }
+            }
         }
+        rows(&mut s.moved, &self.cur.x, &self.cur.xl, w, st);
+        rows(&mut s.start, &self.next.x, &self.next.xl, w, st);
+        for (r, out) in s.inv_mass.chunks_exact_mut(w).enumerate() {
+            let row = &self.inv_mass.as_slice()[r * st..r * st + w];
+            out.iter_mut().zip(row).for_each(|(m, &e)| *m = e.f64());
+        }
+        s.before.clone_from(&s.moved);
         s
     }
 
-    /// Moves each particle to its copy's position (adding the move over `dt` to
-    /// its velocity) and puts the scratch back.
+    /// Moves each particle the pass moved to its copy's position (adding the move
+    /// over `dt` to its velocity) and puts the scratch back.
     fn write_back(&mut self, s: XpbdScratch, dt: f64) {
-        for (p, &to) in s.moved.iter().enumerate() {
-            let i = self.grid.index(p);
-            if to != self.position_at(i) {
-                self.move_particle(i, to, dt);
+        let (w, st) = (self.grid.w, self.grid.stride);
+        for (p, (&to, &from)) in s.moved.iter().zip(&s.before).enumerate() {
+            if to != from {
+                self.move_particle((p / w) * st + p % w, to, dt);
             }
         }
         self.xpbd = s;
@@ -1236,15 +1260,6 @@ impl<E: Real> Kernel<E> {
     /// Position of array index `i` in f64 (high plus low part).
     fn position_at(&self, i: usize) -> DVec3 {
         let (x, xl) = (&self.cur.x, &self.cur.xl);
-        DVec3::from_array(std::array::from_fn(|a| {
-            x[a].as_slice()[i].f64() + xl[a].as_slice()[i].f64()
-        }))
-    }
-
-    /// The position (m) of array index `i` at the start of the step just taken (the
-    /// other buffer, after the swap).
-    fn start_position_at(&self, i: usize) -> DVec3 {
-        let (x, xl) = (&self.next.x, &self.next.xl);
         DVec3::from_array(std::array::from_fn(|a| {
             x[a].as_slice()[i].f64() + xl[a].as_slice()[i].f64()
         }))

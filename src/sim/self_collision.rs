@@ -8,9 +8,10 @@
 //!   of Ten Minute Physics, filled by a counting sort): every pair not joined by a
 //!   spring closer than `reach = h_c + 2 margin`, with `margin = h_c / 2`. The list
 //!   is rebuilt only when some particle has moved more than `margin` since the last
-//!   rebuild, so a pair missing from it cannot have come within `h_c`: each of its
-//!   particles moved less than `margin`. A cloth at rest rebuilds never, a falling
-//!   one every few steps; the check is one pass over the particles.
+//!   rebuild, its cloth's mean move taken off, so a pair missing from it cannot have
+//!   come within `h_c`: each of its particles moved less than `margin` against the
+//!   same common move. A cloth at rest or falling whole rebuilds never, a folding
+//!   one every few steps; the check is two passes over the particles.
 //! * Each step, every candidate pair closer than `h_c` is pushed apart along its
 //!   line to `h_c`, split by inverse mass (one Gauss-Seidel pass over the list).
 //!   Then friction: the pair's relative move along the contact in this step is cut
@@ -144,13 +145,21 @@ impl SelfCollision {
     }
 
     /// Whether some particle moved more than `margin` since the last rebuild (or
-    /// there was none).
+    /// there was none), not counting the cloth's mean move: a pair's distance
+    /// changes by at most the sum of its particles' moves less any common move, so
+    /// a cloth falling or swinging as a whole keeps its list.
     fn moved_more_than(&self, x: &[DVec3], margin: f64) -> bool {
+        if self.anchor.len() != x.len() {
+            return true;
+        }
+        let common = (x.iter().zip(&self.anchor))
+            .map(|(p, a)| *p - *a)
+            .sum::<DVec3>()
+            / x.len() as f64;
         let m2 = margin * margin;
-        self.anchor.len() != x.len()
-            || x.iter()
-                .zip(&self.anchor)
-                .any(|(p, a)| p.distance_squared(*a) > m2 || !p.is_finite())
+        !common.is_finite()
+            || (x.iter().zip(&self.anchor))
+                .any(|(p, a)| (*p - *a - common).length_squared() > m2 || !p.is_finite())
     }
 
     /// Rebuilds the candidate pairs within `reach` of each other.
