@@ -10,10 +10,14 @@
 //! dragged every frame costs no parsing, no resolving of the scene and no new system;
 //! only layout edits (width, height, depth) rebuild it.
 
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub use crate::scene::Edit;
-use crate::scene::{Resolved, Scene, SceneError};
+use glam::DVec3;
+
+use crate::scene::{Pins, Resolved, Scene, SceneError};
 use crate::sim::safe::{self, DEFAULT_SAFETY};
 use crate::sim::{Clock, Params, SpringKind, State, System};
 
@@ -47,6 +51,10 @@ const REBUILD_KEYS: &[&str] = &[
     "bend_scale",
     "seed",
 ];
+
+/// The wind the wind switch turns on when the scene had none to restore: seed
+/// 004's breeze, 3 m/s along z (towards the viewer).
+pub const DEFAULT_WIND: DVec3 = DVec3::new(0.0, 0.0, 3.0);
 
 /// What happened when the simulation diverged.
 #[derive(Clone, Debug, PartialEq)]
@@ -98,6 +106,8 @@ pub struct Session {
     safe_stepping: bool,
     /// What safe stepping chose, when it is on.
     step_choice: Option<StepChoice>,
+    /// Wind and gust (m/s) the wind switch turned off, to turn back on.
+    stored_wind: Option<(DVec3, f64)>,
 }
 
 /// What safe stepping chose for the running system.
@@ -140,12 +150,13 @@ impl Session {
             ms_per_step: 0.0,
             safe_stepping: true,
             step_choice: None,
+            stored_wind: None,
         };
         session.built();
         Ok(session)
     }
 
-    /// Builds the system anew from the settings; pins made by clicking are dropped.
+    /// Builds the system anew from the settings (which hold the pins).
     fn rebuild(&mut self) {
         self.system = self.settings.build();
         self.built();
@@ -298,16 +309,137 @@ impl Session {
     }
 
     /// Rebuilds the system from the scene with the user's edits (R, "Reset").
-    /// Pins made by clicking are dropped; the pause state is kept.
+    /// Pins set by clicking or a preset are kept (they are in the scene); the pause
+    /// state is kept.
     pub fn reset(&mut self) -> Result<(), SceneError> {
         self.settings = self.scene.resolve()?;
         self.rebuild();
         Ok(())
     }
 
+    /// The current setup as a scene file: the scene with every edit and the pins
+    /// in effect, which `cloth --scene FILE` and `cloth run --scene FILE` read back
+    /// to the same run (the state the run has reached is not part of it).
+    pub fn scene_text(&self) -> String {
+        let body = toml::to_string(&self.scene.spec).unwrap_or_else(|e| {
+            // Every field of a spec is a plain number, string or list: unreachable.
+            log::error!("cannot write the scene as TOML: {e}");
+            String::new()
+        });
+        format!(
+            "# Saved by cloth-sandbox from {}.\n# Open it with `cloth --scene FILE` or `cloth run --scene FILE`.\n{body}",
+            self.scene.origin
+        )
+    }
+
+    /// Writes [`Self::scene_text`] to a new file `saved-<scene>-<N>.toml` in `dir`,
+    /// with the first N from 1 that names no file there (an existing file is never
+    /// replaced), and returns its path.
+    pub fn save_in(&self, dir: &Path) -> std::io::Result<PathBuf> {
+        let text = self.scene_text();
+        let stem = save_stem(&self.name);
+        for n in 1..=10_000 {
+            let path = dir.join(format!("saved-{stem}-{n}.toml"));
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut file) => {
+                    file.write_all(text.as_bytes())?;
+                    return Ok(path);
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Err(std::io::Error::other(format!(
+            "{} already holds saved-{stem}-1.toml to saved-{stem}-10000.toml: move some away",
+            dir.display()
+        )))
+    }
+
     /// Whether changing `key` rebuilds the system rather than applying live.
     pub fn needs_rebuild(&self, key: &str) -> bool {
         REBUILD_KEYS.contains(&key)
+    }
+
+    /// The pinned particles of the running system, in index order.
+    pub fn pins(&self) -> Vec<usize> {
+        (0..self.system.particle_count())
+            .filter(|&i| self.system.is_pinned(i))
+            .collect()
+    }
+
+    /// Pins exactly the particles `pins` names (a preset such as the corners, a list,
+    /// or none) and frees every other: recorded in the scene (key `pins`), so that a
+    /// reset, a rebuild and a saved scene keep it, and applied to the running system
+    /// in place, the rest of its state untouched. An index past the last particle is
+    /// refused with an error naming `pins` and the range, and nothing changes.
+    pub fn set_pins(&mut self, pins: Pins) -> Result<(), SceneError> {
+        let indices = self.settings.pin_indices(&pins)?;
+        self.scene.spec.pins = Some(pins);
+        self.settings.pins = indices;
+        self.sync_pins();
+        Ok(())
+    }
+
+    /// Pins particle `i` if it is free, frees it if pinned (a click): recorded in the
+    /// scene as the list of pinned particles. An index past the last particle does
+    /// nothing.
+    pub fn toggle_pin(&mut self, i: usize) {
+        if i >= self.system.particle_count() {
+            return;
+        }
+        let mut pins = self.pins();
+        match pins.binary_search(&i) {
+            Ok(at) => {
+                pins.remove(at);
+            }
+            Err(at) => pins.insert(at, i),
+        }
+        self.scene.spec.pins = Some(Pins::Indices(pins.clone()));
+        self.settings.pins = pins;
+        self.sync_pins();
+    }
+
+    /// Pins and frees the running system's particles to match the settings.
+    fn sync_pins(&mut self) {
+        let mut wanted = vec![false; self.system.particle_count()];
+        for &i in &self.settings.pins {
+            if let Some(w) = wanted.get_mut(i) {
+                *w = true;
+            }
+        }
+        for (i, pin) in wanted.into_iter().enumerate() {
+            if self.system.is_pinned(i) != pin {
+                self.system.set_pinned(i, pin);
+            }
+        }
+    }
+
+    /// Whether any wind blows: a mean wind or gusts.
+    pub fn wind_on(&self) -> bool {
+        let p = &self.settings.params;
+        p.wind != DVec3::ZERO || p.gust != 0.0
+    }
+
+    /// The wind switch (seed 004): off sets the wind and the gusts to zero and
+    /// remembers them; on brings back what it turned off, or else [`DEFAULT_WIND`]. Both are ordinary edits of `wind`
+    /// and `gust`, so a saved scene keeps the switch's state.
+    pub fn set_wind_on(&mut self, on: bool) -> Result<(), SceneError> {
+        if on == self.wind_on() {
+            return Ok(());
+        }
+        let (wind, gust) = if on {
+            self.stored_wind.take().unwrap_or((DEFAULT_WIND, 0.0))
+        } else {
+            let p = &self.settings.params;
+            self.stored_wind = Some((p.wind, p.gust));
+            (DVec3::ZERO, 0.0)
+        };
+        self.apply(Edit::Wind(wind))?;
+        self.apply(Edit::Gust(gust))
     }
 
     /// Applies a typed edit (a panel slider): records it in the scene spec, so that
@@ -440,5 +572,42 @@ impl Session {
             sim_ms,
             behind: false,
         }
+    }
+}
+
+/// The scene part of a saved file's name: a built-in scene's name, or a scene file's
+/// stem without an earlier save's `saved-` and `-N`, in letters, digits, `-` and `_`.
+fn save_stem(name: &str) -> String {
+    let stem = Path::new(name)
+        .file_stem()
+        .map_or(name.into(), |s| s.to_string_lossy());
+    let stem = stem.strip_prefix("saved-").unwrap_or(&stem);
+    let stem = match stem.rsplit_once('-') {
+        Some((head, n)) if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) => head,
+        _ => stem,
+    };
+    let clean: String = stem
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '-' || *c == '_')
+        .take(40)
+        .collect();
+    if clean.is_empty() {
+        "scene".to_string()
+    } else {
+        clean
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::save_stem;
+
+    #[test]
+    fn saved_file_names_come_from_the_scene() {
+        assert_eq!(save_stem("cloth"), "cloth");
+        assert_eq!(save_stem("bench-wind"), "bench-wind");
+        assert_eq!(save_stem("/tmp/my flag.toml"), "myflag");
+        assert_eq!(save_stem("saved-cloth-3.toml"), "cloth");
+        assert_eq!(save_stem("../.."), "scene");
     }
 }

@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use cloth_sandbox::scene::{Layout, builtin_scenes};
+use cloth_sandbox::scene::{Layout, PinPreset, Pins, builtin_scenes};
 use cloth_sandbox::session::{Edit, FrameReport, Session};
 use cloth_sandbox::sim::Integrator;
 use egui::{Color32, RichText, Ui};
@@ -32,6 +32,12 @@ pub enum Action {
     Step,
     /// Turn safe stepping on or off.
     SafeStepping(bool),
+    /// Pin exactly these particles (a preset, or none to unpin all).
+    Pins(Pins),
+    /// Turn the wind (and gusts) on or off.
+    WindOn(bool),
+    /// Save the setup as a scene file (Ctrl+S).
+    Save,
 }
 
 /// Panel state that lives between frames.
@@ -41,6 +47,8 @@ pub struct PanelState {
     pub strain_colors: bool,
     /// Last error from a scene change, shown until the next success.
     pub error: Option<String>,
+    /// Where the setup was last saved.
+    pub saved: Option<String>,
     sim_ms: f64,
     behind: bool,
     frame_time: f64,
@@ -75,7 +83,10 @@ impl PanelState {
     }
 }
 
-/// A slider over `range` that reports a finished change (on release for drags).
+/// A slider over `range` that reports a change the user made. A value the slider
+/// did not touch is left as it is, even one outside `range` or with more decimals
+/// than it shows (egui's default clamps and rounds every frame, which would edit
+/// a scene's damping ratio or a 1024-wide grid the moment it opens).
 fn slider(
     ui: &mut Ui,
     value: &mut f64,
@@ -86,13 +97,14 @@ fn slider(
     let r = ui.add(
         egui::Slider::new(value, range)
             .logarithmic(log)
+            .clamping(egui::SliderClamping::Edits)
             .text(label)
             .max_decimals(6),
     );
     r.changed()
 }
 
-/// Integer slider.
+/// Integer slider; like [`slider`], it leaves a value it did not touch alone.
 fn int_slider(
     ui: &mut Ui,
     value: &mut u32,
@@ -102,9 +114,44 @@ fn int_slider(
     ui.add(
         egui::Slider::new(value, range)
             .logarithmic(true)
+            .clamping(egui::SliderClamping::Edits)
             .text(label),
     )
     .changed()
+}
+
+/// The pin presets the layout has (a grid's corners and edges, a line's ends) and
+/// "unpin all".
+fn pin_presets(ui: &mut Ui, layout: Layout, pinned: usize, actions: &mut Vec<Action>) {
+    let presets: &[(&str, PinPreset, &str)] = match layout {
+        Layout::Grid => &[
+            ("corners", PinPreset::Corners, "Pin the four corners (seed 000)"),
+            ("top corners", PinPreset::TopCorners, "Pin the two top corners"),
+            ("top edge", PinPreset::TopEdge, "Pin the whole top row"),
+            ("left edge", PinPreset::LeftEdge, "Pin the whole left column (a flag on its pole)"),
+        ],
+        Layout::Lattice => &[("ends", PinPreset::Corners, "Pin the first and the last particle")],
+        _ => &[
+            ("first", PinPreset::First, "Pin the first particle only"),
+            ("both ends", PinPreset::Corners, "Pin the first and the last particle"),
+        ],
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.label(format!("Pins ({pinned}):"))
+            .on_hover_text("Pinned particles stay where they are. Click a particle in the view to pin or unpin it.");
+        for &(label, preset, tip) in presets {
+            if ui.button(label).on_hover_text(tip).clicked() {
+                actions.push(Action::Pins(Pins::Preset(preset)));
+            }
+        }
+        if ui
+            .button("unpin all")
+            .on_hover_text("Free every particle: the cloth falls")
+            .clicked()
+        {
+            actions.push(Action::Pins(Pins::Preset(PinPreset::None)));
+        }
+    });
 }
 
 /// Draws the panel; returns what the user asked for and the rectangle (points)
@@ -181,7 +228,17 @@ fn contents(
         if ui.button("Reset").clicked() {
             actions.push(Action::Reset);
         }
+        if ui
+            .button("Save")
+            .on_hover_text("Save the scene, every parameter and the pins as saved-<scene>-N.toml in the working directory (Ctrl+S); open it with `cloth --scene FILE`, `cloth run --scene FILE`, or by dropping it on the window")
+            .clicked()
+        {
+            actions.push(Action::Save);
+        }
     });
+    if let Some(path) = &state.saved {
+        ui.label(RichText::new(format!("Saved to {path}")).small());
+    }
     // The scene's own steps per frame (its speed); safe stepping may run more,
     // smaller steps over the same simulated time.
     let mut substeps = r.substeps;
@@ -189,6 +246,7 @@ fn contents(
         .add(
             egui::Slider::new(&mut substeps, 1..=2000)
                 .logarithmic(true)
+                .clamping(egui::SliderClamping::Edits)
                 .text("speed (steps/frame)"),
         )
         .changed()
@@ -270,10 +328,15 @@ fn contents(
         ui.colored_label(Color32::from_rgb(255, 170, 60), e);
     }
 
+    // Pins.
+    ui.separator();
+    pin_presets(ui, r.layout, session.pins().len(), actions);
+
     // Parameters the scene uses.
     let system = session.system();
     let has_springs = !system.springs().is_empty();
     let has_surface = !system.triangles().is_empty();
+    let mut wind_switch = None;
     let mut edit = |e: Edit| actions.push(Action::Edit(e));
     ui.separator();
     egui::CollapsingHeader::new("Parameters")
@@ -341,18 +404,36 @@ fn contents(
                 edit(Edit::Gravity(g));
             }
             if has_surface {
-                ui.label("Wind (m/s)");
-                let mut w = p.wind;
-                let mut changed = slider(ui, &mut w.x, -20.0..=20.0, "x", false);
-                changed |= slider(ui, &mut w.y, -20.0..=20.0, "y", false);
-                changed |= slider(ui, &mut w.z, -20.0..=20.0, "z", false);
-                if changed {
-                    edit(Edit::Wind(w));
-                }
-                let mut gust = p.gust;
-                if slider(ui, &mut gust, 0.0..=10.0, "gust (m/s)", false) {
-                    edit(Edit::Gust(gust));
-                }
+                // Wind acts through the aerodynamic drag only: without it (seed
+                // 002's still air) the controls would do nothing, so they are off.
+                let aero = p.drag_coefficient > 0.0 && p.air_density > 0.0;
+                ui.add_enabled_ui(aero, |ui| {
+                    let mut on = session.wind_on();
+                    if ui
+                        .checkbox(&mut on, "wind")
+                        .on_hover_text("Wind on or off (seed 004): off sets the wind and gusts to zero and remembers them for turning it back on")
+                        .changed()
+                    {
+                        wind_switch = Some(on);
+                    }
+                    let mut w = p.wind;
+                    let tip = "Mean wind velocity in m/s, acting through the aerodynamic drag on each triangle; -20 to 20 here, up to 10000 m/s in scene files";
+                    ui.label("Wind (m/s)").on_hover_text(tip);
+                    let mut changed = slider(ui, &mut w.x, -20.0..=20.0, "x", false);
+                    changed |= slider(ui, &mut w.y, -20.0..=20.0, "y", false);
+                    changed |= slider(ui, &mut w.z, -20.0..=20.0, "z", false);
+                    if changed {
+                        edit(Edit::Wind(w));
+                    }
+                    let mut gust = p.gust;
+                    if slider(ui, &mut gust, 0.0..=10.0, "gust (m/s)", false) {
+                        edit(Edit::Gust(gust));
+                    }
+                })
+                .response
+                .on_disabled_hover_text(
+                    "This scene has no aerodynamic drag (drag_coefficient or air_density is 0, still air): wind would have no effect",
+                );
             }
             let mut dt = p.dt;
             if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true) {
@@ -381,6 +462,10 @@ fn contents(
                 }
             }
         });
+
+    if let Some(on) = wind_switch {
+        actions.push(Action::WindOn(on));
+    }
 
     // Stats.
     egui::CollapsingHeader::new("Stats")
