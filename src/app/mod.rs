@@ -4,6 +4,7 @@
 
 pub mod frame;
 pub mod gfx;
+pub mod help;
 pub mod input;
 pub mod panel;
 pub mod screenshot;
@@ -317,6 +318,10 @@ impl App {
                 Err(e) => self.panel.error = Some(e.to_string()),
             },
             Action::Save => self.save(),
+            Action::ToggleHelp => {
+                self.panel.help = !self.panel.help;
+                log::info!("help {}", if self.panel.help { "shown" } else { "hidden" });
+            }
             Action::TogglePause => self.session.set_paused(!self.session.paused()),
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::Step => {
@@ -348,6 +353,10 @@ impl App {
             return;
         };
         let down = event.state == ElementState::Pressed;
+        if down && !event.repeat && (code == KeyCode::F1 || event.text.as_deref() == Some("?")) {
+            self.apply(Action::ToggleHelp, event_loop);
+            return;
+        }
         if self.modifiers.control_key() {
             if down && !event.repeat && code == KeyCode::KeyS {
                 self.apply(Action::Save, event_loop);
