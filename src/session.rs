@@ -56,6 +56,9 @@ const REBUILD_KEYS: &[&str] = &[
 /// 004's breeze, 3 m/s along z (towards the viewer).
 pub const DEFAULT_WIND: DVec3 = DVec3::new(0.0, 0.0, 3.0);
 
+/// Most changes [`Session::undo`] can take back.
+pub const MAX_UNDO: usize = 200;
+
 /// What happened when the simulation diverged.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DivergenceReport {
@@ -108,6 +111,15 @@ pub struct Session {
     step_choice: Option<StepChoice>,
     /// Wind and gust (m/s) the wind switch turned off, to turn back on.
     stored_wind: Option<(DVec3, f64)>,
+    /// The scene as loaded, before any edit: what "Defaults" restores.
+    defaults: Scene,
+    /// Setups before each change, oldest first, for undo.
+    undo: Vec<Scene>,
+    /// Setups undone, most recent last, for redo.
+    redo: Vec<Scene>,
+    /// The key of the edit the last undo entry was made for while the same
+    /// gesture goes on (a slider being dragged), so that it makes one entry.
+    edit_group: Option<&'static str>,
 }
 
 /// What safe stepping chose for the running system.
@@ -136,6 +148,10 @@ impl Session {
     pub fn new(scene: Scene, name: &str) -> Result<Self, SceneError> {
         let settings = scene.resolve()?;
         let mut session = Self {
+            defaults: scene.clone(),
+            undo: Vec::new(),
+            redo: Vec::new(),
+            edit_group: None,
             scene,
             name: name.to_string(),
             system: settings.build(),
@@ -378,6 +394,7 @@ impl Session {
     /// refused with an error naming `pins` and the range, and nothing changes.
     pub fn set_pins(&mut self, pins: Pins) -> Result<(), SceneError> {
         let indices = self.settings.pin_indices(&pins)?;
+        self.remember(self.scene.clone(), None);
         self.scene.spec.pins = Some(pins);
         self.settings.pins = indices;
         self.sync_pins();
@@ -398,6 +415,7 @@ impl Session {
             }
             Err(at) => pins.insert(at, i),
         }
+        self.remember(self.scene.clone(), None);
         self.scene.spec.pins = Some(Pins::Indices(pins.clone()));
         self.settings.pins = pins;
         self.sync_pins();
@@ -438,8 +456,11 @@ impl Session {
             self.stored_wind = Some((p.wind, p.gust));
             (DVec3::ZERO, 0.0)
         };
-        self.apply(Edit::Wind(wind))?;
-        self.apply(Edit::Gust(gust))
+        let before = self.scene.clone();
+        self.apply_unrecorded(Edit::Wind(wind))?;
+        self.apply_unrecorded(Edit::Gust(gust))?;
+        self.remember(before, None);
+        Ok(())
     }
 
     /// Applies a typed edit (a panel slider): records it in the scene spec, so that
@@ -448,7 +469,19 @@ impl Session {
     /// time). Width, height and depth rebuild the system with every other setting
     /// kept. A value out of range (or not finite) is refused with an error naming
     /// the field and the allowed range, and nothing changes.
+    ///
+    /// The change can be undone; edits of the same key in a row make one undo
+    /// step until [`Self::end_edit_group`] (the app calls it when the pointer lets
+    /// go of a slider).
     pub fn apply(&mut self, edit: Edit) -> Result<(), SceneError> {
+        let before = self.scene.clone();
+        self.apply_unrecorded(edit)?;
+        self.remember(before, Some(edit.key()));
+        Ok(())
+    }
+
+    /// [`Self::apply`] without an undo entry.
+    fn apply_unrecorded(&mut self, edit: Edit) -> Result<(), SceneError> {
         let mut scene = self.scene.clone();
         scene.apply(edit)?;
         let mut settings = self.settings.clone();
@@ -462,10 +495,103 @@ impl Session {
     /// rebuild the system with every other setting kept; the rest apply to the
     /// running system as [`Self::apply`] does. On error nothing changes.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
+        let before = self.scene.clone();
         let mut scene = self.scene.clone();
         scene.set(key, value)?;
         let settings = scene.resolve()?;
         self.commit(scene, settings, self.needs_rebuild(key));
+        self.remember(before, None);
+        Ok(())
+    }
+
+    /// Records `before`, the setup before a change, for [`Self::undo`], and forgets
+    /// what was undone. A change of the same `group` (edit key) as the last one,
+    /// within one gesture, adds no entry.
+    fn remember(&mut self, before: Scene, group: Option<&'static str>) {
+        if group.is_some() && group == self.edit_group {
+            return;
+        }
+        if self.undo.len() >= MAX_UNDO {
+            self.undo.remove(0);
+        }
+        self.undo.push(before);
+        self.redo.clear();
+        self.edit_group = group;
+    }
+
+    /// Ends the gesture that groups edits of one key into one undo step: the next
+    /// edit makes a new one.
+    pub fn end_edit_group(&mut self) {
+        self.edit_group = None;
+    }
+
+    /// Whether there is a change to undo.
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    /// Whether there is an undone change to redo.
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Takes back the last change of parameters or pins (Ctrl+Z): the setup before
+    /// it comes back, applied in place as edits are, or by a rebuild where the
+    /// layout differs. Returns whether there was anything to undo.
+    pub fn undo(&mut self) -> Result<bool, SceneError> {
+        let Some(scene) = self.undo.pop() else {
+            return Ok(false);
+        };
+        let current = self.scene.clone();
+        if let Err(e) = self.restore(scene.clone()) {
+            self.undo.push(scene);
+            return Err(e);
+        }
+        self.redo.push(current);
+        self.edit_group = None;
+        Ok(true)
+    }
+
+    /// Does again the last change undone (Ctrl+Shift+Z). Returns whether there was
+    /// anything to redo.
+    pub fn redo(&mut self) -> Result<bool, SceneError> {
+        let Some(scene) = self.redo.pop() else {
+            return Ok(false);
+        };
+        let current = self.scene.clone();
+        if let Err(e) = self.restore(scene.clone()) {
+            self.redo.push(scene);
+            return Err(e);
+        }
+        self.undo.push(current);
+        self.edit_group = None;
+        Ok(true)
+    }
+
+    /// Restores the scene's own parameters and pins as it was loaded ("Defaults"),
+    /// dropping every edit; the running state is kept where the layout allows, as
+    /// for an edit. The change can be undone.
+    pub fn restore_defaults(&mut self) -> Result<(), SceneError> {
+        let before = self.scene.clone();
+        self.restore(self.defaults.clone())?;
+        self.remember(before, None);
+        Ok(())
+    }
+
+    /// Makes `scene` the setup: in place, as edits apply, unless it lays the
+    /// particles out differently, which rebuilds. On error nothing changes.
+    fn restore(&mut self, scene: Scene) -> Result<(), SceneError> {
+        let settings = scene.resolve()?;
+        let (a, b) = (&self.settings, &settings);
+        let rebuild = (a.layout, a.orientation, a.width, a.height, a.depth)
+            != (b.layout, b.orientation, b.width, b.height, b.depth)
+            || (a.rotation, a.stretch, a.shear_scale, a.bend_scale, a.params.seed)
+                != (b.rotation, b.stretch, b.shear_scale, b.bend_scale, b.params.seed)
+            || self.scene.spec.origin != scene.spec.origin;
+        self.commit(scene, settings, rebuild);
+        if !rebuild {
+            self.sync_pins();
+        }
         Ok(())
     }
 

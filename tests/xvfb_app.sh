@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
-# another, resize the window, press R, F1 twice (help), Ctrl+S (save), Esc; passes when the app logged each action, exited 0
+# another, resize the window, press R, F1 twice (help), Ctrl+S (save), Ctrl+Z and
+# Ctrl+Shift+Z (undo, redo), Esc; passes when the app logged each action, exited 0
 # and its log holds no error or panic.
 #
 # Needs: Xvfb, xdotool (and ImageMagick's `import` when SHOT_DIR is set, to save
@@ -109,6 +110,16 @@ grep -q "saved the setup to" "$LOG" || fail "Ctrl+S did not save"
 [[ -s $WORK/cwd/saved-cloth-1.toml ]] || fail "Ctrl+S wrote no saved-cloth-1.toml"
 grep -q '^layout = "grid"' "$WORK/cwd/saved-cloth-1.toml" || fail "the saved file is no scene"
 
+# Ctrl+Z takes back the last change (the pin clicked above); Ctrl+Shift+Z redoes it.
+xdotool windowfocus --sync "$WID"
+xdotool key ctrl+z
+sleep 0.5
+grep -q "Undo done" "$LOG" || fail "Ctrl+Z undid nothing"
+xdotool windowfocus --sync "$WID"
+xdotool key ctrl+shift+z
+sleep 0.5
+grep -q "Redo done" "$LOG" || fail "Ctrl+Shift+Z redid nothing"
+
 xdotool windowfocus --sync "$WID"
 xdotool key Escape
 set +e
@@ -124,4 +135,4 @@ APP_PID=""
 if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
     fail "the log has errors"
 fi
-echo "xvfb_app: ok (pin, drag, resize, reset, help, save, quit; exit 0, clean log)"
+echo "xvfb_app: ok (pin, drag, resize, reset, help, save, undo, redo, quit; exit 0, clean log)"

@@ -318,6 +318,26 @@ impl App {
                 Err(e) => self.panel.error = Some(e.to_string()),
             },
             Action::Save => self.save(),
+            Action::Undo | Action::Redo | Action::Defaults => {
+                let particles = self.session.system().particle_count();
+                let done = match action {
+                    Action::Undo => self.session.undo(),
+                    Action::Redo => self.session.redo(),
+                    _ => self.session.restore_defaults().map(|()| true),
+                };
+                match done {
+                    Ok(true) => {
+                        log::info!("{action:?} done");
+                        self.panel.error = None;
+                        if self.session.system().particle_count() != particles {
+                            self.mouse.cancel();
+                            self.frame_camera();
+                        }
+                    }
+                    Ok(false) => log::info!("{action:?}: nothing to do"),
+                    Err(e) => self.panel.error = Some(e.to_string()),
+                }
+            }
             Action::ToggleHelp => {
                 self.panel.help = !self.panel.help;
                 log::info!("help {}", if self.panel.help { "shown" } else { "hidden" });
@@ -358,8 +378,15 @@ impl App {
             return;
         }
         if self.modifiers.control_key() {
-            if down && !event.repeat && code == KeyCode::KeyS {
-                self.apply(Action::Save, event_loop);
+            let action = match code {
+                KeyCode::KeyS => Some(Action::Save),
+                KeyCode::KeyZ if self.modifiers.shift_key() => Some(Action::Redo),
+                KeyCode::KeyZ => Some(Action::Undo),
+                KeyCode::KeyY => Some(Action::Redo),
+                _ => None,
+            };
+            if let Some(action) = action.filter(|_| down) {
+                self.apply(action, event_loop);
             }
             return;
         }
@@ -423,6 +450,10 @@ impl App {
 
         for action in actions {
             self.apply(action, event_loop);
+        }
+        // A slider let go: its next edit is a new undo step.
+        if !self.egui_ctx.egui_is_using_pointer() {
+            self.session.end_edit_group();
         }
     }
 }

@@ -40,6 +40,12 @@ pub enum Action {
     Save,
     /// Show or hide the help overlay (F1, ?).
     ToggleHelp,
+    /// Take back the last change of parameters or pins (Ctrl+Z).
+    Undo,
+    /// Do again the last change undone (Ctrl+Shift+Z).
+    Redo,
+    /// Restore the scene's own parameters and pins.
+    Defaults,
 }
 
 /// Panel state that lives between frames.
@@ -278,6 +284,29 @@ fn contents(
             .clicked()
         {
             actions.push(Action::Save);
+        }
+    });
+    ui.horizontal(|ui| {
+        if ui
+            .add_enabled(session.can_undo(), egui::Button::new("Undo"))
+            .on_hover_text("Take back the last change of a parameter or the pins (Ctrl+Z)")
+            .clicked()
+        {
+            actions.push(Action::Undo);
+        }
+        if ui
+            .add_enabled(session.can_redo(), egui::Button::new("Redo"))
+            .on_hover_text("Do again the last change undone (Ctrl+Shift+Z)")
+            .clicked()
+        {
+            actions.push(Action::Redo);
+        }
+        if ui
+            .button("Defaults")
+            .on_hover_text("Restore the scene's own parameters and pins, as it was opened (with any --set), in place; R then starts it again from there. Can be undone")
+            .clicked()
+        {
+            actions.push(Action::Defaults);
         }
     });
     if let Some(path) = &state.saved {
