@@ -585,8 +585,19 @@ impl Session {
         let (a, b) = (&self.settings, &settings);
         let rebuild = (a.layout, a.orientation, a.width, a.height, a.depth)
             != (b.layout, b.orientation, b.width, b.height, b.depth)
-            || (a.rotation, a.stretch, a.shear_scale, a.bend_scale, a.params.seed)
-                != (b.rotation, b.stretch, b.shear_scale, b.bend_scale, b.params.seed)
+            || (
+                a.rotation,
+                a.stretch,
+                a.shear_scale,
+                a.bend_scale,
+                a.params.seed,
+            ) != (
+                b.rotation,
+                b.stretch,
+                b.shear_scale,
+                b.bend_scale,
+                b.params.seed,
+            )
             || self.scene.spec.origin != scene.spec.origin;
         self.commit(scene, settings, rebuild);
         if !rebuild {

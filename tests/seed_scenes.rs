@@ -49,10 +49,7 @@ fn seed_002_hanging_cloth_has_the_seeds_numbers() {
     // Structural: neighbours along x and y; shear: both diagonals of every cell;
     // bend: two apart along x and y.
     assert_eq!(s.system().particle_count(), w * h);
-    assert_eq!(
-        count(&s, SpringKind::Structural),
-        (w - 1) * h + w * (h - 1)
-    );
+    assert_eq!(count(&s, SpringKind::Structural), (w - 1) * h + w * (h - 1));
     assert_eq!(count(&s, SpringKind::Shear), 2 * (w - 1) * (h - 1));
     assert_eq!(count(&s, SpringKind::Bend), (w - 2) * h + w * (h - 2));
     // Every spring's rest length is the distance between its ends at the start.
@@ -128,8 +125,14 @@ fn pin_presets_pin_exactly_their_particles_in_place() {
         for &i in &expected {
             assert_eq!(s.system().positions()[i], start[i], "pinned {i} moved");
         }
-        let free = (0..w * h).find(|i| !expected.contains(i)).expect("a free one");
-        assert_ne!(s.system().positions()[free], start[free], "free {free} stuck");
+        let free = (0..w * h)
+            .find(|i| !expected.contains(i))
+            .expect("a free one");
+        assert_ne!(
+            s.system().positions()[free],
+            start[free],
+            "free {free} stuck"
+        );
     }
     // "Unpin all", then a click pins one particle and a second click frees it.
     s.toggle_pin(7);
@@ -141,7 +144,11 @@ fn pin_presets_pin_exactly_their_particles_in_place() {
     s.reset().expect("resets");
     assert_eq!(s.pins(), vec![3], "a clicked pin is part of the setup");
     s.toggle_pin(usize::MAX);
-    assert_eq!(s.pins(), vec![3], "a click past the last particle does nothing");
+    assert_eq!(
+        s.pins(),
+        vec![3],
+        "a click past the last particle does nothing"
+    );
 }
 
 #[test]
@@ -158,7 +165,8 @@ fn a_pin_list_past_the_last_particle_is_refused_naming_pins() {
 fn presets_off_a_grid_mean_the_ends_of_the_line() {
     let mut s = Session::load_with("chain", &[]).expect("loads");
     let n = s.system().particle_count();
-    s.set_pins(Pins::Preset(PinPreset::Corners)).expect("applies");
+    s.set_pins(Pins::Preset(PinPreset::Corners))
+        .expect("applies");
     assert_eq!(s.pins(), vec![0, n - 1]);
     s.set_pins(Pins::Preset(PinPreset::First)).expect("applies");
     assert_eq!(s.pins(), vec![0]);
@@ -167,7 +175,10 @@ fn presets_off_a_grid_mean_the_ends_of_the_line() {
 #[test]
 fn the_wind_switch_turns_wind_and_gusts_off_and_back_on() {
     let mut s = Session::load_with("cloth", &[]).expect("loads");
-    let scene = Scene::load("cloth").expect("loads").resolve().expect("valid");
+    let scene = Scene::load("cloth")
+        .expect("loads")
+        .resolve()
+        .expect("valid");
     let (wind, gust) = (scene.params.wind, scene.params.gust);
     assert!(wind != DVec3::ZERO && gust > 0.0);
     assert!(s.wind_on());

@@ -8,7 +8,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "Left drag on a particle",
         "move it (on the plane through it facing the camera)",
     ),
-    ("Right drag, or left drag on empty space", "orbit the camera"),
+    (
+        "Right drag, or left drag on empty space",
+        "orbit the camera",
+    ),
     ("Middle drag, or Shift + right drag", "pan"),
     ("Mouse wheel", "zoom"),
     ("W A S D / Q E", "fly forward, left, back, right / down, up"),
@@ -17,7 +20,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
     (". (period)", "one step while paused"),
     ("R", "reset the scene (keeps your edits and pins)"),
     ("Ctrl+S", "save the setup as saved-<scene>-N.toml"),
-    ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a parameter or pin change"),
+    (
+        "Ctrl+Z / Ctrl+Shift+Z",
+        "undo / redo a parameter or pin change",
+    ),
     ("Drop a scene file on the window", "open it"),
     ("F1 or ?", "show / hide this help"),
     ("Esc or P", "quit"),

@@ -144,15 +144,35 @@ fn int_slider(
 fn pin_presets(ui: &mut Ui, layout: Layout, pinned: usize, actions: &mut Vec<Action>) {
     let presets: &[(&str, PinPreset, &str)] = match layout {
         Layout::Grid => &[
-            ("corners", PinPreset::Corners, "Pin the four corners (seed 000)"),
-            ("top corners", PinPreset::TopCorners, "Pin the two top corners"),
+            (
+                "corners",
+                PinPreset::Corners,
+                "Pin the four corners (seed 000)",
+            ),
+            (
+                "top corners",
+                PinPreset::TopCorners,
+                "Pin the two top corners",
+            ),
             ("top edge", PinPreset::TopEdge, "Pin the whole top row"),
-            ("left edge", PinPreset::LeftEdge, "Pin the whole left column (a flag on its pole)"),
+            (
+                "left edge",
+                PinPreset::LeftEdge,
+                "Pin the whole left column (a flag on its pole)",
+            ),
         ],
-        Layout::Lattice => &[("ends", PinPreset::Corners, "Pin the first and the last particle")],
+        Layout::Lattice => &[(
+            "ends",
+            PinPreset::Corners,
+            "Pin the first and the last particle",
+        )],
         _ => &[
             ("first", PinPreset::First, "Pin the first particle only"),
-            ("both ends", PinPreset::Corners, "Pin the first and the last particle"),
+            (
+                "both ends",
+                PinPreset::Corners,
+                "Pin the first and the last particle",
+            ),
         ],
     };
     ui.horizontal_wrapped(|ui| {
@@ -214,8 +234,10 @@ fn contents(
         }
     });
     ui.label(
-        RichText::new("Click a particle: pin · drag it: move · drag elsewhere: orbit · F1 or ?: all keys")
-            .small(),
+        RichText::new(
+            "Click a particle: pin · drag it: move · drag elsewhere: orbit · F1 or ?: all keys",
+        )
+        .small(),
     );
     ui.separator();
 
@@ -608,17 +630,26 @@ fn contents(
         .default_open(true)
         .show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.mesh, "mesh").on_hover_text("Draw the cloth surface, lit");
-                ui.checkbox(&mut view.wireframe, "wireframe").on_hover_text("Draw the triangles' edges");
-                ui.checkbox(&mut view.textured, "texture").on_hover_text("A checker texture on the surface, to show how it moves");
+                ui.checkbox(&mut view.mesh, "mesh")
+                    .on_hover_text("Draw the cloth surface, lit");
+                ui.checkbox(&mut view.wireframe, "wireframe")
+                    .on_hover_text("Draw the triangles' edges");
+                ui.checkbox(&mut view.textured, "texture")
+                    .on_hover_text("A checker texture on the surface, to show how it moves");
             });
             ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.springs, "springs").on_hover_text("Draw the springs as lines, coloured by kind");
-                ui.checkbox(&mut state.strain_colors, "by strain").on_hover_text("Colour springs by strain (stretch over rest length) instead of kind");
+                ui.checkbox(&mut view.springs, "springs")
+                    .on_hover_text("Draw the springs as lines, coloured by kind");
+                ui.checkbox(&mut state.strain_colors, "by strain")
+                    .on_hover_text(
+                        "Colour springs by strain (stretch over rest length) instead of kind",
+                    );
             });
             ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.particles, "particles").on_hover_text("Draw every particle as a dot");
-                ui.checkbox(&mut view.pins, "pins").on_hover_text("Mark the pinned particles in red");
+                ui.checkbox(&mut view.particles, "particles")
+                    .on_hover_text("Draw every particle as a dot");
+                ui.checkbox(&mut view.pins, "pins")
+                    .on_hover_text("Mark the pinned particles in red");
             });
             ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"))
                 .on_hover_text("Diameter of the particle dots in screen pixels, 2 to 20");

@@ -489,7 +489,9 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
 
     let pins = pin_indices(
         o,
-        spec.pins.as_ref().unwrap_or(&Pins::Preset(default_pins(layout))),
+        spec.pins
+            .as_ref()
+            .unwrap_or(&Pins::Preset(default_pins(layout))),
         layout,
         [width, height],
         particles,
