@@ -9,6 +9,11 @@
 //! and changes the running system in place through its setters, so that a slider
 //! dragged every frame costs no parsing, no resolving of the scene and no new system;
 //! only layout edits (width, height, depth) rebuild it.
+//!
+//! The scene spec is the whole setup: pins set by a click or a preset are recorded
+//! in it too, so that a reset keeps them, [`Session::save_in`] writes it as a scene
+//! file that loads back to the same run, and undo, redo and "Defaults" restore a
+//! setup by the same in-place path as edits.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -391,7 +396,8 @@ impl Session {
     /// or none) and frees every other: recorded in the scene (key `pins`), so that a
     /// reset, a rebuild and a saved scene keep it, and applied to the running system
     /// in place, the rest of its state untouched. An index past the last particle is
-    /// refused with an error naming `pins` and the range, and nothing changes.
+    /// refused with an error naming `pins` and the range, and nothing changes. The
+    /// change can be undone.
     pub fn set_pins(&mut self, pins: Pins) -> Result<(), SceneError> {
         let indices = self.settings.pin_indices(&pins)?;
         self.remember(self.scene.clone(), None);
@@ -402,8 +408,8 @@ impl Session {
     }
 
     /// Pins particle `i` if it is free, frees it if pinned (a click): recorded in the
-    /// scene as the list of pinned particles. An index past the last particle does
-    /// nothing.
+    /// scene as the list of pinned particles, and can be undone. An index past the
+    /// last particle does nothing.
     pub fn toggle_pin(&mut self, i: usize) {
         if i >= self.system.particle_count() {
             return;

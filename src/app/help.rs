@@ -21,7 +21,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("R", "reset the scene (keeps your edits and pins)"),
     ("Ctrl+S", "save the setup as saved-<scene>-N.toml"),
     (
-        "Ctrl+Z / Ctrl+Shift+Z",
+        "Ctrl+Z / Ctrl+Shift+Z or Ctrl+Y",
         "undo / redo a parameter or pin change",
     ),
     ("Drop a scene file on the window", "open it"),

@@ -377,7 +377,9 @@ impl App {
             self.apply(Action::ToggleHelp, event_loop);
             return;
         }
-        if self.modifiers.control_key() {
+        // Ctrl+S, Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y. Only presses are taken: a release
+        // still reaches the fly keys below, so S held before Ctrl never sticks.
+        if down && self.modifiers.control_key() {
             let action = match code {
                 KeyCode::KeyS => Some(Action::Save),
                 KeyCode::KeyZ if self.modifiers.shift_key() => Some(Action::Redo),
@@ -385,10 +387,12 @@ impl App {
                 KeyCode::KeyY => Some(Action::Redo),
                 _ => None,
             };
-            if let Some(action) = action.filter(|_| down) {
-                self.apply(action, event_loop);
+            if let Some(action) = action {
+                if !event.repeat {
+                    self.apply(action, event_loop);
+                }
+                return;
             }
-            return;
         }
         match code {
             KeyCode::KeyW => self.fly.forward = down,
