@@ -9,11 +9,20 @@
 //! and changes the running system in place through its setters, so that a slider
 //! dragged every frame costs no parsing, no resolving of the scene and no new system;
 //! only layout edits (width, height, depth) rebuild it.
+//!
+//! The scene spec is the whole setup: pins set by a click or a preset are recorded
+//! in it too, so that a reset keeps them, [`Session::save_in`] writes it as a scene
+//! file that loads back to the same run, and undo, redo and "Defaults" restore a
+//! setup by the same in-place path as edits.
 
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 pub use crate::scene::Edit;
-use crate::scene::{Resolved, Scene, SceneError};
+use glam::DVec3;
+
+use crate::scene::{Pins, Resolved, Scene, SceneError};
 use crate::sim::safe::{self, DEFAULT_SAFETY};
 use crate::sim::{Clock, Params, SpringKind, State, System};
 
@@ -47,6 +56,13 @@ const REBUILD_KEYS: &[&str] = &[
     "bend_scale",
     "seed",
 ];
+
+/// The wind the wind switch turns on when the scene had none to restore: seed
+/// 004's breeze, 3 m/s along z (towards the viewer).
+pub const DEFAULT_WIND: DVec3 = DVec3::new(0.0, 0.0, 3.0);
+
+/// Most changes [`Session::undo`] can take back.
+pub const MAX_UNDO: usize = 200;
 
 /// What happened when the simulation diverged.
 #[derive(Clone, Debug, PartialEq)]
@@ -98,6 +114,17 @@ pub struct Session {
     safe_stepping: bool,
     /// What safe stepping chose, when it is on.
     step_choice: Option<StepChoice>,
+    /// Wind and gust (m/s) the wind switch turned off, to turn back on.
+    stored_wind: Option<(DVec3, f64)>,
+    /// The scene as loaded, before any edit: what "Defaults" restores.
+    defaults: Scene,
+    /// Setups before each change, oldest first, for undo.
+    undo: Vec<Scene>,
+    /// Setups undone, most recent last, for redo.
+    redo: Vec<Scene>,
+    /// The key of the edit the last undo entry was made for while the same
+    /// gesture goes on (a slider being dragged), so that it makes one entry.
+    edit_group: Option<&'static str>,
 }
 
 /// What safe stepping chose for the running system.
@@ -126,6 +153,10 @@ impl Session {
     pub fn new(scene: Scene, name: &str) -> Result<Self, SceneError> {
         let settings = scene.resolve()?;
         let mut session = Self {
+            defaults: scene.clone(),
+            undo: Vec::new(),
+            redo: Vec::new(),
+            edit_group: None,
             scene,
             name: name.to_string(),
             system: settings.build(),
@@ -140,12 +171,13 @@ impl Session {
             ms_per_step: 0.0,
             safe_stepping: true,
             step_choice: None,
+            stored_wind: None,
         };
         session.built();
         Ok(session)
     }
 
-    /// Builds the system anew from the settings; pins made by clicking are dropped.
+    /// Builds the system anew from the settings (which hold the pins).
     fn rebuild(&mut self) {
         self.system = self.settings.build();
         self.built();
@@ -298,16 +330,143 @@ impl Session {
     }
 
     /// Rebuilds the system from the scene with the user's edits (R, "Reset").
-    /// Pins made by clicking are dropped; the pause state is kept.
+    /// Pins set by clicking or a preset are kept (they are in the scene); the pause
+    /// state is kept.
     pub fn reset(&mut self) -> Result<(), SceneError> {
         self.settings = self.scene.resolve()?;
         self.rebuild();
         Ok(())
     }
 
+    /// The current setup as a scene file: the scene with every edit and the pins
+    /// in effect, which `cloth --scene FILE` and `cloth run --scene FILE` read back
+    /// to the same run (the state the run has reached is not part of it).
+    pub fn scene_text(&self) -> String {
+        let body = toml::to_string(&self.scene.spec).unwrap_or_else(|e| {
+            // Every field of a spec is a plain number, string or list: unreachable.
+            log::error!("cannot write the scene as TOML: {e}");
+            String::new()
+        });
+        format!(
+            "# Saved by cloth-sandbox from {}.\n# Open it with `cloth --scene FILE` or `cloth run --scene FILE`.\n{body}",
+            self.scene.origin
+        )
+    }
+
+    /// Writes [`Self::scene_text`] to a new file `saved-<scene>-<N>.toml` in `dir`,
+    /// with the first N from 1 that names no file there (an existing file is never
+    /// replaced), and returns its path.
+    pub fn save_in(&self, dir: &Path) -> std::io::Result<PathBuf> {
+        let text = self.scene_text();
+        let stem = save_stem(&self.name);
+        for n in 1..=10_000 {
+            let path = dir.join(format!("saved-{stem}-{n}.toml"));
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut file) => {
+                    file.write_all(text.as_bytes())?;
+                    return Ok(path);
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Err(std::io::Error::other(format!(
+            "{} already holds saved-{stem}-1.toml to saved-{stem}-10000.toml: move some away",
+            dir.display()
+        )))
+    }
+
     /// Whether changing `key` rebuilds the system rather than applying live.
     pub fn needs_rebuild(&self, key: &str) -> bool {
         REBUILD_KEYS.contains(&key)
+    }
+
+    /// The pinned particles of the running system, in index order.
+    pub fn pins(&self) -> Vec<usize> {
+        (0..self.system.particle_count())
+            .filter(|&i| self.system.is_pinned(i))
+            .collect()
+    }
+
+    /// Pins exactly the particles `pins` names (a preset such as the corners, a list,
+    /// or none) and frees every other: recorded in the scene (key `pins`), so that a
+    /// reset, a rebuild and a saved scene keep it, and applied to the running system
+    /// in place, the rest of its state untouched. An index past the last particle is
+    /// refused with an error naming `pins` and the range, and nothing changes. The
+    /// change can be undone.
+    pub fn set_pins(&mut self, pins: Pins) -> Result<(), SceneError> {
+        let indices = self.settings.pin_indices(&pins)?;
+        self.remember(self.scene.clone(), None);
+        self.scene.spec.pins = Some(pins);
+        self.settings.pins = indices;
+        self.sync_pins();
+        Ok(())
+    }
+
+    /// Pins particle `i` if it is free, frees it if pinned (a click): recorded in the
+    /// scene as the list of pinned particles, and can be undone. An index past the
+    /// last particle does nothing.
+    pub fn toggle_pin(&mut self, i: usize) {
+        if i >= self.system.particle_count() {
+            return;
+        }
+        let mut pins = self.pins();
+        match pins.binary_search(&i) {
+            Ok(at) => {
+                pins.remove(at);
+            }
+            Err(at) => pins.insert(at, i),
+        }
+        self.remember(self.scene.clone(), None);
+        self.scene.spec.pins = Some(Pins::Indices(pins.clone()));
+        self.settings.pins = pins;
+        self.sync_pins();
+    }
+
+    /// Pins and frees the running system's particles to match the settings.
+    fn sync_pins(&mut self) {
+        let mut wanted = vec![false; self.system.particle_count()];
+        for &i in &self.settings.pins {
+            if let Some(w) = wanted.get_mut(i) {
+                *w = true;
+            }
+        }
+        for (i, pin) in wanted.into_iter().enumerate() {
+            if self.system.is_pinned(i) != pin {
+                self.system.set_pinned(i, pin);
+            }
+        }
+    }
+
+    /// Whether any wind blows: a mean wind or gusts.
+    pub fn wind_on(&self) -> bool {
+        let p = &self.settings.params;
+        p.wind != DVec3::ZERO || p.gust != 0.0
+    }
+
+    /// The wind switch (seed 004): off sets the wind and the gusts to zero and
+    /// remembers them; on brings back what it turned off, or else [`DEFAULT_WIND`]. Both are ordinary edits of `wind`
+    /// and `gust`, so a saved scene keeps the switch's state.
+    pub fn set_wind_on(&mut self, on: bool) -> Result<(), SceneError> {
+        if on == self.wind_on() {
+            return Ok(());
+        }
+        let (wind, gust) = if on {
+            self.stored_wind.take().unwrap_or((DEFAULT_WIND, 0.0))
+        } else {
+            let p = &self.settings.params;
+            self.stored_wind = Some((p.wind, p.gust));
+            (DVec3::ZERO, 0.0)
+        };
+        let before = self.scene.clone();
+        self.apply_unrecorded(Edit::Wind(wind))?;
+        self.apply_unrecorded(Edit::Gust(gust))?;
+        self.remember(before, None);
+        Ok(())
     }
 
     /// Applies a typed edit (a panel slider): records it in the scene spec, so that
@@ -316,7 +475,19 @@ impl Session {
     /// time). Width, height and depth rebuild the system with every other setting
     /// kept. A value out of range (or not finite) is refused with an error naming
     /// the field and the allowed range, and nothing changes.
+    ///
+    /// The change can be undone; edits of the same key in a row make one undo
+    /// step until [`Self::end_edit_group`] (the app calls it when the pointer lets
+    /// go of a slider).
     pub fn apply(&mut self, edit: Edit) -> Result<(), SceneError> {
+        let before = self.scene.clone();
+        self.apply_unrecorded(edit)?;
+        self.remember(before, Some(edit.key()));
+        Ok(())
+    }
+
+    /// [`Self::apply`] without an undo entry.
+    fn apply_unrecorded(&mut self, edit: Edit) -> Result<(), SceneError> {
         let mut scene = self.scene.clone();
         scene.apply(edit)?;
         let mut settings = self.settings.clone();
@@ -330,10 +501,114 @@ impl Session {
     /// rebuild the system with every other setting kept; the rest apply to the
     /// running system as [`Self::apply`] does. On error nothing changes.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
+        let before = self.scene.clone();
         let mut scene = self.scene.clone();
         scene.set(key, value)?;
         let settings = scene.resolve()?;
         self.commit(scene, settings, self.needs_rebuild(key));
+        self.remember(before, None);
+        Ok(())
+    }
+
+    /// Records `before`, the setup before a change, for [`Self::undo`], and forgets
+    /// what was undone. A change of the same `group` (edit key) as the last one,
+    /// within one gesture, adds no entry.
+    fn remember(&mut self, before: Scene, group: Option<&'static str>) {
+        if group.is_some() && group == self.edit_group {
+            return;
+        }
+        if self.undo.len() >= MAX_UNDO {
+            self.undo.remove(0);
+        }
+        self.undo.push(before);
+        self.redo.clear();
+        self.edit_group = group;
+    }
+
+    /// Ends the gesture that groups edits of one key into one undo step: the next
+    /// edit makes a new one.
+    pub fn end_edit_group(&mut self) {
+        self.edit_group = None;
+    }
+
+    /// Whether there is a change to undo.
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    /// Whether there is an undone change to redo.
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Takes back the last change of parameters or pins (Ctrl+Z): the setup before
+    /// it comes back, applied in place as edits are, or by a rebuild where the
+    /// layout differs. Returns whether there was anything to undo.
+    pub fn undo(&mut self) -> Result<bool, SceneError> {
+        let Some(scene) = self.undo.pop() else {
+            return Ok(false);
+        };
+        let current = self.scene.clone();
+        if let Err(e) = self.restore(scene.clone()) {
+            self.undo.push(scene);
+            return Err(e);
+        }
+        self.redo.push(current);
+        self.edit_group = None;
+        Ok(true)
+    }
+
+    /// Does again the last change undone (Ctrl+Shift+Z). Returns whether there was
+    /// anything to redo.
+    pub fn redo(&mut self) -> Result<bool, SceneError> {
+        let Some(scene) = self.redo.pop() else {
+            return Ok(false);
+        };
+        let current = self.scene.clone();
+        if let Err(e) = self.restore(scene.clone()) {
+            self.redo.push(scene);
+            return Err(e);
+        }
+        self.undo.push(current);
+        self.edit_group = None;
+        Ok(true)
+    }
+
+    /// Restores the scene's own parameters and pins as it was loaded ("Defaults"),
+    /// dropping every edit; the running state is kept where the layout allows, as
+    /// for an edit. The change can be undone.
+    pub fn restore_defaults(&mut self) -> Result<(), SceneError> {
+        let before = self.scene.clone();
+        self.restore(self.defaults.clone())?;
+        self.remember(before, None);
+        Ok(())
+    }
+
+    /// Makes `scene` the setup: in place, as edits apply, unless it lays the
+    /// particles out differently, which rebuilds. On error nothing changes.
+    fn restore(&mut self, scene: Scene) -> Result<(), SceneError> {
+        let settings = scene.resolve()?;
+        let (a, b) = (&self.settings, &settings);
+        let rebuild = (a.layout, a.orientation, a.width, a.height, a.depth)
+            != (b.layout, b.orientation, b.width, b.height, b.depth)
+            || (
+                a.rotation,
+                a.stretch,
+                a.shear_scale,
+                a.bend_scale,
+                a.params.seed,
+            ) != (
+                b.rotation,
+                b.stretch,
+                b.shear_scale,
+                b.bend_scale,
+                b.params.seed,
+            )
+            || self.scene.spec.origin != scene.spec.origin;
+        self.commit(scene, settings, rebuild);
+        if !rebuild {
+            self.sync_pins();
+        }
         Ok(())
     }
 
@@ -440,5 +715,42 @@ impl Session {
             sim_ms,
             behind: false,
         }
+    }
+}
+
+/// The scene part of a saved file's name: a built-in scene's name, or a scene file's
+/// stem without an earlier save's `saved-` and `-N`, in letters, digits, `-` and `_`.
+fn save_stem(name: &str) -> String {
+    let stem = Path::new(name)
+        .file_stem()
+        .map_or(name.into(), |s| s.to_string_lossy());
+    let stem = stem.strip_prefix("saved-").unwrap_or(&stem);
+    let stem = match stem.rsplit_once('-') {
+        Some((head, n)) if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) => head,
+        _ => stem,
+    };
+    let clean: String = stem
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '-' || *c == '_')
+        .take(40)
+        .collect();
+    if clean.is_empty() {
+        "scene".to_string()
+    } else {
+        clean
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::save_stem;
+
+    #[test]
+    fn saved_file_names_come_from_the_scene() {
+        assert_eq!(save_stem("cloth"), "cloth");
+        assert_eq!(save_stem("bench-wind"), "bench-wind");
+        assert_eq!(save_stem("/tmp/my flag.toml"), "myflag");
+        assert_eq!(save_stem("saved-cloth-3.toml"), "cloth");
+        assert_eq!(save_stem("../.."), "scene");
     }
 }

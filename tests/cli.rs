@@ -276,10 +276,12 @@ fn scenes_lists_every_builtin() {
     let out = stdout(&cloth(&["scenes"]));
     for name in [
         "cloth",
+        "corners",
         "flag",
         "spring",
         "chain",
         "jelly",
+        "hanging",
         "rope",
         "sheet",
         "drape",

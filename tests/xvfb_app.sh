@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
-# another, resize the window, press R, press Esc; passes when the app logged each action, exited 0
+# another, resize the window, press R, F1 twice (help), Ctrl+S (save), Ctrl+Z and
+# Ctrl+Shift+Z (undo, redo), Esc; passes when the app logged each action, exited 0
 # and its log holds no error or panic.
 #
 # Needs: Xvfb, xdotool (and ImageMagick's `import` when SHOT_DIR is set, to save
@@ -14,6 +15,7 @@ BIN=${CLOTH_BIN:-target/release/cloth}
 if [[ ! -x $BIN ]]; then
     cargo build --release --quiet
 fi
+BIN=$(realpath "$BIN")
 for tool in Xvfb xdotool; do
     command -v "$tool" >/dev/null || { echo "xvfb_app: $tool is not installed" >&2; exit 1; }
 done
@@ -44,7 +46,9 @@ export DISPLAY=":$(head -1 "$WORK/display")"
 export XDG_RUNTIME_DIR=$WORK/xdg
 mkdir -m 700 "$XDG_RUNTIME_DIR"
 
-RUST_LOG=${RUST_LOG:-warn,cloth=info} "$BIN" >"$LOG" 2>&1 &
+# In a scratch working directory: Ctrl+S saves there.
+mkdir "$WORK/cwd"
+(cd "$WORK/cwd" && RUST_LOG=${RUST_LOG:-warn,cloth=info} exec "$BIN") >"$LOG" 2>&1 &
 APP_PID=$!
 WID=$(timeout 30 xdotool search --sync --name "cloth-sandbox" | head -1) || true
 [[ -n $WID ]] || fail "no window titled cloth-sandbox appeared"
@@ -86,6 +90,36 @@ xdotool key r
 sleep 1
 grep -q "scene reset" "$LOG" || fail "R did not reset the scene"
 shot 5-reset
+
+# F1 shows the help overlay and hides it again.
+xdotool windowfocus --sync "$WID"
+xdotool key F1
+sleep 1
+grep -q "help shown" "$LOG" || fail "F1 did not show the help"
+shot 6-help
+xdotool windowfocus --sync "$WID"
+xdotool key F1
+sleep 0.5
+grep -q "help hidden" "$LOG" || fail "F1 again did not hide the help"
+
+# Ctrl+S saves the setup in the working directory, as a scene file.
+xdotool windowfocus --sync "$WID"
+xdotool key ctrl+s
+sleep 1
+grep -q "saved the setup to" "$LOG" || fail "Ctrl+S did not save"
+[[ -s $WORK/cwd/saved-cloth-1.toml ]] || fail "Ctrl+S wrote no saved-cloth-1.toml"
+grep -q '^layout = "grid"' "$WORK/cwd/saved-cloth-1.toml" || fail "the saved file is no scene"
+
+# Ctrl+Z takes back the last change (the pin clicked above); Ctrl+Shift+Z redoes it.
+xdotool windowfocus --sync "$WID"
+xdotool key ctrl+z
+sleep 0.5
+grep -q "Undo done" "$LOG" || fail "Ctrl+Z undid nothing"
+xdotool windowfocus --sync "$WID"
+xdotool key ctrl+shift+z
+sleep 0.5
+grep -q "Redo done" "$LOG" || fail "Ctrl+Shift+Z redid nothing"
+
 xdotool windowfocus --sync "$WID"
 xdotool key Escape
 set +e
@@ -101,4 +135,4 @@ APP_PID=""
 if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
     fail "the log has errors"
 fi
-echo "xvfb_app: ok (pin, drag, resize, reset, quit; exit 0, clean log)"
+echo "xvfb_app: ok (pin, drag, resize, reset, help, save, undo, redo, quit; exit 0, clean log)"

@@ -4,6 +4,7 @@
 
 pub mod frame;
 pub mod gfx;
+pub mod help;
 pub mod input;
 pub mod panel;
 pub mod screenshot;
@@ -231,7 +232,7 @@ impl App {
         match action {
             MouseAction::TogglePin(i) => {
                 let pinned = self.session.system().is_pinned(i);
-                self.session.system_mut().set_pinned(i, !pinned);
+                self.session.toggle_pin(i);
                 log::info!(
                     "{} particle {i}",
                     if pinned { "unpinned" } else { "pinned" }
@@ -280,6 +281,8 @@ impl App {
             Action::ResetView => self.frame_camera(),
             Action::LoadScene(name) => match self.session.load_scene(&name) {
                 Ok(()) => {
+                    log::info!("loaded scene {name}");
+                    self.panel.error = None;
                     self.mouse.cancel();
                     self.scene_loaded();
                 }
@@ -294,6 +297,7 @@ impl App {
             }
             Action::Edit(edit) => match self.session.apply(edit) {
                 Ok(()) => {
+                    log::debug!("edit {edit:?}");
                     self.panel.error = None;
                     if edit.rebuilds() {
                         self.mouse.cancel();
@@ -305,10 +309,61 @@ impl App {
                     self.panel.error = Some(e.to_string());
                 }
             },
+            Action::Pins(pins) => match self.session.set_pins(pins) {
+                Ok(()) => self.panel.error = None,
+                Err(e) => self.panel.error = Some(e.to_string()),
+            },
+            Action::WindOn(on) => match self.session.set_wind_on(on) {
+                Ok(()) => self.panel.error = None,
+                Err(e) => self.panel.error = Some(e.to_string()),
+            },
+            Action::Save => self.save(),
+            Action::Undo | Action::Redo | Action::Defaults => {
+                let particles = self.session.system().particle_count();
+                let done = match action {
+                    Action::Undo => self.session.undo(),
+                    Action::Redo => self.session.redo(),
+                    _ => self.session.restore_defaults().map(|()| true),
+                };
+                match done {
+                    Ok(true) => {
+                        log::info!("{action:?} done");
+                        self.panel.error = None;
+                        if self.session.system().particle_count() != particles {
+                            self.mouse.cancel();
+                            self.frame_camera();
+                        }
+                    }
+                    Ok(false) => log::info!("{action:?}: nothing to do"),
+                    Err(e) => self.panel.error = Some(e.to_string()),
+                }
+            }
+            Action::ToggleHelp => {
+                self.panel.help = !self.panel.help;
+                log::info!("help {}", if self.panel.help { "shown" } else { "hidden" });
+            }
             Action::TogglePause => self.session.set_paused(!self.session.paused()),
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::Step => {
                 self.session.single_step();
+            }
+        }
+    }
+
+    /// Saves the setup as a scene file in the working directory and says where in
+    /// the panel.
+    fn save(&mut self) {
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        match self.session.save_in(&dir) {
+            Ok(path) => {
+                log::info!("saved the setup to {}", path.display());
+                self.panel.error = None;
+                self.panel.saved = Some(path.display().to_string());
+            }
+            Err(e) => {
+                let text = format!("cannot save the setup in {}: {e}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
             }
         }
     }
@@ -318,6 +373,27 @@ impl App {
             return;
         };
         let down = event.state == ElementState::Pressed;
+        if down && !event.repeat && (code == KeyCode::F1 || event.text.as_deref() == Some("?")) {
+            self.apply(Action::ToggleHelp, event_loop);
+            return;
+        }
+        // Ctrl+S, Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y. Only presses are taken: a release
+        // still reaches the fly keys below, so S held before Ctrl never sticks.
+        if down && self.modifiers.control_key() {
+            let action = match code {
+                KeyCode::KeyS => Some(Action::Save),
+                KeyCode::KeyZ if self.modifiers.shift_key() => Some(Action::Redo),
+                KeyCode::KeyZ => Some(Action::Undo),
+                KeyCode::KeyY => Some(Action::Redo),
+                _ => None,
+            };
+            if let Some(action) = action {
+                if !event.repeat {
+                    self.apply(action, event_loop);
+                }
+                return;
+            }
+        }
         match code {
             KeyCode::KeyW => self.fly.forward = down,
             KeyCode::KeyS => self.fly.back = down,
@@ -326,7 +402,8 @@ impl App {
             KeyCode::KeyE => self.fly.up = down,
             KeyCode::KeyQ => self.fly.down = down,
             _ if !down || event.repeat => {}
-            KeyCode::Escape => self.apply(Action::Quit, event_loop),
+            // Seed 000 quits on P as well as Esc.
+            KeyCode::Escape | KeyCode::KeyP => self.apply(Action::Quit, event_loop),
             KeyCode::KeyR => self.apply(Action::Reset, event_loop),
             KeyCode::Space => self.apply(Action::TogglePause, event_loop),
             KeyCode::KeyF | KeyCode::Home => self.apply(Action::ResetView, event_loop),
@@ -377,6 +454,10 @@ impl App {
 
         for action in actions {
             self.apply(action, event_loop);
+        }
+        // A slider let go: its next edit is a new undo step.
+        if !self.egui_ctx.egui_is_using_pointer() {
+            self.session.end_edit_group();
         }
     }
 }
@@ -435,6 +516,13 @@ impl ApplicationHandler for App {
                 }
             }
             WindowEvent::RedrawRequested => self.redraw(event_loop),
+            // A scene file dropped on the window (e.g. one saved with Ctrl+S) opens.
+            WindowEvent::DroppedFile(path) => {
+                self.apply(
+                    Action::LoadScene(path.to_string_lossy().into_owned()),
+                    event_loop,
+                );
+            }
             WindowEvent::ModifiersChanged(m) => self.modifiers = m.state(),
             WindowEvent::Focused(false) => {
                 self.fly = FlyKeys::default();

@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use cloth_sandbox::scene::{Layout, builtin_scenes};
+use cloth_sandbox::scene::{Layout, PinPreset, Pins, Scene, builtin_scenes};
 use cloth_sandbox::session::{Edit, FrameReport, Session};
 use cloth_sandbox::sim::Integrator;
 use egui::{Color32, RichText, Ui};
@@ -32,6 +32,20 @@ pub enum Action {
     Step,
     /// Turn safe stepping on or off.
     SafeStepping(bool),
+    /// Pin exactly these particles (a preset, or none to unpin all).
+    Pins(Pins),
+    /// Turn the wind (and gusts) on or off.
+    WindOn(bool),
+    /// Save the setup as a scene file (Ctrl+S).
+    Save,
+    /// Show or hide the help overlay (F1, ?).
+    ToggleHelp,
+    /// Take back the last change of parameters or pins (Ctrl+Z).
+    Undo,
+    /// Do again the last change undone (Ctrl+Shift+Z).
+    Redo,
+    /// Restore the scene's own parameters and pins.
+    Defaults,
 }
 
 /// Panel state that lives between frames.
@@ -41,6 +55,10 @@ pub struct PanelState {
     pub strain_colors: bool,
     /// Last error from a scene change, shown until the next success.
     pub error: Option<String>,
+    /// Where the setup was last saved.
+    pub saved: Option<String>,
+    /// Whether the help overlay is open.
+    pub help: bool,
     sim_ms: f64,
     behind: bool,
     frame_time: f64,
@@ -75,36 +93,104 @@ impl PanelState {
     }
 }
 
-/// A slider over `range` that reports a finished change (on release for drags).
+/// A slider over `range` that reports a change the user made. A value the slider
+/// did not touch is left as it is, even one outside `range` or with more decimals
+/// than it shows (egui's default clamps and rounds every frame, which would edit
+/// a scene's damping ratio or a 1024-wide grid the moment it opens).
 fn slider(
     ui: &mut Ui,
     value: &mut f64,
     range: std::ops::RangeInclusive<f64>,
     label: &str,
     log: bool,
+    tip: &str,
 ) -> bool {
-    let r = ui.add(
+    let (lo, hi) = (*range.start(), *range.end());
+    let scale = if log { ", logarithmic" } else { "" };
+    ui.add(
         egui::Slider::new(value, range)
             .logarithmic(log)
+            .clamping(egui::SliderClamping::Edits)
             .text(label)
             .max_decimals(6),
-    );
-    r.changed()
+    )
+    .on_hover_text(format!(
+        "{tip}\nSlider: {lo} to {hi}{scale}; type a value in the box for more"
+    ))
+    .changed()
 }
 
-/// Integer slider.
+/// Integer slider; like [`slider`], it leaves a value it did not touch alone.
 fn int_slider(
     ui: &mut Ui,
     value: &mut u32,
     range: std::ops::RangeInclusive<u32>,
     label: &str,
+    tip: &str,
 ) -> bool {
+    let (lo, hi) = (*range.start(), *range.end());
     ui.add(
         egui::Slider::new(value, range)
             .logarithmic(true)
+            .clamping(egui::SliderClamping::Edits)
             .text(label),
     )
+    .on_hover_text(format!("{tip}\nSlider: {lo} to {hi}"))
     .changed()
+}
+
+/// The pin presets the layout has (a grid's corners and edges, a line's ends) and
+/// "unpin all".
+fn pin_presets(ui: &mut Ui, layout: Layout, pinned: usize, actions: &mut Vec<Action>) {
+    let presets: &[(&str, PinPreset, &str)] = match layout {
+        Layout::Grid => &[
+            (
+                "corners",
+                PinPreset::Corners,
+                "Pin the four corners (seed 000)",
+            ),
+            (
+                "top corners",
+                PinPreset::TopCorners,
+                "Pin the two top corners",
+            ),
+            ("top edge", PinPreset::TopEdge, "Pin the whole top row"),
+            (
+                "left edge",
+                PinPreset::LeftEdge,
+                "Pin the whole left column (a flag on its pole)",
+            ),
+        ],
+        Layout::Lattice => &[(
+            "ends",
+            PinPreset::Corners,
+            "Pin the first and the last particle",
+        )],
+        _ => &[
+            ("first", PinPreset::First, "Pin the first particle only"),
+            (
+                "both ends",
+                PinPreset::Corners,
+                "Pin the first and the last particle",
+            ),
+        ],
+    };
+    ui.horizontal_wrapped(|ui| {
+        ui.label(format!("Pins ({pinned}):"))
+            .on_hover_text("Pinned particles stay where they are. Click a particle in the view to pin or unpin it.");
+        for &(label, preset, tip) in presets {
+            if ui.button(label).on_hover_text(tip).clicked() {
+                actions.push(Action::Pins(Pins::Preset(preset)));
+            }
+        }
+        if ui
+            .button("unpin all")
+            .on_hover_text("Free every particle: the cloth falls")
+            .clicked()
+        {
+            actions.push(Action::Pins(Pins::Preset(PinPreset::None)));
+        }
+    });
 }
 
 /// Draws the panel; returns what the user asked for and the rectangle (points)
@@ -117,6 +203,7 @@ pub fn show(
     adapter: &str,
 ) -> (Vec<Action>, egui::Rect) {
     let mut actions = Vec::new();
+    super::help::show(ui.ctx(), &mut state.help);
     egui::Panel::left("controls")
         .resizable(true)
         .default_size(290.0)
@@ -136,8 +223,22 @@ fn contents(
     adapter: &str,
     actions: &mut Vec<Action>,
 ) {
-    ui.heading("cloth-sandbox");
-    ui.label(RichText::new("Click: pin/unpin · drag particle: move · right-drag: orbit · middle/shift-right: pan · wheel: zoom · WASD/QE: fly · F: reset view · R: reset · Space: pause · Esc: quit").small());
+    ui.horizontal(|ui| {
+        ui.heading("cloth-sandbox");
+        if ui
+            .button("Help")
+            .on_hover_text("Every key and mouse binding (F1 or ?)")
+            .clicked()
+        {
+            actions.push(Action::ToggleHelp);
+        }
+    });
+    ui.label(
+        RichText::new(
+            "Click a particle: pin · drag it: move · drag elsewhere: orbit · F1 or ?: all keys",
+        )
+        .small(),
+    );
     ui.separator();
 
     // Scene and integrator.
@@ -146,9 +247,19 @@ fn contents(
         .selected_text(scene.as_str())
         .show_ui(ui, |ui| {
             for b in builtin_scenes() {
-                ui.selectable_value(&mut scene, b.name.to_string(), b.name);
+                let description = Scene::parse(b.toml, b.name)
+                    .ok()
+                    .and_then(|s| s.spec.description)
+                    .unwrap_or_default();
+                ui.selectable_value(&mut scene, b.name.to_string(), b.name)
+                    .on_hover_text(description);
             }
-        });
+        })
+        .response
+        .on_hover_text(format!(
+            "{}\nOpening another scene drops your edits (save them first with Ctrl+S); a scene file dropped on the window opens too",
+            session.scene().spec.description.as_deref().unwrap_or("The running scene")
+        ));
     if scene != session.name() {
         actions.push(Action::LoadScene(scene));
     }
@@ -161,7 +272,9 @@ fn contents(
             for i in Integrator::ALL {
                 ui.selectable_value(&mut integrator, i, i.name());
             }
-        });
+        })
+        .response
+        .on_hover_text("How each step advances the particles: explicit Euler, symplectic Euler, position Verlet, RK2, RK4 (explicit, stable below a critical dt), implicit Euler (stable at any dt, damps), XPBD (constraints, any stiffness)");
     if integrator != p.integrator {
         actions.push(Action::Edit(Edit::Integrator(integrator)));
     }
@@ -169,19 +282,58 @@ fn contents(
     // Run controls.
     ui.horizontal(|ui| {
         let label = if session.paused() { "Play" } else { "Pause" };
-        if ui.button(label).clicked() {
+        if ui.button(label).on_hover_text("Pause or resume (Space)").clicked() {
             actions.push(Action::TogglePause);
         }
         if ui
             .add_enabled(session.paused(), egui::Button::new("Step"))
+            .on_hover_text("Run one step of dt (. key)")
+            .on_disabled_hover_text("Pause first: Step runs one step of dt")
             .clicked()
         {
             actions.push(Action::Step);
         }
-        if ui.button("Reset").clicked() {
+        if ui
+            .button("Reset")
+            .on_hover_text("Start the scene again from its setup, keeping your edits and pins (R)")
+            .clicked()
+        {
             actions.push(Action::Reset);
         }
+        if ui
+            .button("Save")
+            .on_hover_text("Save the scene, every parameter and the pins as saved-<scene>-N.toml in the working directory (Ctrl+S); open it with `cloth --scene FILE`, `cloth run --scene FILE`, or by dropping it on the window")
+            .clicked()
+        {
+            actions.push(Action::Save);
+        }
     });
+    ui.horizontal(|ui| {
+        if ui
+            .add_enabled(session.can_undo(), egui::Button::new("Undo"))
+            .on_hover_text("Take back the last change of a parameter or the pins (Ctrl+Z)")
+            .clicked()
+        {
+            actions.push(Action::Undo);
+        }
+        if ui
+            .add_enabled(session.can_redo(), egui::Button::new("Redo"))
+            .on_hover_text("Do again the last change undone (Ctrl+Shift+Z)")
+            .clicked()
+        {
+            actions.push(Action::Redo);
+        }
+        if ui
+            .button("Defaults")
+            .on_hover_text("Restore the scene's own parameters and pins, as it was opened (with any --set), in place; R then starts it again from there. Can be undone")
+            .clicked()
+        {
+            actions.push(Action::Defaults);
+        }
+    });
+    if let Some(path) = &state.saved {
+        ui.label(RichText::new(format!("Saved to {path}")).small());
+    }
     // The scene's own steps per frame (its speed); safe stepping may run more,
     // smaller steps over the same simulated time.
     let mut substeps = r.substeps;
@@ -189,8 +341,10 @@ fn contents(
         .add(
             egui::Slider::new(&mut substeps, 1..=2000)
                 .logarithmic(true)
+                .clamping(egui::SliderClamping::Edits)
                 .text("speed (steps/frame)"),
         )
+        .on_hover_text("The scene's steps of dt per displayed frame (1/60 s of wall time): the simulation's speed. Safe stepping may split them into more, smaller steps. Slider: 1 to 2000, logarithmic")
         .changed()
     {
         actions.push(Action::Edit(Edit::Substeps(substeps)));
@@ -199,7 +353,7 @@ fn contents(
     if ui
         .checkbox(&mut safe, "safe stepping")
         .on_hover_text(
-            "Keep dt below half the integrator's critical step, with more substeps per frame",
+            "Keep dt below half the integrator's critical step (dt_crit), with more substeps per frame so that the simulated time per frame stays the same",
         )
         .changed()
     {
@@ -270,10 +424,15 @@ fn contents(
         ui.colored_label(Color32::from_rgb(255, 170, 60), e);
     }
 
+    // Pins.
+    ui.separator();
+    pin_presets(ui, r.layout, session.pins().len(), actions);
+
     // Parameters the scene uses.
     let system = session.system();
     let has_springs = !system.springs().is_empty();
     let has_surface = !system.triangles().is_empty();
+    let mut wind_switch = None;
     let mut edit = |e: Edit| actions.push(Action::Edit(e));
     ui.separator();
     egui::CollapsingHeader::new("Parameters")
@@ -288,16 +447,16 @@ fn contents(
                 } else {
                     100_000.0
                 };
-                if slider(ui, &mut k, 0.01..=k_max, "stiffness k (N/m)", true) {
+                if slider(ui, &mut k, 0.01..=k_max, "stiffness k (N/m)", true, "Spring stiffness k in N/m: force per metre of stretch (shear and bend springs keep their multiples of it)") {
                     edit(Edit::Stiffness(k));
                 }
                 let mut b = r.damping;
-                if slider(ui, &mut b, 0.0..=100.0, "damping b (N·s/m)", true) {
+                if slider(ui, &mut b, 0.0..=100.0, "damping b (N·s/m)", true, "Spring damping b in N·s/m: force per m/s of stretching speed along the spring") {
                     edit(Edit::Damping(b));
                 }
             }
             let mut rest = r.rest_length;
-            if slider(ui, &mut rest, 0.001..=5.0, "rest length (m)", true) {
+            if slider(ui, &mut rest, 0.001..=5.0, "rest length (m)", true, "Spacing between neighbouring particles in m; the cloth grows or shrinks about its pins") {
                 edit(Edit::RestLength(rest));
             }
             match r.layout {
@@ -310,74 +469,92 @@ fn contents(
                         2..=32
                     };
                     let mut w = r.width;
-                    if int_slider(ui, &mut w, side.clone(), "width (particles)") {
+                    if int_slider(ui, &mut w, side.clone(), "width (particles)", "Particles across; rebuilds the scene keeping the other settings") {
                         edit(Edit::Width(w));
                     }
                     let mut h = r.height;
-                    if int_slider(ui, &mut h, side, "height (particles)") {
+                    if int_slider(ui, &mut h, side, "height (particles)", "Particles down; rebuilds the scene keeping the other settings") {
                         edit(Edit::Height(h));
                     }
                     if r.layout == Layout::Lattice {
                         let mut d = r.depth;
-                        if int_slider(ui, &mut d, 2..=32, "depth (particles)") {
+                        if int_slider(ui, &mut d, 2..=32, "depth (particles)", "Particles deep; rebuilds the scene keeping the other settings") {
                             edit(Edit::Depth(d));
                         }
                     }
                 }
                 Layout::Chain | Layout::Rope => {
                     let mut w = r.width;
-                    if int_slider(ui, &mut w, 2..=200, "length (particles)") {
+                    if int_slider(ui, &mut w, 2..=200, "length (particles)", "Particles along the line; rebuilds the scene keeping the other settings") {
                         edit(Edit::Width(w));
                     }
                 }
                 Layout::Spring => {}
             }
             let mut m = r.particle_mass;
-            if slider(ui, &mut m, 0.000_001..=10.0, "particle mass (kg)", true) {
+            if slider(ui, &mut m, 0.000_001..=10.0, "particle mass (kg)", true, "Mass of each particle in kg") {
                 edit(Edit::ParticleMass(m));
             }
             let mut g = p.gravity;
-            if slider(ui, &mut g.y, -30.0..=10.0, "gravity y (m/s²)", false) {
+            if slider(ui, &mut g.y, -30.0..=10.0, "gravity y (m/s²)", false, "Gravitational acceleration along y in m/s² (negative is down; Earth: -9.81)") {
                 edit(Edit::Gravity(g));
             }
             if has_surface {
-                ui.label("Wind (m/s)");
-                let mut w = p.wind;
-                let mut changed = slider(ui, &mut w.x, -20.0..=20.0, "x", false);
-                changed |= slider(ui, &mut w.y, -20.0..=20.0, "y", false);
-                changed |= slider(ui, &mut w.z, -20.0..=20.0, "z", false);
-                if changed {
-                    edit(Edit::Wind(w));
-                }
-                let mut gust = p.gust;
-                if slider(ui, &mut gust, 0.0..=10.0, "gust (m/s)", false) {
-                    edit(Edit::Gust(gust));
-                }
+                // Wind acts through the aerodynamic drag only: without it (seed
+                // 002's still air) the controls would do nothing, so they are off.
+                let aero = p.drag_coefficient > 0.0 && p.air_density > 0.0;
+                ui.add_enabled_ui(aero, |ui| {
+                    let mut on = session.wind_on();
+                    if ui
+                        .checkbox(&mut on, "wind")
+                        .on_hover_text("Wind on or off (seed 004): off sets the wind and gusts to zero and remembers them for turning it back on")
+                        .changed()
+                    {
+                        wind_switch = Some(on);
+                    }
+                    let mut w = p.wind;
+                    let tip = "Mean wind velocity in m/s, acting through the aerodynamic drag on each triangle; -20 to 20 here, up to 10000 m/s in scene files";
+                    ui.label("Wind (m/s)").on_hover_text(tip);
+                    let mut changed = slider(ui, &mut w.x, -20.0..=20.0, "x", false, "Wind velocity along x in m/s");
+                    changed |= slider(ui, &mut w.y, -20.0..=20.0, "y", false, "Wind velocity along y in m/s");
+                    changed |= slider(ui, &mut w.z, -20.0..=20.0, "z", false, "Wind velocity along z in m/s (towards the viewer)");
+                    if changed {
+                        edit(Edit::Wind(w));
+                    }
+                    let mut gust = p.gust;
+                    if slider(ui, &mut gust, 0.0..=10.0, "gust (m/s)", false, "Gust amplitude in m/s: random variation of the wind about its mean") {
+                        edit(Edit::Gust(gust));
+                    }
+                })
+                .response
+                .on_disabled_hover_text(
+                    "This scene has no aerodynamic drag (drag_coefficient or air_density is 0, still air): wind would have no effect",
+                );
             }
             let mut dt = p.dt;
-            if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true) {
+            if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true, "Time step in s; safe stepping may run smaller steps over the same simulated time") {
                 edit(Edit::Dt(dt));
             }
             if !system.bars().is_empty() {
                 let mut it = p.bar_iterations;
-                if int_slider(ui, &mut it, 0..=64, "bar relaxation iterations") {
+                if int_slider(ui, &mut it, 0..=64, "bar relaxation iterations", "Rigid-bar relaxation passes per step (seed 001: 4 to 10); more passes keep bars closer to their length") {
                     edit(Edit::BarIterations(it));
                 }
             }
             if let Some(limit) = p.stretch_limit {
                 let mut l = limit;
-                if slider(ui, &mut l, 0.0..=1.0, "stretch limit", false) {
+                if slider(ui, &mut l, 0.0..=1.0, "stretch limit", false, "Maximum stretch tau (Provot): springs are kept no longer than (1 + tau) times their rest length; 0.1 = 10%") {
                     edit(Edit::StretchLimit(l));
                 }
             }
             let surface = !system.triangles().is_empty();
             if p.ground.is_some() || p.sphere.is_some() || surface {
                 let mut mu = p.friction;
-                if slider(ui, &mut mu, 0.0..=2.0, "friction μ", false) {
+                if slider(ui, &mut mu, 0.0..=2.0, "friction μ", false, "Coulomb friction coefficient μ of the ground and the sphere (no unit); 0 is frictionless") {
                     edit(Edit::Friction(mu));
                 }
                 let mut t = p.thickness;
-                if slider(ui, &mut t, 0.0..=0.1, "thickness (m)", false) {
+                if slider(ui, &mut t, 0.0..=0.1, "thickness (m)", false, "Contact thickness in m: how far above the ground and outside the sphere the cloth rests") {
                     edit(Edit::Thickness(t));
                 }
             }
@@ -395,6 +572,10 @@ fn contents(
                 }
             }
         });
+
+    if let Some(on) = wind_switch {
+        actions.push(Action::WindOn(on));
+    }
 
     // Stats.
     egui::CollapsingHeader::new("Stats")
@@ -469,23 +650,38 @@ fn contents(
         .default_open(true)
         .show(ui, |ui| {
             ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.mesh, "mesh");
-                ui.checkbox(&mut view.wireframe, "wireframe");
-                ui.checkbox(&mut view.textured, "texture");
+                ui.checkbox(&mut view.mesh, "mesh")
+                    .on_hover_text("Draw the cloth surface, lit");
+                ui.checkbox(&mut view.wireframe, "wireframe")
+                    .on_hover_text("Draw the triangles' edges");
+                ui.checkbox(&mut view.textured, "texture")
+                    .on_hover_text("A checker texture on the surface, to show how it moves");
             });
             ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.springs, "springs");
-                ui.checkbox(&mut state.strain_colors, "by strain");
+                ui.checkbox(&mut view.springs, "springs")
+                    .on_hover_text("Draw the springs as lines, coloured by kind");
+                ui.checkbox(&mut state.strain_colors, "by strain")
+                    .on_hover_text(
+                        "Colour springs by strain (stretch over rest length) instead of kind",
+                    );
             });
             ui.horizontal_wrapped(|ui| {
-                ui.checkbox(&mut view.particles, "particles");
-                ui.checkbox(&mut view.pins, "pins");
+                ui.checkbox(&mut view.particles, "particles")
+                    .on_hover_text("Draw every particle as a dot");
+                ui.checkbox(&mut view.pins, "pins")
+                    .on_hover_text("Mark the pinned particles in red");
             });
-            ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"));
+            ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"))
+                .on_hover_text("Diameter of the particle dots in screen pixels, 2 to 20");
             ui.horizontal(|ui| {
                 ui.label("background");
-                ui.color_edit_button_srgb(&mut view.background);
-                if ui.button("Reset view").clicked() {
+                ui.color_edit_button_srgb(&mut view.background)
+                    .on_hover_text("Background colour of the view");
+                if ui
+                    .button("Reset view")
+                    .on_hover_text("Frame the scene with the default camera (F or Home)")
+                    .clicked()
+                {
                     actions.push(Action::ResetView);
                 }
             });

@@ -488,26 +488,15 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
     };
     let substeps = SUBSTEPS.check(o, spec.substeps.unwrap_or(16))?;
 
-    let pins = match spec.pins.clone().unwrap_or(Pins::Preset(match layout {
-        Layout::Grid => PinPreset::TopCorners,
-        Layout::Lattice => PinPreset::None,
-        _ => PinPreset::First,
-    })) {
-        Pins::Indices(list) => {
-            if let Some(&bad) = list.iter().find(|&&i| i >= particles) {
-                return Err(invalid(
-                    o,
-                    "pins",
-                    format!(
-                        "index {bad} is out of range: the scene has {particles} particles (0 to {})",
-                        particles - 1
-                    ),
-                ));
-            }
-            list
-        }
-        Pins::Preset(p) => preset_pins(p, layout, width as usize, height as usize, particles),
-    };
+    let pins = pin_indices(
+        o,
+        spec.pins
+            .as_ref()
+            .unwrap_or(&Pins::Preset(default_pins(layout))),
+        layout,
+        [width, height],
+        particles,
+    )?;
     Ok(Resolved {
         layout,
         orientation: spec.orientation.unwrap_or_default(),
@@ -562,6 +551,49 @@ fn anchor(
         spec.origin.map_or(default_origin, |v| v.0),
         1e6,
     )
+}
+
+/// The pin set a layout has when its scene names none: a grid's top corners, a
+/// lattice nothing, the first particle of a line.
+fn default_pins(layout: Layout) -> PinPreset {
+    match layout {
+        Layout::Grid => PinPreset::TopCorners,
+        Layout::Lattice => PinPreset::None,
+        _ => PinPreset::First,
+    }
+}
+
+/// The particles `pins` names in a `width` x `height` layout of `particles`, sorted;
+/// an index past the last particle is an error naming `pins` and the range.
+fn pin_indices(
+    o: &str,
+    pins: &Pins,
+    layout: Layout,
+    [width, height]: [u32; 2],
+    particles: usize,
+) -> Result<Vec<usize>, SceneError> {
+    match pins {
+        Pins::Indices(list) => {
+            if let Some(&bad) = list.iter().find(|&&i| i >= particles) {
+                return Err(invalid(
+                    o,
+                    "pins",
+                    format!(
+                        "index {bad} is out of range: the scene has {particles} particles (0 to {})",
+                        particles.saturating_sub(1)
+                    ),
+                ));
+            }
+            Ok(list.clone())
+        }
+        Pins::Preset(p) => Ok(preset_pins(
+            *p,
+            layout,
+            width as usize,
+            height as usize,
+            particles,
+        )),
+    }
 }
 
 fn preset_pins(preset: PinPreset, layout: Layout, w: usize, h: usize, n: usize) -> Vec<usize> {
@@ -644,6 +676,19 @@ impl Resolved {
             Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) => *self = scene.resolve()?,
         }
         Ok(())
+    }
+
+    /// The particles `pins` names in this layout (a preset resolved for its shape),
+    /// as a scene file's `pins` key would give them. An index past the last particle
+    /// is an error naming `pins` and the allowed range.
+    pub fn pin_indices(&self, pins: &Pins) -> Result<Vec<usize>, SceneError> {
+        pin_indices(
+            EDIT_ORIGIN,
+            pins,
+            self.layout,
+            [self.width, self.height],
+            self.particle_count(),
+        )
     }
 
     /// Number of particles.

@@ -18,7 +18,7 @@ use build::{
     STIFFNESS, STRETCH_LIMIT, SUBSTEPS, THICKNESS, WIND, side_ranges,
 };
 pub use edit::Edit;
-pub use values::{Pins, Vector};
+pub use values::{PinPreset, Pins, Vector};
 
 use crate::limits::echo;
 use crate::sim::System;
@@ -276,6 +276,7 @@ macro_rules! builtin {
 
 const BUILTINS: &[BuiltinScene] = &[
     builtin!("cloth"),
+    builtin!("corners"),
     builtin!("flag"),
     builtin!("sheet"),
     builtin!("drape"),
@@ -283,6 +284,7 @@ const BUILTINS: &[BuiltinScene] = &[
     builtin!("spring"),
     builtin!("chain"),
     builtin!("jelly"),
+    builtin!("hanging"),
     builtin!("rope"),
     builtin!("bench"),
     builtin!("bench-wind"),
