@@ -13,7 +13,8 @@ CLOTH=target/release/cloth
 # name | scene and settings (the grid size is added)
 CASES=(
   "bench (plain)|--scene bench"
-  "drape (sphere, ground)|--scene drape"
+  "drape (sphere, ground, friction)|--scene drape --set self_collision=false"
+  "drape + self-collision|--scene drape"
   "50 pins at random places|--scene bench --set pins=RANDOM50"
   "air damping|--scene bench --set air_damping=0.0001"
   "bench-wind (drag)|--scene bench-wind"

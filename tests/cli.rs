@@ -285,6 +285,7 @@ fn scenes_lists_every_builtin() {
         "rope",
         "sheet",
         "drape",
+        "fold",
         "bench",
         "bench-wind",
     ] {
