@@ -30,7 +30,11 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
-/// One test only, so no other test thread allocates while we count.
+/// One test only, so no other test thread allocates while we count. The harness's
+/// own main thread may still allocate just after the test starts (seen once in CI
+/// on a loaded machine: 4 allocations in the first, 1 ms long, window), so a window
+/// that counts allocations is measured again, up to three times: a kernel that
+/// allocates as it steps allocates in every window.
 ///
 /// `steps(dt, n)` allocates nothing on one or two threads. `step()` called in a
 /// loop on two threads enters the rayon pool once per call, and rayon's global job
@@ -45,19 +49,29 @@ fn no_allocation_in_1000_steps() {
             cloth.set_threads(threads);
             assert_eq!(cloth.is_parallel(), threads > 1);
             cloth.steps(dt, 200); // let the pool's threads start (their start allocates)
-            let before = ALLOCATIONS.load(Ordering::SeqCst);
-            cloth.steps(dt, 1000);
-            let after = ALLOCATIONS.load(Ordering::SeqCst);
+            let fewest = |cloth: &mut GridCloth, run: &dyn Fn(&mut GridCloth)| {
+                let mut counts = Vec::new();
+                for _ in 0..3 {
+                    let before = ALLOCATIONS.load(Ordering::SeqCst);
+                    run(cloth);
+                    counts.push(ALLOCATIONS.load(Ordering::SeqCst) - before);
+                    if counts.last() == Some(&0) {
+                        break;
+                    }
+                }
+                println!("N={n} threads={threads} wind={wind}: windows counted {counts:?}");
+                counts.into_iter().min().unwrap()
+            };
+            let count = fewest(&mut cloth, &|c| c.steps(dt, 1000));
             assert_eq!(
-                after - before,
-                0,
+                count, 0,
                 "steps(dt, 1000): N={n} threads={threads} wind={wind}"
             );
-            let before = ALLOCATIONS.load(Ordering::SeqCst);
-            for _ in 0..1000 {
-                cloth.step(dt);
-            }
-            let count = ALLOCATIONS.load(Ordering::SeqCst) - before;
+            let count = fewest(&mut cloth, &|c| {
+                for _ in 0..1000 {
+                    c.step(dt);
+                }
+            });
             println!("1000 x step(): N={n} threads={threads} wind={wind}: {count} allocations");
             if threads == 1 {
                 assert_eq!(count, 0, "step(): N={n} wind={wind}");

@@ -35,16 +35,26 @@ fn allocations_during(scene: &str, overrides: &[&str], steps: u64) -> usize {
 }
 
 /// Allocations of `steps` steps on the general engine, or on a fast engine when
-/// `fast` (the first run, not counted, builds the engine).
+/// `fast` (the first run, not counted, builds the engine). A window that counts
+/// some is measured again, up to three times, and the fewest returned: the test
+/// harness's own thread may allocate while a window runs, but a system that
+/// allocates as it steps does so in every window.
 fn allocations_on(fast: bool, scene: &str, overrides: &[&str], steps: u64) -> usize {
     let mut scene = Scene::load(scene).unwrap();
     scene.set_all(overrides.iter().copied()).unwrap();
     let mut system = scene.build().unwrap();
     system.set_fast_path(fast);
     system.run(10).unwrap();
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    system.run(steps).unwrap();
-    ALLOCATIONS.load(Ordering::SeqCst) - before
+    let mut fewest = usize::MAX;
+    for _ in 0..3 {
+        let before = ALLOCATIONS.load(Ordering::SeqCst);
+        system.run(steps).unwrap();
+        fewest = fewest.min(ALLOCATIONS.load(Ordering::SeqCst) - before);
+        if fewest == 0 {
+            break;
+        }
+    }
+    fewest
 }
 
 // One test function: the counter is global, and tests in one binary run in parallel.
