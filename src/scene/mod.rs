@@ -256,6 +256,108 @@ fn clip(line: &str) -> String {
     }
 }
 
+/// A TOML error in a scene file `text`, in plain words (see [`plain_words`]): the
+/// line and its caret on lines of their own, then what is wrong.
+fn file_message(error: &toml::de::Error, text: &str) -> String {
+    let what = error.message().trim();
+    let Some(span) = error.span() else {
+        return plain_words(what, None, Layout::default());
+    };
+    let start = span.start.min(text.len());
+    let line_start = text[..start].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[start..].find('\n').map_or(text.len(), |i| start + i);
+    let line = &text[line_start..line_end];
+    let number = text[..start].matches('\n').count() + 1;
+    // The key the value belongs to, when the error is in a `key = value` line.
+    let key = line.split_once('=').map(|(k, _)| k.trim());
+    let column = text[line_start..start].chars().count();
+    let width = text[start..span.end.min(line_end).max(start)]
+        .chars()
+        .count()
+        .max(1);
+    format!(
+        "line {number}:\n  {}\n  {}{}\n{}",
+        clip(line),
+        " ".repeat(column.min(200)),
+        "^".repeat(width.min(200)),
+        plain_words(what, key, Layout::default())
+    )
+}
+
+/// A deserialiser's message in plain words, for `key` when known: an unknown key
+/// gets the nearest known one ("did you mean"); a whole number out of its type, or
+/// a value of the wrong type, says what the key takes and, for the counts, their
+/// range. Other messages are kept, clipped.
+fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
+    if let Some(rest) = message.strip_prefix("unknown field `") {
+        let unknown = rest.split('`').next().unwrap_or("");
+        // serde lists the keys: "unknown field `x`, expected one of `a`, `b`".
+        let known = rest.split_once("expected").map_or("", |(_, list)| list);
+        let nearest = known
+            .split('`')
+            .skip(1)
+            .step_by(2)
+            .map(|k| (edit_distance(unknown, k), k))
+            .min()
+            .filter(|&(d, _)| d <= 2.max(unknown.len() / 3));
+        return match nearest {
+            Some((_, k)) => format!(
+                "`{}` is not a scene key; did you mean `{k}`?",
+                echo(unknown)
+            ),
+            None => format!(
+                "`{}` is not a scene key (README, \"Scene files and --set share keys\", lists them)",
+                echo(unknown)
+            ),
+        };
+    }
+    // serde: "invalid value: integer `-3`, expected u32",
+    // "invalid type: string \"abc\", expected f64".
+    let expected = message.rsplit_once(", expected ").map(|(_, e)| e.trim());
+    let got = message
+        .split_once(": ")
+        .and_then(|(_, rest)| rest.rsplit_once(", expected "))
+        .map(|(got, _)| got.trim());
+    if let (Some(expected), Some(got), Some(key)) = (expected, got, key) {
+        let got = got
+            .trim_start_matches("integer ")
+            .trim_start_matches("floating point ")
+            .trim_matches('`');
+        let whole = matches!(expected, "u32" | "u64" | "i64" | "usize");
+        let range = side_ranges(layout)
+            .into_iter()
+            .flatten()
+            .chain([SUBSTEPS, BAR_ITERATIONS])
+            .find(|r| r.field == key);
+        let takes = match (whole, range) {
+            (true, Some(r)) => format!("a whole number from {} to {}", r.lo, r.hi),
+            (true, None) => "a whole number, 0 or more".to_string(),
+            (false, _) if expected == "f64" => "a number".to_string(),
+            (false, _) => expected.to_string(),
+        };
+        return format!("`{}` must be {takes}, got {}", echo(key), clip(got));
+    }
+    clip(message)
+}
+
+/// Levenshtein distance between two keys.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
 /// A built-in scene: its name and TOML text.
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinScene {
@@ -309,13 +411,7 @@ impl Scene {
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
         let spec: SceneSpec = toml::from_str(text).map_err(|e| SceneError::Parse {
             origin: origin.to_string(),
-            message: e
-                .to_string()
-                .trim()
-                .lines()
-                .map(clip)
-                .collect::<Vec<_>>()
-                .join(" "),
+            message: file_message(&e, text),
         })?;
         let scene = Self {
             spec,
@@ -384,7 +480,7 @@ impl Scene {
             .try_into()
             .map_err(|e: toml::de::Error| SceneError::Parse {
                 origin: origin.clone(),
-                message: clip(e.message().trim()),
+                message: plain_words(e.message().trim(), Some(key), self.spec.layout),
             })?;
         let candidate = Self {
             spec,
