@@ -195,6 +195,22 @@ pub const BAR_ITERATIONS: CountRange = CountRange {
     hi: 10_000,
 };
 
+/// `bar_iterations = n` on `layout`, checked: only a rope has bars (on any other
+/// layout the key would do nothing, so it is refused), and `n` in its range.
+pub fn bar_iterations(origin: &str, layout: Layout, n: u32) -> Result<u32, SceneError> {
+    if layout != Layout::Rope {
+        return Err(invalid(
+            origin,
+            "bar_iterations",
+            format!(
+                "does not apply to a {} layout: only a rope has bars to relax",
+                layout.name()
+            ),
+        ));
+    }
+    BAR_ITERATIONS.check(origin, n)
+}
+
 /// The allowed `width`, `height` and `depth` of a layout; `None` where the layout
 /// ignores the key (a spring has two particles; lines have no height or depth).
 pub fn side_ranges(layout: Layout) -> [Option<CountRange>; 3] {
@@ -482,7 +498,10 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         self_collision: spec.self_collision.unwrap_or(false),
         integrator,
         dt: DT.check(o, spec.dt.unwrap_or(1.0 / 960.0))?,
-        bar_iterations: BAR_ITERATIONS.check(o, spec.bar_iterations.unwrap_or(0))?,
+        bar_iterations: match spec.bar_iterations {
+            Some(n) => bar_iterations(o, layout, n)?,
+            None => 0,
+        },
         stretch_limit,
         seed: spec.seed.unwrap_or(1),
     };

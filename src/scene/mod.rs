@@ -541,7 +541,9 @@ impl Scene {
             Edit::Dt(dt) => spec.dt = Some(DT.check(o, dt)?),
             Edit::Substeps(n) => spec.substeps = Some(SUBSTEPS.check(o, n)?),
             Edit::Integrator(i) => spec.integrator = Some(i.name().to_string()),
-            Edit::BarIterations(n) => spec.bar_iterations = Some(BAR_ITERATIONS.check(o, n)?),
+            Edit::BarIterations(n) => {
+                spec.bar_iterations = Some(build::bar_iterations(o, spec.layout, n)?)
+            }
             Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
             Edit::Friction(mu) => spec.friction = Some(FRICTION.check(o, mu)?),
             Edit::Thickness(t) => spec.thickness = Some(THICKNESS.check(o, t)?),
