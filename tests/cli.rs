@@ -1,22 +1,10 @@
 //! The `cloth` command line as a user runs it: exit codes, output fields, dumps and
 //! error messages.
 
-use std::process::{Command, Output};
+mod binary;
 
-fn cloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use binary::{cloth, stderr, stdout};
+use std::process::Command;
 
 #[test]
 fn run_prints_the_summary() {

@@ -5,22 +5,13 @@
 //! for the case at hand (heavy damping has a small stable step; a sphere holding
 //! particles at the start is refused with a message).
 
-use std::process::{Command, Output};
+mod binary;
+
+use binary::{cloth, stderr};
 
 use cloth_sandbox::scene::Scene;
 use cloth_sandbox::sim::max_speed;
 use glam::DVec3;
-
-fn cloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn diverged(args: &[&str]) -> serde_json::Value {
     let o = cloth(args);

@@ -4,18 +4,10 @@
 //! diverged run's CSV holds the last finite state and says so.
 
 use std::path::{Path, PathBuf};
+mod binary;
+
+use binary::{cloth, stderr};
 use std::process::{Command, Output};
-
-fn cloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 /// A fresh folder for one test.
 fn folder(name: &str) -> PathBuf {

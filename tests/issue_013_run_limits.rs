@@ -3,18 +3,9 @@
 //! before it starts with a message giving the limit; a scene "file" that never
 //! ends (`/dev/zero`) or is too large is refused rather than read.
 
-use std::process::{Command, Output};
+mod binary;
 
-fn cloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_cloth"))
-        .args(args)
-        .output()
-        .expect("runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
+use binary::{cloth, stderr};
 
 /// Exit code 2 with a message holding every one of `words`.
 fn refused(args: &[&str], words: &[&str]) {

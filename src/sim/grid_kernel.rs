@@ -645,7 +645,7 @@ struct Kernel<E: Real> {
     par_bands: Vec<Band<E>>,
     simd: SimdLevel,
     /// XPBD's and self-collision's scratch (empty without them).
-    xpbd: XpbdScratch,
+    f64_copies_scratch: F64Copies,
     /// Self-collision's candidate pairs.
     self_collision: SelfCollision,
     /// The stretch limit's corrections along one row, per axis (`nv + PL` floats),
@@ -657,7 +657,7 @@ struct Kernel<E: Real> {
 /// width + column`): positions as the constraint pass moves them, before it, at the
 /// start of the step, and inverse masses.
 #[derive(Clone, Debug, Default)]
-struct XpbdScratch {
+struct F64Copies {
     moved: Vec<DVec3>,
     /// The positions before the pass.
     before: Vec<DVec3>,
@@ -749,7 +749,7 @@ impl<E: Real> Kernel<E> {
             seq_band: make_bands(&grid, 1),
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
-            xpbd: XpbdScratch::default(),
+            f64_copies_scratch: F64Copies::default(),
             self_collision: SelfCollision::default(),
             stretch_fix: std::array::from_fn(|_| {
                 std::array::from_fn(|_| vec![E::ZERO; grid.nv + PL])
@@ -1073,9 +1073,9 @@ impl<E: Real> Kernel<E> {
     /// f64 copies of the positions, those at the start of the step and the inverse
     /// masses, in cloth order (the scratch taken out of `self`; see
     /// [`Self::write_back`]).
-    fn f64_copies(&mut self) -> XpbdScratch {
+    fn f64_copies(&mut self) -> F64Copies {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let mut s = std::mem::take(&mut self.xpbd);
+        let mut s = std::mem::take(&mut self.f64_copies_scratch);
         s.moved.resize(w * h, DVec3::ZERO);
         s.start.resize(w * h, DVec3::ZERO);
         s.inv_mass.resize(w * h, 0.0);
@@ -1112,14 +1112,14 @@ impl<E: Real> Kernel<E> {
 
     /// Moves each particle the pass moved to its copy's position (adding the move
     /// over `dt` to its velocity) and puts the scratch back.
-    fn write_back(&mut self, s: XpbdScratch, dt: f64) {
+    fn write_back(&mut self, s: F64Copies, dt: f64) {
         let (w, st) = (self.grid.w, self.grid.stride);
         for (p, (&to, &from)) in s.moved.iter().zip(&s.before).enumerate() {
             if to != from {
                 self.move_particle((p / w) * st + p % w, to, dt);
             }
         }
-        self.xpbd = s;
+        self.f64_copies_scratch = s;
     }
 
     /// Self-collision ([`super::self_collision`]) at thickness `h_c`, on f64 copies
@@ -1127,16 +1127,17 @@ impl<E: Real> Kernel<E> {
     fn self_collision_pass(&mut self, h_c: f64, dt: f64) {
         let mut s = self.f64_copies();
         let width = self.grid.w;
-        let present = self.spec.present;
-        // The stencil directions and their kinds (structural, shear, bend).
-        let kinds = [0, 2, 1, 0, 1, 2];
+        // The stencil's directions whose kind of spring exists.
+        let springs = self
+            .stencil()
+            .map(|(direction, _, present, _)| (direction, present));
         let joined = |i: usize, j: usize| {
             let (a, b) = (i.min(j), i.max(j));
             let (dr, dc) = (
                 b / width - a / width,
                 (b % width) as isize - (a % width) as isize,
             );
-            (STENCIL_DIRECTIONS.iter().zip(kinds)).any(|(&d, kind)| d == (dr, dc) && present[kind])
+            springs.contains(&((dr, dc), true))
         };
         let (friction, pass) = (self.spec.friction, &mut self.self_collision);
         pass.apply(&mut s.moved, &s.start, &s.inv_mass, h_c, friction, joined);

@@ -73,25 +73,12 @@ pub struct SelfCollision {
     built_for: f64,
     /// Pairs pushed apart by the last pass.
     contacts: usize,
-    /// Rebuilds of the pair list so far.
-    rebuilds: u64,
 }
 
 impl SelfCollision {
     /// Pairs pushed apart by the last pass (the panel's contact count).
     pub fn contacts(&self) -> usize {
         self.contacts
-    }
-
-    /// How many times the candidate list was rebuilt.
-    pub fn rebuilds(&self) -> u64 {
-        self.rebuilds
-    }
-
-    /// Forgets the candidate list (after the particles were moved by hand or the
-    /// system was rebuilt): the next pass rebuilds it.
-    pub fn reset(&mut self) {
-        self.anchor.clear();
     }
 
     /// One pass on positions `x` (moved in place) that were at `start` at the start
@@ -164,7 +151,6 @@ impl SelfCollision {
 
     /// Rebuilds the candidate pairs within `reach` of each other.
     fn rebuild(&mut self, x: &[DVec3], reach: f64, joined: impl Fn(usize, usize) -> bool) {
-        self.rebuilds += 1;
         self.anchor.clear();
         self.anchor.extend_from_slice(x);
         self.pairs.clear();
