@@ -414,6 +414,8 @@ struct Summary {
     wall: f64,
     particles: usize,
     springs: usize,
+    /// Springs broken (torn or cut) during the run.
+    broken_springs: usize,
     energy: cloth_sandbox::sim::Energy,
     min: DVec3,
     max: DVec3,
@@ -446,6 +448,7 @@ impl Summary {
             wall,
             particles: system.particle_count(),
             springs: system.springs().len(),
+            broken_springs: system.broken_springs(),
             energy: system.energy(),
             min,
             max,
@@ -476,6 +479,7 @@ impl Summary {
             "spring_steps_per_second": sps * self.springs as f64,
             "particles": self.particles,
             "springs": self.springs,
+            "broken_springs": self.broken_springs,
             "energy": {
                 "kinetic": self.energy.kinetic,
                 "gravity": self.energy.gravity,
@@ -520,6 +524,9 @@ impl Summary {
         if let Some(n) = self.solver_iterations {
             println!("cg iterations   {n} (last step)");
         }
+        if self.broken_springs > 0 {
+            println!("broken springs  {}", self.broken_springs);
+        }
     }
 }
 
@@ -558,6 +565,12 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         constraints.push(format!(
             "self-collision (particles {} m apart, friction {})",
             p.thickness, p.friction
+        ));
+    }
+    if let Some(tau) = p.tear_strain {
+        constraints.push(format!(
+            "tearing (a spring breaks past {:.0}% stretch)",
+            tau * 100.0
         ));
     }
     if p.friction > 0.0 && (p.sphere.is_some() || p.ground.is_some()) {
@@ -613,6 +626,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             "seed": p.seed,
             "bar_iterations": p.bar_iterations,
             "stretch_limit": p.stretch_limit,
+            "tear_strain": p.tear_strain,
         },
         "extent": 2.0 * extent,
         "stability": {

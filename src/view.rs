@@ -317,9 +317,68 @@ pub fn pick_particle(
     best.map(|(i, _, _)| i)
 }
 
+/// The springs (pairs of particle indices) whose projections on screen cross the
+/// segment from `from` to `to` (pixels): what a cut along the mouse's path breaks.
+/// Springs with an end behind the camera or not finite are never cut.
+pub fn springs_crossed(
+    camera: &OrbitCamera,
+    viewport: Vec2,
+    (from, to): (Vec2, Vec2),
+    positions: &[Vec3],
+    springs: impl Iterator<Item = (usize, usize)>,
+) -> Vec<(usize, usize)> {
+    let screen: Vec<Option<Vec2>> = positions
+        .iter()
+        .map(|&p| {
+            p.is_finite()
+                .then(|| camera.project(p, viewport))
+                .flatten()
+                .map(|(s, _)| s)
+        })
+        .collect();
+    springs
+        .filter(|&(a, b)| match (screen.get(a), screen.get(b)) {
+            (Some(Some(p)), Some(Some(q))) => segments_cross(from, to, *p, *q),
+            _ => false,
+        })
+        .collect()
+}
+
+/// Whether the segments `a`-`b` and `c`-`d` cross (touching counts).
+fn segments_cross(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
+    let side = |p: Vec2, q: Vec2, r: Vec2| (q - p).perp_dot(r - p);
+    let (d1, d2) = (side(c, d, a), side(c, d, b));
+    let (d3, d4) = (side(a, b, c), side(a, b, d));
+    let apart = |x: f32, y: f32| (x > 0.0 && y > 0.0) || (x < 0.0 && y < 0.0);
+    !(apart(d1, d2) || apart(d3, d4)) && (a != b || c != d)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn crossing_segments() {
+        let v = |x: f32, y: f32| Vec2::new(x, y);
+        assert!(segments_cross(
+            v(0.0, 0.0),
+            v(2.0, 2.0),
+            v(0.0, 2.0),
+            v(2.0, 0.0)
+        ));
+        assert!(!segments_cross(
+            v(0.0, 0.0),
+            v(1.0, 0.0),
+            v(0.0, 1.0),
+            v(1.0, 1.0)
+        ));
+        assert!(!segments_cross(
+            v(0.0, 0.0),
+            v(1.0, 1.0),
+            v(2.0, 2.0),
+            v(3.0, 0.0)
+        ));
+    }
 
     #[test]
     fn default_camera_looks_at_target() {

@@ -37,8 +37,12 @@ fn settled(scene: &str, overrides: &[&str], fast: bool, steps: u64) -> System {
 #[test]
 fn folded_layers_keep_their_thickness_apart() {
     // The fold scene: the cloth slides off a small frictionless sphere and piles
-    // onto the ground (5 s).
-    let without = settled("fold", &["self_collision=false"], true, 4800);
+    // onto the ground (5 s). The pile is chaotic, and the grid engine's round-off
+    // differs between SIMD levels (when the cloth started centred over the sphere,
+    // 247 pairs crossed on an AVX2 machine, 49 with AVX-512, none on the f64
+    // engine); the scene now starts off-centre, and the count without
+    // self-collision is taken on the f64 engine, the same on every machine.
+    let without = settled("fold", &["self_collision=false"], false, 4800);
     let h_c = without.params().thickness;
     let crossed = close_pairs(&without, h_c / 2.0);
     println!("without self-collision: {crossed} pairs closer than h_c / 2");

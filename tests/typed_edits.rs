@@ -37,6 +37,7 @@ fn live_edits() -> Vec<Edit> {
         Edit::Substeps(7),
         Edit::Integrator(Integrator::Verlet),
         Edit::StretchLimit(0.2),
+        Edit::TearStrain(Some(0.8)),
         Edit::Friction(0.4),
         Edit::Thickness(0.01),
         Edit::SelfCollision(true),
@@ -81,6 +82,7 @@ fn assert_applied(s: &Session, edit: Edit) {
         Edit::Integrator(i) => assert_eq!(p.integrator, i),
         Edit::BarIterations(n) => assert_eq!(p.bar_iterations, n),
         Edit::StretchLimit(t) => assert_eq!(p.stretch_limit, Some(t)),
+        Edit::TearStrain(t) => assert_eq!(p.tear_strain, t),
         Edit::Friction(mu) => assert_eq!(p.friction, mu),
         Edit::Thickness(t) => assert_eq!(p.thickness, t),
         Edit::SelfCollision(on) => assert_eq!(p.self_collision, on),
@@ -285,6 +287,8 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::Depth(n) => n.to_string(),
         Edit::Integrator(i) => i.name().to_string(),
         Edit::SelfCollision(on) => on.to_string(),
+        // Tearing off is the key's absence, which has no `--set` form.
+        Edit::TearStrain(t) => t.expect("tearing on").to_string(),
     };
     (edit.key(), value)
 }

@@ -9,6 +9,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "move it (on the plane through it facing the camera)",
     ),
     (
+        "Ctrl + left drag",
+        "cut the cloth: break the springs the mouse's path crosses",
+    ),
+    (
         "Right drag, or left drag on empty space",
         "orbit the camera",
     ),

@@ -1,6 +1,7 @@
 //! Mouse gestures on the scene: click a particle to pin it, press and drag a
-//! particle to move it, drag elsewhere to orbit (left/right) or pan (middle,
-//! shift+right), wheel to zoom. Pure state machine: the app applies the actions.
+//! particle to move it, Ctrl + left drag to cut the cloth, drag elsewhere to orbit
+//! (left/right) or pan (middle, shift+right), wheel to zoom. Pure state machine:
+//! the app applies the actions.
 
 use glam::Vec2;
 
@@ -20,6 +21,8 @@ pub enum Gesture {
     Orbit,
     /// Panning the camera.
     Pan,
+    /// Cutting the springs the cursor's path crosses (Ctrl + left drag).
+    Cutting,
 }
 
 /// Something the app should do in response to the mouse.
@@ -35,6 +38,9 @@ pub enum MouseAction {
     Orbit(Vec2),
     /// Pan by this cursor motion (px).
     Pan(Vec2),
+    /// Cut the springs that the cursor's path from the first point to the second
+    /// (px) crosses on screen.
+    Cut(Vec2, Vec2),
 }
 
 /// Mouse buttons the scene reacts to.
@@ -67,11 +73,12 @@ impl Default for Mouse {
 }
 
 impl Mouse {
-    /// A button went down over the scene; `picked` is the particle under the cursor.
+    /// A button went down over the scene with the modifiers `shift` and `ctrl`
+    /// held; `picked` is the particle under the cursor.
     pub fn press(
         &mut self,
         button: Button,
-        shift: bool,
+        (shift, ctrl): (bool, bool),
         picked: Option<usize>,
     ) -> Option<MouseAction> {
         if self.gesture != Gesture::Idle {
@@ -79,6 +86,7 @@ impl Mouse {
         }
         let start = self.cursor?;
         self.gesture = match (button, picked) {
+            (Button::Left, _) if ctrl => Gesture::Cutting,
             (Button::Left, Some(particle)) => Gesture::Pressed { particle, start },
             (Button::Left, None) => Gesture::Orbit,
             (Button::Right, _) if shift => Gesture::Pan,
@@ -111,6 +119,7 @@ impl Mouse {
             }),
             Gesture::Orbit => Some(MouseAction::Orbit(delta)),
             Gesture::Pan => Some(MouseAction::Pan(delta)),
+            Gesture::Cutting => from.map(|from| MouseAction::Cut(from, to)),
         }
     }
 
@@ -123,7 +132,8 @@ impl Mouse {
             }
             (Gesture::Dragging { .. }, Button::Left) => Some(MouseAction::Release),
             (Gesture::Orbit, Button::Left | Button::Right)
-            | (Gesture::Pan, Button::Right | Button::Middle) => None,
+            | (Gesture::Pan, Button::Right | Button::Middle)
+            | (Gesture::Cutting, Button::Left) => None,
             _ => return None,
         };
         self.gesture = Gesture::Idle;
@@ -154,16 +164,32 @@ mod tests {
     fn click_without_motion_toggles_pin() {
         let mut m = Mouse::default();
         m.moved(Vec2::new(10.0, 10.0));
-        m.press(Button::Left, false, Some(3));
+        m.press(Button::Left, (false, false), Some(3));
         m.moved(Vec2::new(11.0, 10.0));
         assert_eq!(m.release(Button::Left), Some(MouseAction::TogglePin(3)));
+    }
+
+    #[test]
+    fn ctrl_drag_cuts_along_the_path_even_from_a_particle() {
+        let mut m = Mouse::default();
+        m.moved(Vec2::new(10.0, 10.0));
+        m.press(Button::Left, (false, true), Some(3));
+        assert_eq!(
+            m.moved(Vec2::new(30.0, 10.0)),
+            Some(MouseAction::Cut(
+                Vec2::new(10.0, 10.0),
+                Vec2::new(30.0, 10.0)
+            ))
+        );
+        assert_eq!(m.release(Button::Left), None);
+        assert_eq!(m.gesture, Gesture::Idle);
     }
 
     #[test]
     fn press_and_drag_moves_then_releases() {
         let mut m = Mouse::default();
         m.moved(Vec2::new(10.0, 10.0));
-        m.press(Button::Left, false, Some(3));
+        m.press(Button::Left, (false, false), Some(3));
         assert!(matches!(
             m.moved(Vec2::new(30.0, 10.0)),
             Some(MouseAction::Drag { particle: 3, .. })

@@ -22,7 +22,7 @@ use winit::keyboard::{KeyCode, ModifiersState, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use cloth_sandbox::session::Session;
-use cloth_sandbox::view::{FlyKeys, OrbitCamera, pick_particle};
+use cloth_sandbox::view::{FlyKeys, OrbitCamera, pick_particle, springs_crossed};
 
 use crate::render::ViewOptions;
 use frame::FrameData;
@@ -269,6 +269,21 @@ impl App {
             }
             MouseAction::Orbit(d) => self.camera.orbit(d),
             MouseAction::Pan(d) => self.camera.pan(d, self.viewport()),
+            MouseAction::Cut(from, to) => {
+                self.frame_data.refresh_positions(self.session.system());
+                let system = self.session.system();
+                let springs = system
+                    .springs()
+                    .iter()
+                    .map(|s| (s.a as usize, s.b as usize));
+                let path = (self.to_scene(from), self.to_scene(to));
+                let (positions, viewport) = (&self.frame_data.positions, self.viewport());
+                let crossed = springs_crossed(&self.camera, viewport, path, positions, springs);
+                if !crossed.is_empty() {
+                    let cut = self.session.system_mut().cut(&crossed);
+                    log::info!("cut {cut} springs");
+                }
+            }
         }
     }
 
@@ -563,8 +578,10 @@ impl ApplicationHandler for App {
                             (Button::Left, Some(c)) => self.pick(c),
                             _ => None,
                         };
+                        let m = self.modifiers;
                         if let Some(a) =
-                            self.mouse.press(button, self.modifiers.shift_key(), picked)
+                            self.mouse
+                                .press(button, (m.shift_key(), m.control_key()), picked)
                         {
                             self.apply_mouse(a);
                         }

@@ -571,6 +571,24 @@ fn contents(
                     edit(Edit::SelfCollision(on));
                 }
             }
+            if !system.springs().is_empty() || system.broken_springs() > 0 {
+                let mut on = p.tear_strain.is_some();
+                if ui
+                    .checkbox(&mut on, "tearing")
+                    .on_hover_text(
+                        "Springs break for good when stretched past the tear strain; \
+                         Ctrl + left drag cuts the cloth along the mouse's path either way",
+                    )
+                    .changed()
+                {
+                    edit(Edit::TearStrain(on.then_some(p.tear_strain.unwrap_or(0.5))));
+                }
+                if let Some(mut tau) = p.tear_strain {
+                    if slider(ui, &mut tau, 0.01..=2.0, "tear strain", true, "A spring breaks when longer than (1 + strain) times its rest length: 0.5 = 50% stretched (0.01 to 100)") {
+                        edit(Edit::TearStrain(Some(tau)));
+                    }
+                }
+            }
         });
 
     if let Some(on) = wind_switch {
@@ -635,6 +653,9 @@ fn contents(
                     budget.limit() - budget.base,
                     budget.base
                 ));
+            }
+            if system.broken_springs() > 0 {
+                ui.label(format!("broken springs {}", system.broken_springs()));
             }
             if p.self_collision {
                 ui.label(format!(

@@ -168,6 +168,8 @@ pub const AIR_DAMPING: NumberRange<'static> = number("air_damping", 0.0, false, 
 pub const DT: NumberRange<'static> = number("dt", 0.0, true, 1.0);
 /// `stretch_limit` (a fraction of the rest length).
 pub const STRETCH_LIMIT: NumberRange<'static> = number("stretch_limit", 0.0, false, 100.0);
+/// `tear_strain` (a fraction of the rest length).
+pub const TEAR_STRAIN: NumberRange<'static> = number("tear_strain", 0.0, true, 100.0);
 /// `friction`, the Coulomb coefficient μ of the colliders.
 pub const FRICTION: NumberRange<'static> = number("friction", 0.0, false, 10.0);
 /// `thickness` in m: contact thickness of the cloth on the colliders.
@@ -503,6 +505,9 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
             None => 0,
         },
         stretch_limit,
+        tear_strain: (spec.tear_strain)
+            .map(|t| TEAR_STRAIN.check(o, t))
+            .transpose()?,
         seed: spec.seed.unwrap_or(1),
     };
     let substeps = SUBSTEPS.check(o, spec.substeps.unwrap_or(16))?;
@@ -679,6 +684,7 @@ impl Resolved {
             Edit::Integrator(i) => p.integrator = i,
             Edit::BarIterations(n) => p.bar_iterations = n,
             Edit::StretchLimit(t) => p.stretch_limit = Some(t),
+            Edit::TearStrain(t) => p.tear_strain = t,
             Edit::Friction(mu) => p.friction = mu,
             Edit::SelfCollision(on) => p.self_collision = on,
             Edit::Thickness(t) => {

@@ -42,6 +42,8 @@ pub enum Edit {
     BarIterations(u32),
     /// Maximum stretch tau (`stretch_limit`): springs no longer than (1 + tau) L.
     StretchLimit(f64),
+    /// Strain past which a spring tears (`tear_strain`); `None`: springs never tear.
+    TearStrain(Option<f64>),
     /// Coulomb friction coefficient μ of the ground and the sphere (`friction`).
     Friction(f64),
     /// Contact thickness in m on the ground and the sphere (`thickness`).
@@ -73,6 +75,7 @@ impl Edit {
             Self::Integrator(_) => "integrator",
             Self::BarIterations(_) => "bar_iterations",
             Self::StretchLimit(_) => "stretch_limit",
+            Self::TearStrain(_) => "tear_strain",
             Self::Friction(_) => "friction",
             Self::Thickness(_) => "thickness",
             Self::SelfCollision(_) => "self_collision",

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 pub use build::GRID_MAX_SIDE;
 use build::{
     AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, FRICTION, GRAVITY, GUST, PARTICLE_MASS, REST_LENGTH,
-    STIFFNESS, STRETCH_LIMIT, SUBSTEPS, THICKNESS, WIND, side_ranges,
+    STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND, side_ranges,
 };
 pub use edit::Edit;
 pub use values::{PinPreset, Pins, Vector};
@@ -198,6 +198,10 @@ pub struct SceneSpec {
     /// Maximum stretch tau (Provot): springs no longer than (1 + tau) L.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stretch_limit: Option<f64>,
+    /// Strain past which a spring tears: it breaks when longer than (1 + tau) L.
+    /// Absent: springs never tear.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tear_strain: Option<f64>,
 }
 
 /// Keys that give the same quantity: setting one clears the others.
@@ -383,6 +387,7 @@ const BUILTINS: &[BuiltinScene] = &[
     builtin!("sheet"),
     builtin!("drape"),
     builtin!("fold"),
+    builtin!("tear"),
     builtin!("spring"),
     builtin!("chain"),
     builtin!("jelly"),
@@ -545,6 +550,9 @@ impl Scene {
                 spec.bar_iterations = Some(build::bar_iterations(o, spec.layout, n)?)
             }
             Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
+            Edit::TearStrain(t) => {
+                spec.tear_strain = t.map(|t| TEAR_STRAIN.check(o, t)).transpose()?
+            }
             Edit::Friction(mu) => spec.friction = Some(FRICTION.check(o, mu)?),
             Edit::Thickness(t) => spec.thickness = Some(THICKNESS.check(o, t)?),
             Edit::SelfCollision(on) => spec.self_collision = Some(on),

@@ -26,6 +26,7 @@ use glam::DVec3;
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
 use super::mesh_kernel::{MeshKernel, MeshParams};
+use super::springs::STENCIL_DIRECTIONS;
 use super::{Divergence, Integrator, SpringKind, System};
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
@@ -89,6 +90,9 @@ pub(super) struct Engines {
     pub(super) grid_springs: Option<GridSprings>,
     /// How many times a grid kernel was built for this system.
     builds: u64,
+    /// Bumped each time springs break ([`super::tearing`]): a grid kernel that saw
+    /// an older count takes the springs left from the model.
+    springs_version: u64,
 }
 
 impl Clone for Engines {
@@ -99,11 +103,17 @@ impl Clone for Engines {
             mesh: None,
             grid_springs: self.grid_springs,
             builds: self.builds,
+            springs_version: self.springs_version,
         }
     }
 }
 
 impl Engines {
+    /// Springs broke in the model: the engines must take the springs left.
+    pub(super) fn springs_changed(&mut self) {
+        self.springs_version += 1;
+    }
+
     /// The f64 state changed outside the engines: copy it in before they next run.
     pub(super) fn mark_stale(&mut self) {
         if let Some(grid) = &mut self.grid {
@@ -147,13 +157,16 @@ struct FastPath {
     /// Positions of the particles held in place (pinned or grabbed), exactly as
     /// the f64 state had them: the kernel holds them in f32.
     held: Vec<(usize, DVec3)>,
+    /// The [`Engines::springs_version`] whose springs the kernel holds.
+    springs_seen: Option<u64>,
 }
 
 /// A grid cloth's springs and masses as the kernel needs them: one mass, and per
 /// kind (structural, shear, bend) one stiffness and damping with rest lengths `h`,
-/// `h√2`, `2h`, every spring of the stencil present for each kind that has any (a
-/// kind with none, e.g. `shear_scale = 0`, gets `k = b = 0`). Computed when springs
-/// or masses change, not on every run.
+/// `h√2`, `2h`; every spring is a stencil spring of its kind, though not every
+/// stencil spring need be there (springs tear: the kernel takes which are left
+/// from the model, [`stencil_bits`]). A kind with none, e.g. `shear_scale = 0`,
+/// gets `k = b = 0`. Computed when springs or masses change, not on every run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct GridSprings {
     coefficients: [SpringCoefficients; 3],
@@ -191,7 +204,6 @@ impl GridSprings {
             return None;
         }
         let mut kinds: [Option<(f64, f64, f64)>; 3] = [None; 3];
-        let mut counts = [0usize; 3];
         for s in &model.springs {
             let slot = match s.kind {
                 SpringKind::Structural => 0,
@@ -200,8 +212,8 @@ impl GridSprings {
                 SpringKind::Other => return None,
             };
             // The scene says this is a grid: check that the spring is a stencil
-            // spring of its kind (with the counts below and canonical springs being
-            // unique, the springs are then exactly the stencil).
+            // spring of its kind (canonical springs being unique, the springs are
+            // then a subset of the stencil, and the kernel masks the others).
             let (a, b) = (s.a as usize, s.b as usize);
             let (ra, ca) = (a / shape.width, a % shape.width);
             let (rb, cb) = (b / shape.width, b % shape.width);
@@ -220,17 +232,14 @@ impl GridSprings {
                 Some(c) if c == coefficients => {}
                 Some(_) => return None,
             }
-            counts[slot] += 1;
         }
         let h = kinds[0]?.2;
-        let (w, r) = (shape.width, shape.height);
-        let stencil = grid_kernel::stencil_counts(w, r);
         let rest_ratio = [1.0, std::f64::consts::SQRT_2, 2.0];
         let mut coefficients = [SpringCoefficients::default(); 3];
         for slot in 0..3 {
             if let Some((k, b, rest)) = kinds[slot] {
                 let grid_rest = (rest - rest_ratio[slot] * h).abs() <= 1e-12 * h.max(1e-300);
-                if !grid_rest || counts[slot] != stencil[slot] {
+                if !grid_rest {
                     return None;
                 }
                 coefficients[slot] = SpringCoefficients { k, b };
@@ -243,6 +252,38 @@ impl GridSprings {
             mass,
         })
     }
+}
+
+/// Which stencil springs and triangles `model` (a grid that [`GridSprings::of`]
+/// accepted) has left, as [`GridCloth::set_springs_left`] takes them; `None` when
+/// it has every stencil spring of the kinds `present` and every triangle.
+fn springs_left(model: &super::Model, present: [bool; 3]) -> Option<Vec<u8>> {
+    let shape = model.grid?;
+    let (w, h) = (shape.width, shape.height);
+    let stencil = grid_kernel::stencil_counts(w, h);
+    let whole_springs: usize = (0..3).filter(|&k| present[k]).map(|k| stencil[k]).sum();
+    let whole_triangles = 2 * w.saturating_sub(1) * h.saturating_sub(1);
+    if model.springs.len() == whole_springs && model.triangles.len() == whole_triangles {
+        return None;
+    }
+    let mut bits = vec![0u8; w * h];
+    for s in &model.springs {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let offset = (b / w - a / w, (b % w) as isize - (a % w) as isize);
+        if let Some(d) = STENCIL_DIRECTIONS.iter().position(|&o| o == offset) {
+            bits[a] |= 1 << d;
+        }
+    }
+    for &[a, b, c] in &model.triangles {
+        let [a, b, c] = [a, b, c].map(|i| i as usize);
+        // (a, b, d) with b = a + 1, d = a + w; (b, e, d) with e = b + w, d = e - 1.
+        if b == a + 1 && c == a + w {
+            bits[a] |= 1 << 6;
+        } else if b == a + w && c + 1 == b && a >= 1 {
+            bits[a - 1] |= 1 << 7;
+        }
+    }
+    Some(bits)
 }
 
 impl System {
@@ -344,6 +385,7 @@ impl System {
             dt: _,             // given to each run
             bar_iterations: _, // bars are refused below
             stretch_limit,
+            tear_strain,
             friction,
             thickness,
             self_collision,
@@ -387,6 +429,7 @@ impl System {
             friction,
             self_collision: self_collision.then_some(thickness).filter(|&t| t > 0.0),
             stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
+            tear_strain,
             integrator,
             present: springs.present,
             precision: Precision::Single,
@@ -430,9 +473,14 @@ impl System {
                     spec,
                     in_sync: false,
                     held: Vec::new(),
+                    springs_seen: None,
                 }
             }
         };
+        if fast.springs_seen != Some(self.engines.springs_version) {
+            (fast.kernel).set_springs_left(springs_left(&self.model, fast.spec.present));
+            fast.springs_seen = Some(self.engines.springs_version);
+        }
         if !fast.in_sync {
             fast.kernel
                 .set_state(&self.state.positions, &self.state.velocities);
@@ -541,8 +589,9 @@ trait FastEngine {
     /// The largest squared speed and squared distance from `center` (infinite on
     /// NaN).
     fn extremes(&self, center: DVec3) -> (f64, f64);
-    /// The engine's state into the system's f64 state.
-    fn copy_back(&self, system: &mut System);
+    /// The engine's state into the system's f64 state (and springs it broke into
+    /// the model).
+    fn copy_back(&mut self, system: &mut System);
     /// The system's f64 state into the engine (the reverse of `copy_back`).
     fn load(&mut self, system: &System);
 }
@@ -559,7 +608,23 @@ impl FastEngine for FastPath {
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
     }
-    fn copy_back(&self, system: &mut System) {
+    fn copy_back(&mut self, system: &mut System) {
+        let torn = self.kernel.take_torn();
+        if !torn.is_empty() {
+            let width = self.spec.width;
+            let mut pairs: Vec<(usize, usize)> = torn
+                .into_iter()
+                .map(|(p, d)| {
+                    let (dr, dc) = STENCIL_DIRECTIONS[d];
+                    (p, (p + dr * width).wrapping_add_signed(dc))
+                })
+                .collect();
+            pairs.sort_unstable();
+            let pair = |s: &super::Spring| (s.a as usize, s.b as usize);
+            system.break_springs(|s| pairs.binary_search(&pair(s)).is_ok());
+            // The kernel broke them itself: its masks are the model's.
+            self.springs_seen = Some(system.engines.springs_version);
+        }
         self.kernel.positions_into(&mut system.state.positions);
         self.kernel.velocities_into(&mut system.state.velocities);
         for &(i, position) in &self.held {
@@ -583,7 +648,7 @@ impl FastEngine for MeshPath {
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
     }
-    fn copy_back(&self, system: &mut System) {
+    fn copy_back(&mut self, system: &mut System) {
         self.kernel.positions_into(&mut system.state.positions);
         self.kernel.velocities_into(&mut system.state.velocities);
         system.set_verlet_history(|u| self.kernel.update_velocities_into(u));

@@ -147,6 +147,9 @@ pub struct GridSpec {
     pub self_collision: Option<f64>,
     /// Provot's stretch limit `tau`, if any: no spring longer than `(1 + tau) L`.
     pub stretch_limit: Option<f64>,
+    /// Tear strain `tau`, if springs tear ([`super::tearing`]): a spring longer
+    /// than `(1 + tau) L` at the end of a step breaks.
+    pub tear_strain: Option<f64>,
     /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
     pub integrator: Integrator,
     /// Which kinds of spring exist (structural, shear, bend); an absent kind has
@@ -250,6 +253,7 @@ impl GridSpec {
             friction: 0.0,
             self_collision: None,
             stretch_limit: None,
+            tear_strain: None,
             integrator: Integrator::SymplecticEuler,
             present: [true; 3],
             precision: Precision::Single,
@@ -651,6 +655,117 @@ struct Kernel<E: Real> {
     /// The stretch limit's corrections along one row, per axis (`nv + PL` floats),
     /// for each of two threads.
     stretch_fix: [[Vec<E>; 3]; 2],
+    /// The springs left when some tore or were cut (`None`: the whole stencil).
+    torn: Option<Torn<E>>,
+    /// Springs torn by the steps since [`GridCloth::take_torn`]: (particle in cloth
+    /// order, stencil direction).
+    torn_log: Vec<(usize, usize)>,
+}
+
+/// Which kind of spring each stencil direction holds, as an index into
+/// [`GridSpec::present`]: right, two right, down-left, down, down-right, two down.
+const DIRECTION_KIND: [usize; 6] = [0, 2, 1, 0, 1, 2];
+
+/// In [`Torn::bits`], the bits of the cell's triangles `(a, b, d)` and `(b, e, d)`
+/// (after the six springs' bits).
+const TRIANGLE_BITS: [u8; 2] = [1 << 6, 1 << 7];
+
+/// A grid cloth with springs missing: which springs and triangles are left, and
+/// the masks the row pass multiplies their forces and drag by.
+#[derive(Clone, Debug)]
+struct Torn<E> {
+    /// Per particle in cloth order: bit `d < 6` set when its spring in stencil
+    /// direction `d` ([`STENCIL_DIRECTIONS`]) exists, then [`TRIANGLE_BITS`] for
+    /// the triangles of the cell it is the top left corner of.
+    bits: Vec<u8>,
+    /// Per direction, at each particle's array index: 1 where that spring exists.
+    springs: [Buf<E>; 6],
+    /// Per cell, at the array index of its top left particle: 1 where the triangle
+    /// `(a, b, d)` (first array) or `(b, e, d)` (second) exists.
+    triangles: [Buf<E>; 2],
+}
+
+impl<E: Real> Torn<E> {
+    /// The springs and triangles `bits` (see [`Torn::bits`]) on `grid`, with masks.
+    fn new(bits: Vec<u8>, grid: &Grid) -> Self {
+        let mut torn = Self {
+            bits,
+            springs: std::array::from_fn(|_| Buf::zeros(grid.len())),
+            triangles: std::array::from_fn(|_| Buf::zeros(grid.len())),
+        };
+        torn.refresh(grid);
+        torn
+    }
+
+    /// Every stencil spring of the kinds `present` that fits on `grid`, and every
+    /// triangle.
+    fn whole(grid: &Grid, present: [bool; 3]) -> Vec<u8> {
+        let (w, h) = (grid.w, grid.h);
+        (0..w * h)
+            .map(|p| {
+                let (r, c) = (p / w, p % w);
+                let mut bits = 0;
+                for (d, &(dr, dc)) in STENCIL_DIRECTIONS.iter().enumerate() {
+                    let cc = c as isize + dc;
+                    if present[DIRECTION_KIND[d]] && r + dr < h && (0..w as isize).contains(&cc) {
+                        bits |= 1 << d;
+                    }
+                }
+                if r + 1 < h && c + 1 < w {
+                    bits |= TRIANGLE_BITS[0] | TRIANGLE_BITS[1];
+                }
+                bits
+            })
+            .collect()
+    }
+
+    /// Whether the spring from particle `p` in stencil direction `d` is left.
+    fn has(&self, p: usize, d: usize) -> bool {
+        self.bits[p] >> d & 1 == 1
+    }
+
+    /// Breaks the spring from particle `p` in direction `d` on a grid `w` wide,
+    /// and the triangles along it.
+    fn break_spring(&mut self, p: usize, d: usize, w: usize) {
+        self.bits[p] &= !(1 << d);
+        let c = p % w;
+        let [first, second] = TRIANGLE_BITS;
+        let mut clear = |cell: Option<usize>, bit: u8| {
+            if let Some(cell) = cell {
+                self.bits[cell] &= !bit;
+            }
+        };
+        match STENCIL_DIRECTIONS[d] {
+            // Edge a-b of its cell, e-d of the cell above.
+            (0, 1) => {
+                clear(Some(p), first);
+                clear(p.checked_sub(w), second);
+            }
+            // Edge a-d of its cell, b-e of the cell to the left.
+            (1, 0) => {
+                clear(Some(p), first);
+                clear((c > 0).then(|| p - 1), second);
+            }
+            // Edge b-d of both triangles of the cell to the left.
+            (1, -1) => clear(Some(p - 1), first | second),
+            // Bend springs and the other diagonal are no triangle's edge.
+            _ => {}
+        }
+    }
+
+    /// Recomputes the masks from `bits`.
+    fn refresh(&mut self, grid: &Grid) {
+        let one = |on: bool| if on { E::ONE } else { E::ZERO };
+        for p in 0..grid.w * grid.h {
+            let (i, bits) = (grid.index(p), self.bits[p]);
+            for d in 0..6 {
+                self.springs[d].as_mut_slice()[i] = one(bits >> d & 1 == 1);
+            }
+            for (mask, bit) in self.triangles.iter_mut().zip(TRIANGLE_BITS) {
+                mask.as_mut_slice()[i] = one(bits & bit != 0);
+            }
+        }
+    }
 }
 
 /// XPBD's and self-collision's f64 copies, per particle in cloth order (`p = row *
@@ -754,6 +869,8 @@ impl<E: Real> Kernel<E> {
             stretch_fix: std::array::from_fn(|_| {
                 std::array::from_fn(|_| vec![E::ZERO; grid.nv + PL])
             }),
+            torn: None,
+            torn_log: Vec::new(),
             grid,
             spec,
         }
@@ -906,6 +1023,17 @@ impl<E: Real> Kernel<E> {
             u: self.cur.u.each_ref().map(Buf::as_slice),
             inv_mass: self.inv_mass.as_slice(),
             col_mask: self.col_mask.as_slice(),
+            // In the order `block` evaluates them: right, two right, down,
+            // down-right, the other diagonal (down-left from the next column), two
+            // down, then the two triangles.
+            torn: self.torn.as_ref().map(|t| {
+                let [right, two_right, down_left, down, down_right, two_down] =
+                    t.springs.each_ref().map(Buf::as_slice);
+                let [first, second] = t.triangles.each_ref().map(Buf::as_slice);
+                [
+                    right, two_right, down, down_right, down_left, two_down, first, second,
+                ]
+            }),
             drag: self.drag_on,
             simd: self.simd,
         };
@@ -953,6 +1081,70 @@ impl<E: Real> Kernel<E> {
         // particles out of the sphere.
         if contact.is_active() && self.params.sphere.is_none() {
             self.resolve_contact(&contact);
+        }
+        if let Some(tau) = self.spec.tear_strain {
+            self.tear_pass(tau);
+        }
+    }
+
+    /// The springs the model has left (`bits` as in [`Torn::bits`]; `None`: the
+    /// whole stencil, every triangle).
+    pub fn set_springs_left(&mut self, bits: Option<Vec<u8>>) {
+        self.torn = bits.map(|bits| Torn::new(bits, &self.grid));
+    }
+
+    /// The springs torn since the last call: (particle in cloth order, stencil
+    /// direction).
+    pub fn take_torn(&mut self) -> Vec<(usize, usize)> {
+        std::mem::take(&mut self.torn_log)
+    }
+
+    /// Tearing, the step's last phase ([`super::tearing`]): breaks every spring
+    /// past the tear strain `tau`. A vectorisable scan of each row in the kernel's
+    /// precision finds the rows that may hold one, with a margin; there
+    /// [`super::tearing::overstretched`] decides in f64, as in the f64 engine.
+    fn tear_pass(&mut self, tau: f64) {
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let mut broke = false;
+        for (d, ((dr, dc), rest, present, _)) in self.stencil().into_iter().enumerate() {
+            let c0 = (-dc).max(0) as usize;
+            let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
+            if !present || len == 0 || dr >= h {
+                continue;
+            }
+            let longest = (1.0 + tau) * rest;
+            // f32 lengths are good to about 1e-6 of themselves: the scan's margin.
+            let scan2 = E::of(longest * longest * (1.0 - 1e-4));
+            for r in 0..h - dr {
+                let (a, b) = (r * st + c0, ((r + dr) * st + c0).wrapping_add_signed(dc));
+                let alive = self
+                    .torn
+                    .as_ref()
+                    .map(|t| &t.springs[d].as_slice()[a..a + len]);
+                if !row_may_tear(&self.cur, a, b, len, alive, scan2) {
+                    continue;
+                }
+                for c in c0..c0 + len {
+                    let p = r * w + c;
+                    let q = (p + dr * w).wrapping_add_signed(dc);
+                    let there = self.torn.as_ref().is_none_or(|t| t.has(p, d));
+                    let (i, j) = (self.grid.index(p), self.grid.index(q));
+                    let (xi, xj) = (self.position_at(i), self.position_at(j));
+                    if there && super::tearing::overstretched(xi, xj, rest, tau) {
+                        let present = self.spec.present;
+                        let grid = self.grid;
+                        let torn = self.torn.get_or_insert_with(|| {
+                            Torn::new(Torn::<E>::whole(&grid, present), &grid)
+                        });
+                        torn.break_spring(p, d, w);
+                        self.torn_log.push((p, d));
+                        broke = true;
+                    }
+                }
+            }
+        }
+        if broke && let Some(torn) = &mut self.torn {
+            torn.refresh(&self.grid);
         }
     }
 
@@ -1029,7 +1221,8 @@ impl<E: Real> Kernel<E> {
         let (w, h) = (self.grid.w, self.grid.h);
         let n = w * h;
         let mut s = self.f64_copies();
-        for ((dr, dc), rest, present, kind) in self.stencil() {
+        let bits = self.torn.as_ref().map(|t| t.bits.as_slice());
+        for (d, ((dr, dc), rest, present, kind)) in self.stencil().into_iter().enumerate() {
             if !present || kind.k <= 0.0 {
                 continue;
             }
@@ -1039,6 +1232,7 @@ impl<E: Real> Kernel<E> {
                 dc,
                 spring: (rest, kind.k, kind.b),
                 dt,
+                left: bits.map(|bits| (bits, 1 << d)),
             };
             for colour in 0..2 {
                 // Springs along rows stay in their row; the others' rows alternate
@@ -1051,19 +1245,22 @@ impl<E: Real> Kernel<E> {
                 };
                 let from = (first_row * w).min(n);
                 let size = block_rows * w;
-                let blocks = s.moved[from..]
-                    .chunks_mut(size)
-                    .zip(s.start[from..].chunks(size))
-                    .zip(s.inv_mass[from..].chunks(size));
+                let correct = |k: usize, ((x, x0), m)| {
+                    class.correct_block(x, x0, m, from + k * size, colour);
+                };
                 if parallel && n >= PARALLEL_MIN_PARTICLES {
                     use rayon::prelude::*;
                     let blocks = s.moved[from..]
                         .par_chunks_mut(size)
                         .zip(s.start[from..].par_chunks(size))
                         .zip(s.inv_mass[from..].par_chunks(size));
-                    blocks.for_each(|((x, x0), m)| class.correct_block(x, x0, m, colour));
+                    blocks.enumerate().for_each(|(k, block)| correct(k, block));
                 } else {
-                    blocks.for_each(|((x, x0), m)| class.correct_block(x, x0, m, colour));
+                    let blocks = s.moved[from..]
+                        .chunks_mut(size)
+                        .zip(s.start[from..].chunks(size))
+                        .zip(s.inv_mass[from..].chunks(size));
+                    blocks.enumerate().for_each(|(k, block)| correct(k, block));
                 }
             }
         }
@@ -1127,17 +1324,22 @@ impl<E: Real> Kernel<E> {
     fn self_collision_pass(&mut self, h_c: f64, dt: f64) {
         let mut s = self.f64_copies();
         let width = self.grid.w;
-        // The stencil's directions whose kind of spring exists.
+        // The stencil's directions whose kind of spring exists, and the springs
+        // left when some tore.
         let springs = self
             .stencil()
             .map(|(direction, _, present, _)| (direction, present));
+        let torn = self.torn.as_ref();
         let joined = |i: usize, j: usize| {
             let (a, b) = (i.min(j), i.max(j));
             let (dr, dc) = (
                 b / width - a / width,
                 (b % width) as isize - (a % width) as isize,
             );
-            springs.contains(&((dr, dc), true))
+            springs
+                .iter()
+                .position(|&s| s == ((dr, dc), true))
+                .is_some_and(|d| torn.is_none_or(|t| t.has(a, d)))
         };
         let (friction, pass) = (self.spec.friction, &mut self.self_collision);
         pass.apply(&mut s.moved, &s.start, &s.inv_mass, h_c, friction, joined);
@@ -1160,7 +1362,7 @@ impl<E: Real> Kernel<E> {
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
         let inv_dt = E::of(1.0 / dt);
         let compensated = self.params.compensated;
-        for ((dr, dc), rest, present, _) in self.stencil() {
+        for (d, ((dr, dc), rest, present, _)) in self.stencil().into_iter().enumerate() {
             // Columns c with both ends on the cloth: 0 <= c + dc < w.
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
@@ -1192,15 +1394,19 @@ impl<E: Real> Kernel<E> {
                 .min(h);
                 let rows = |range: std::ops::Range<usize>| range.start..range.end.min(h - dr);
                 let inv_mass = self.inv_mass.as_slice();
+                let alive = self.torn.as_ref().map(|t| t.springs[d].as_slice());
                 let out = self.cur.rows();
                 let [fix_lo, fix_hi] = &mut self.stretch_fix;
                 let simd = self.simd;
-                let run =
-                    |out: &mut Out<E>, base: usize, fix: &mut _, rows: std::ops::Range<usize>| {
-                        for r in rows.filter(in_class) {
-                            stretch_limit_line_dispatch(simd, out, base, inv_mass, fix, &line(r));
-                        }
-                    };
+                let run = |out: &mut Out<E>,
+                           base: usize,
+                           fix: &mut _,
+                           rows: std::ops::Range<usize>| {
+                    for r in rows.filter(in_class) {
+                        let line = line(r);
+                        stretch_limit_line_dispatch(simd, out, base, inv_mass, alive, fix, &line);
+                    }
+                };
                 if parallel {
                     let (mut lo, mut hi) = out.split_at(split * st);
                     rayon::join(
@@ -1592,6 +1798,19 @@ impl GridCloth {
         /// Pairs of particles the last self-collision pass pushed apart.
         fn self_collision_contacts(&self) -> usize
     );
+    forward!(
+        /// Sets which springs and triangles are left: per particle in cloth order,
+        /// bit `d < 6` for its spring in stencil direction `d`
+        /// ([`super::springs::STENCIL_DIRECTIONS`]), bits 6 and 7 for the triangles
+        /// `(a, b, d)` and `(b, e, d)` of the cell it is the top left corner of;
+        /// `None`: the whole stencil and every triangle.
+        fn set_springs_left(&mut self, bits: Option<Vec<u8>>)
+    );
+    forward!(
+        /// The springs torn since the last call, as (particle in cloth order,
+        /// stencil direction).
+        fn take_torn(&mut self) -> Vec<(usize, usize)>
+    );
 }
 
 /// Read-only inputs of a step.
@@ -1605,6 +1824,9 @@ struct Ctx<'a, E> {
     u: [&'a [E]; 3],
     inv_mass: &'a [E],
     col_mask: &'a [E],
+    /// With springs missing, the masks of the springs a block evaluates and of its
+    /// triangles (see [`block`]).
+    torn: Option<[&'a [E]; 8]>,
     drag: bool,
     simd: SimdLevel,
 }
@@ -1854,10 +2076,11 @@ mod x86 {
         out: &mut Out<E>,
         base: usize,
         inv_mass: &[E],
+        alive: Option<&[E]>,
         fix: &mut [Vec<E>; 3],
         line: &StretchLine<E>,
     ) {
-        stretch_limit_line(out, base, inv_mass, fix, line);
+        stretch_limit_line(out, base, inv_mass, alive, fix, line);
     }
 
     /// One row in float64 with the portable lanes, compiled for the same features
@@ -2091,6 +2314,7 @@ fn stretch_limit_line_dispatch<E: Real>(
     out: &mut Out<E>,
     base: usize,
     inv_mass: &[E],
+    alive: Option<&[E]>,
     fix: &mut [Vec<E>; 3],
     line: &StretchLine<E>,
 ) {
@@ -2098,9 +2322,9 @@ fn stretch_limit_line_dispatch<E: Real>(
         #[cfg(target_arch = "x86_64")]
         // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
         SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
-            x86::stretch_limit_line_avx2(out, base, inv_mass, fix, line)
+            x86::stretch_limit_line_avx2(out, base, inv_mass, alive, fix, line)
         },
-        _ => stretch_limit_line(out, base, inv_mass, fix, line),
+        _ => stretch_limit_line(out, base, inv_mass, alive, fix, line),
     }
 }
 
@@ -2110,7 +2334,8 @@ fn stretch_limit_line_dispatch<E: Real>(
 /// `fix` (a loop the compiler vectorises; a line with no spring over the limit
 /// stops there), then the moves of the first ends, then those of the second ends.
 /// Each particle has at most one spring in a class, so the moves do not interact.
-/// A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`). The lanes are
+/// A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`). Springs that
+/// tore (0 in `alive`, the direction's mask, when some did) are skipped. The lanes are
 /// whole portable blocks: lanes past `len` reach ghost columns inside the row's
 /// padding and are given no correction.
 #[inline(always)]
@@ -2118,6 +2343,7 @@ fn stretch_limit_line<E: Real>(
     out: &mut Out<E>,
     base: usize,
     inv_mass: &[E],
+    alive: Option<&[E]>,
     fix: &mut [Vec<E>; 3],
     line: &StretchLine<E>,
 ) {
@@ -2142,6 +2368,9 @@ fn stretch_limit_line<E: Real>(
         let [(xa, xb), (ya, yb), (za, zb)] = [x, y, z].map(|p| ends(p, a, b, lanes));
         let [(la, lb), (ma, mb), (na, nb)] = [xl, yl, zl].map(|p| ends(p, a, b, lanes));
         let (wa, wb) = ends(inv_mass, a, b, lanes);
+        // Springs that tore stay out (`alive` is indexed like the state, not from
+        // `base`).
+        let alive = alive.map(|m| &m[line.a..line.a + lanes]);
         let [fx, fy, fz] = fix.each_mut().map(|f| &mut f[..lanes]);
         let (own_colour, shift) = colour.unwrap_or((0, 0));
         let every_column = colour.is_none();
@@ -2154,7 +2383,8 @@ fn stretch_limit_line<E: Real>(
             let l2 = dx * dx + dy * dy + dz * dz;
             let w = wa[j] + wb[j];
             let in_class = every_column || ((c0 + j) >> shift) & 1 == own_colour;
-            let over = j < len && in_class && l2 > longest2 && w > E::ZERO;
+            let there = alive.is_none_or(|m| m[j] != E::ZERO);
+            let over = j < len && in_class && l2 > longest2 && w > E::ZERO && there;
             let l = l2.sqrt();
             let scale = if over {
                 (l - longest) / (l * w)
@@ -2206,23 +2436,60 @@ fn stretch_limit_line<E: Real>(
 }
 
 /// A particle's position (high and low parts) and velocity, one per lane.
+/// Whether any spring from `a .. a + len` to `b .. b + len` (array indices in
+/// `state`) that `alive` keeps (all without a mask) is longer than `sqrt(scan2)`,
+/// in the state's precision. Written as a plain loop over slices for the compiler
+/// to vectorise.
+fn row_may_tear<E: Real>(
+    state: &State<E>,
+    a: usize,
+    b: usize,
+    len: usize,
+    alive: Option<&[E]>,
+    scan2: E,
+) -> bool {
+    fn ends<E: Real>(p: &Buf<E>, a: usize, b: usize, len: usize) -> (&[E], &[E]) {
+        let p = p.as_slice();
+        (&p[a..a + len], &p[b..b + len])
+    }
+    let ends = |p| ends(p, a, b, len);
+    let [(xa, xb), (ya, yb), (za, zb)] = state.x.each_ref().map(ends);
+    // The low parts are zeros when the positions have none.
+    let [(la, lb), (ma, mb), (na, nb)] = state.xl.each_ref().map(ends);
+    let mut over = false;
+    for j in 0..len {
+        let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
+        let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
+        let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
+        let mut l2 = dx * dx + dy * dy + dz * dz;
+        if let Some(alive) = alive {
+            l2 = l2 * alive[j];
+        }
+        over |= l2 > scan2;
+    }
+    over
+}
+
 /// One colour class of XPBD's springs on a grid: the stencil direction `(dr, dc)`
 /// and the spring `(rest length, k, b)` at step `dt`.
 #[derive(Clone, Copy, Debug)]
-struct XpbdClass {
+struct XpbdClass<'a> {
     width: usize,
     dr: usize,
     dc: isize,
     spring: (f64, f64, f64),
     dt: f64,
+    /// With springs missing, which are left ([`Torn::bits`]) and this direction's bit.
+    left: Option<(&'a [u8], u8)>,
 }
 
-impl XpbdClass {
+impl XpbdClass<'_> {
     /// Corrects the class's springs of colour `colour` inside one block of rows
     /// (`x` positions, `x0` at the start of the step, `w` inverse masses, the block's
-    /// first row where the class's rows start): a row, for springs along rows,
-    /// else `dr` rows of springs reaching `dr` rows down. No spring leaves the block.
-    fn correct_block(&self, x: &mut [DVec3], x0: &[DVec3], w: &[f64], colour: usize) {
+    /// first row where the class's rows start, its first particle `first`): a row,
+    /// for springs along rows, else `dr` rows of springs reaching `dr` rows down.
+    /// No spring leaves the block.
+    fn correct_block(&self, x: &mut [DVec3], x0: &[DVec3], w: &[f64], first: usize, colour: usize) {
         let width = self.width;
         let rows = x.len() / width;
         // Columns c with both ends on the cloth: 0 <= c + dc < width.
@@ -2231,6 +2498,11 @@ impl XpbdClass {
             width.saturating_sub(self.dc.max(0) as usize),
         );
         let mut correct = |a: usize, b: usize| {
+            if let Some((bits, bit)) = self.left
+                && bits[first + a] & bit == 0
+            {
+                return;
+            }
             let (rest, k, damping) = self.spring;
             if let Some(c) = constraints::xpbd_correction(
                 [x[a], x[b]],
@@ -2364,6 +2636,8 @@ struct RowKernel<S: Simd> {
     u: [*const S::E; 3],
     inv_mass: *const S::E,
     col_mask: *const S::E,
+    /// [`Ctx::torn`]'s masks.
+    torn: Option<[*const S::E; 8]>,
     acc: *mut S::E,
     out: [*mut S::E; 12],
     /// Array offsets of the rows `row`, `row + 1`, `row + 2`.
@@ -2407,6 +2681,10 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const
     assert!(S::LANES <= BLOCK && nv.is_multiple_of(S::LANES) && acc.len() == SLOTS * 3 * nv);
     assert!(b[2] + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
     assert!(ctx.col_mask.len() >= g.stride + nv);
+    for mask in ctx.torn.iter().flatten() {
+        // Read up to one past the row's last block (the other diagonal's).
+        assert!(mask.len() >= b[0] + nv + 1);
+    }
     for a in ctx.x.iter().chain(&ctx.xl).chain(&ctx.v) {
         assert_eq!(a.len(), g.len());
     }
@@ -2452,6 +2730,7 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const
         u: if verlet { ctx.u } else { ctx.v }.map(<[S::E]>::as_ptr),
         inv_mass: ctx.inv_mass.as_ptr(),
         col_mask: ctx.col_mask.as_ptr(),
+        torn: ctx.torn.map(|t| t.map(<[S::E]>::as_ptr)),
         acc: acc.as_mut_ptr(),
         out: out.0.each_mut().map(|o| o.as_mut_ptr()),
         b,
@@ -2461,8 +2740,8 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const
         lo,
     };
     // Blocks from `c_mask` on hold a column >= w - 2; near the bottom all blocks
-    // reach ghost rows.
-    let c_mask = if row + 2 < g.h {
+    // reach ghost rows; with springs missing every block is masked.
+    let c_mask = if row + 2 < g.h && ctx.torn.is_none() {
         (g.w.saturating_sub(2) / S::LANES) * S::LANES
     } else {
         0
@@ -2518,26 +2797,37 @@ unsafe fn block<
     let p10 = (&ld(k.x, b1 + c), &ldl(b1 + c), &ld(k.v, b1 + c));
     let p11 = (&ld(k.x, b1 + c + 1), &ldl(b1 + c + 1), &ld(k.v, b1 + c + 1));
     let p20 = (&ld(k.x, b2 + c), &ldl(b2 + c), &ld(k.v, b2 + c));
-    let (m1, m2, m1d, down, down2) = if MASK {
-        // SAFETY: as above.
-        let (m1, m2) = unsafe {
-            (
-                s.load(k.col_mask.add(c)),
-                s.load(k.col_mask.add(k.stride + c)),
-            )
-        };
-        let m1d = s.mul(m1, k.down);
-        (Some(m1), Some(m2), Some(m1d), Some(k.down), Some(k.down2))
+    // Masks of the springs right, two right, down, down-right, the other diagonal,
+    // two down, and of the two triangles.
+    let masks: Option<[S::V; 8]> = if MASK {
+        Some(match k.torn {
+            // SAFETY: as above (the other diagonal's mask is read one column on).
+            Some(t) => unsafe {
+                std::array::from_fn(|m| s.load(t[m].add(b0 + c + usize::from(m == 4))))
+            },
+            None => {
+                // SAFETY: as above.
+                let (m1, m2) = unsafe {
+                    (
+                        s.load(k.col_mask.add(c)),
+                        s.load(k.col_mask.add(k.stride + c)),
+                    )
+                };
+                let m1d = s.mul(m1, k.down);
+                [m1, m2, k.down, m1d, m1d, k.down2, m1d, m1d]
+            }
+        })
     } else {
-        (None, None, None, None, None)
+        None
     };
+    let mask = |m: usize| masks.map(|masks| masks[m]);
     let [structural, bend, shear] = k.kinds;
-    let right = spring::<S, LO>(s, p00, p01, structural, m1);
-    let right2 = spring::<S, LO>(s, p00, p02, bend, m2);
-    let d = spring::<S, LO>(s, p00, p10, structural, down);
-    let dr = spring::<S, LO>(s, p00, p11, shear, m1d);
-    let anti = spring::<S, LO>(s, p01, p10, shear, m1d);
-    let d2 = spring::<S, LO>(s, p00, p20, bend, down2);
+    let right = spring::<S, LO>(s, p00, p01, structural, mask(0));
+    let right2 = spring::<S, LO>(s, p00, p02, bend, mask(1));
+    let d = spring::<S, LO>(s, p00, p10, structural, mask(2));
+    let dr = spring::<S, LO>(s, p00, p11, shear, mask(3));
+    let anti = spring::<S, LO>(s, p01, p10, shear, mask(4));
+    let d2 = spring::<S, LO>(s, p00, p20, bend, mask(5));
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
         let (va, vb, vd, ve) = (p00.2, p01.2, p10.2, p11.2);
@@ -2545,8 +2835,8 @@ unsafe fn block<
         let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
         let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
         (
-            triangle(s, [p00.0, p01.0, p10.0], &vr1, k.neg_drag, m1d),
-            triangle(s, [p01.0, p11.0, p10.0], &vr2, k.neg_drag, m1d),
+            triangle(s, [p00.0, p01.0, p10.0], &vr1, k.neg_drag, mask(6)),
+            triangle(s, [p01.0, p11.0, p10.0], &vr2, k.neg_drag, mask(7)),
         )
     } else {
         ([zero; 3], [zero; 3])

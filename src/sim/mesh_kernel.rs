@@ -94,6 +94,7 @@ impl MeshParams {
             dt,
             bar_iterations,
             stretch_limit,
+            tear_strain,
             friction,
             thickness: _, // already in `ground` and `sphere`
             self_collision,
@@ -106,8 +107,10 @@ impl MeshParams {
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
         } = model.terms;
-        // Self-collision runs on the f64 engine for topologies other than grids.
-        if aero || self_collision || !MeshKernel::supports(integrator) {
+        // Self-collision and tearing run on the f64 engine for topologies other
+        // than grids.
+        let tears = tear_strain.is_some();
+        if aero || self_collision || tears || !MeshKernel::supports(integrator) {
             return None;
         }
         Some(Self {

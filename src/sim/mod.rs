@@ -8,6 +8,7 @@
 //! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook
 //!   into [`System::run`];
 //! - [`self_collision`]: particles of a cloth kept a thickness apart, with friction;
+//! - [`tearing`]: springs that tear past a strain or are cut, and leave the model;
 //! - [`divergence`], [`energy_budget`], [`stability`], [`safe`]: when a run has
 //!   blown up (runaways, and energy past its budget), the stable step, and safe
 //!   stepping;
@@ -34,6 +35,7 @@ pub mod springs;
 pub mod stability;
 pub mod state;
 pub mod system;
+pub mod tearing;
 pub mod verlet;
 pub mod wind;
 

@@ -64,6 +64,9 @@ pub struct Params {
     pub bar_iterations: u32,
     /// Maximum stretch `tau` (Provot 1995): no spring longer than `(1 + tau) L`.
     pub stretch_limit: Option<f64>,
+    /// Strain `tau` past which a spring tears ([`super::tearing`]): it breaks when
+    /// longer than `(1 + tau) L` at the end of a step. `None`: springs never tear.
+    pub tear_strain: Option<f64>,
     /// Seed of the gusts.
     pub seed: u64,
 }
@@ -86,6 +89,7 @@ impl Default for Params {
             dt: 1.0 / 960.0,
             bar_iterations: 0,
             stretch_limit: None,
+            tear_strain: None,
             seed: 0,
         }
     }
@@ -123,6 +127,8 @@ pub struct Model {
     /// The order the Gauss-Seidel passes over the springs (XPBD, stretch limit)
     /// visit them in ([`super::springs::constraint_order`]): indices into `springs`.
     pub constraint_order: Vec<u32>,
+    /// Springs broken (torn or cut, [`super::tearing`]) since the model was built.
+    pub broken_springs: usize,
     /// Rigid bars, relaxed after each step.
     pub bars: Vec<Bar>,
     /// Surface triangles (empty for scenes without a surface).

@@ -1,7 +1,7 @@
 //! [`System`]: a model, its state and the scratch space a step needs, and the step
 //! itself, read in one place ([`System::step`]): forces and integration
-//! ([`super::integrators`]), then constraints ([`super::constraints`]), then the
-//! divergence check ([`super::divergence`]).
+//! ([`super::integrators`]), then constraints ([`super::constraints`]), then
+//! tearing ([`super::tearing`]), then the divergence check ([`super::divergence`]).
 //!
 //! The system ties together parts that live in their own files: the [`Model`],
 //! the [`State`] (with its [`super::VerletHistory`]), the [`Workspace`], the user's
@@ -87,6 +87,7 @@ impl System {
             springs,
             adjacency,
             constraint_order,
+            broken_springs: 0,
             bars,
             triangles,
             uvs,
@@ -365,6 +366,9 @@ impl System {
                 .before_constraints
                 .clone_from(&self.state.positions);
             constraints::apply(&self.model, &mut self.state, &mut self.work);
+        }
+        if let Some(tau) = self.model.params.tear_strain {
+            self.tear(tau);
         }
         self.state.time += self.model.params.dt;
         self.state.steps += 1;

@@ -1,0 +1,103 @@
+//! Tearing and cutting: springs that break for good.
+//!
+//! - **The rule.** With a `tear_strain` `tau`, a spring tears when, at the end of a
+//!   step (after the constraints), it is longer than `(1 + tau) L`
+//!   ([`overstretched`]). A spring whose length is not finite never tears: a NaN
+//!   or an infinity is a divergence, which its own check reports.
+//! - **Cutting.** The user cuts the springs that the mouse's path crosses on screen
+//!   ([`System::cut`]); the app finds them, the system breaks them the same way.
+//! - **What breaking means.** A broken spring leaves the model for good: its force,
+//!   its place in the constraint passes (XPBD, stretch limit) and its exemption
+//!   from self-collision go with it. A surface triangle with a broken spring along
+//!   one of its edges leaves the aero pass and the mesh, so the hole renders clean
+//!   and no triangle spans it.
+//! - **Both engines.** The f64 engine tears here, after its constraints. The grid
+//!   kernel applies the same rule at the same point of its step, with [`overstretched`]
+//!   deciding in f64, and keeps masks of the springs left for its row pass; it
+//!   hands its breaks back to the model after each run of steps
+//!   ([`super::fast_path`]).
+
+use glam::DVec3;
+
+use super::{Adjacency, Spring, System, fast_path, springs};
+
+/// Whether a spring of rest length `rest` between `a` and `b` is past the tear
+/// strain `tau`: longer than `(1 + tau) rest`, with a finite length.
+pub fn overstretched(a: DVec3, b: DVec3, rest: f64, tau: f64) -> bool {
+    let l = (a - b).length();
+    l.is_finite() && l > (1.0 + tau) * rest
+}
+
+impl System {
+    /// Springs broken so far (torn or cut) since the system was built.
+    pub fn broken_springs(&self) -> usize {
+        self.model.broken_springs
+    }
+
+    /// Cuts the springs joining any of `pairs` (particle indices, either order):
+    /// they break as a tear breaks them (see [`super::tearing`]). Returns how many
+    /// were cut; pairs that no spring joins are ignored.
+    pub fn cut(&mut self, pairs: &[(usize, usize)]) -> usize {
+        let mut wanted: Vec<(u32, u32)> = pairs
+            .iter()
+            .filter_map(|&(i, j)| Some((u32::try_from(i).ok()?, u32::try_from(j).ok()?)))
+            .map(|(i, j)| (i.min(j), i.max(j)))
+            .collect();
+        wanted.sort_unstable();
+        let cut = self.break_springs(|s| wanted.binary_search(&(s.a, s.b)).is_ok());
+        if cut > 0 {
+            self.mark_edited();
+        }
+        cut
+    }
+
+    /// The step's last phase with a tear strain `tau`: breaks the springs past it.
+    pub(super) fn tear(&mut self, tau: f64) {
+        let x = &self.state.positions;
+        let over = |s: &Spring| overstretched(x[s.a as usize], x[s.b as usize], s.rest, tau);
+        if self.model.springs.iter().any(over) {
+            let x = std::mem::take(&mut self.state.positions);
+            self.break_springs(|s| overstretched(x[s.a as usize], x[s.b as usize], s.rest, tau));
+            self.state.positions = x;
+        }
+    }
+
+    /// Removes the springs for which `broken` holds, and the triangles along them,
+    /// and rebuilds what depends on the spring list (adjacency, constraint order,
+    /// scratch, the fast engines' view of the grid). Returns how many broke.
+    /// Allocates, but only when something breaks.
+    pub(super) fn break_springs(&mut self, broken: impl Fn(&Spring) -> bool) -> usize {
+        let model = &mut self.model;
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        model.springs.retain(|s| {
+            let b = broken(s);
+            if b {
+                pairs.push((s.a, s.b));
+            }
+            !b
+        });
+        if pairs.is_empty() {
+            return 0;
+        }
+        // Canonical springs are sorted by their ends, so `pairs` is too.
+        let along_break = |&[a, b, c]: &[u32; 3]| {
+            [(a, b), (b, c), (c, a)]
+                .iter()
+                .any(|&(i, j)| pairs.binary_search(&(i.min(j), i.max(j))).is_ok())
+        };
+        model.triangles.retain(|t| !along_break(t));
+        let n = model.mass.len();
+        model.adjacency = Adjacency::new(n, &model.springs);
+        model.constraint_order = springs::constraint_order(&model.springs, model.grid);
+        model.broken_springs += pairs.len();
+        model.refresh_terms();
+        let m = model.springs.len();
+        self.work.spring_forces.truncate(m);
+        if self.model.params.integrator == super::Integrator::ImplicitEuler {
+            self.work.implicit.resize(n, m);
+        }
+        self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.engines.springs_changed();
+        pairs.len()
+    }
+}
