@@ -318,15 +318,22 @@ pub fn pick_particle(
 }
 
 /// The springs (pairs of particle indices) whose projections on screen cross the
-/// segment from `from` to `to` (pixels): what a cut along the mouse's path breaks.
+/// polyline `path` (pixels): what a cut along the mouse's path breaks. The app
+/// passes the last few points of the path, not only the last move, so that a
+/// spring the moving cloth carries across a joint between two moves is still cut.
 /// Springs with an end behind the camera or not finite are never cut.
 pub fn springs_crossed(
     camera: &OrbitCamera,
     viewport: Vec2,
-    (from, to): (Vec2, Vec2),
+    path: &[Vec2],
     positions: &[Vec3],
     springs: impl Iterator<Item = (usize, usize)>,
 ) -> Vec<(usize, usize)> {
+    let Some((lo, hi)) = path.iter().fold(None, |acc: Option<(Vec2, Vec2)>, &p| {
+        Some(acc.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))))
+    }) else {
+        return Vec::new();
+    };
     let screen: Vec<Option<Vec2>> = positions
         .iter()
         .map(|&p| {
@@ -338,7 +345,11 @@ pub fn springs_crossed(
         .collect();
     springs
         .filter(|&(a, b)| match (screen.get(a), screen.get(b)) {
-            (Some(Some(p)), Some(Some(q))) => segments_cross(from, to, *p, *q),
+            (Some(Some(p)), Some(Some(q))) => {
+                // Cheap test first: the spring's box against the path's.
+                let near = p.min(*q).cmple(hi).all() && p.max(*q).cmpge(lo).all();
+                near && path.windows(2).any(|w| segments_cross(w[0], w[1], *p, *q))
+            }
             _ => false,
         })
         .collect()

@@ -128,6 +128,8 @@ struct App {
     /// Smoothed frame time (s).
     frame_time: f64,
     hovered: Option<usize>,
+    /// The last points (px) of the cut the mouse is drawing (Ctrl + left drag).
+    cut_path: Vec<Vec2>,
     fatal: Option<anyhow::Error>,
 }
 
@@ -148,6 +150,7 @@ impl App {
             last_frame: Instant::now(),
             frame_time: 1.0 / 60.0,
             hovered: None,
+            cut_path: Vec::new(),
             fatal: None,
         };
         app.scene_loaded();
@@ -270,15 +273,25 @@ impl App {
             MouseAction::Orbit(d) => self.camera.orbit(d),
             MouseAction::Pan(d) => self.camera.pan(d, self.viewport()),
             MouseAction::Cut(from, to) => {
+                // The path's last few points: a spring the moving cloth carried
+                // across a joint between two moves is still cut.
+                const CUT_PATH_POINTS: usize = 8;
+                if self.cut_path.last() != Some(&from) {
+                    self.cut_path.clear();
+                    self.cut_path.push(from);
+                }
+                self.cut_path.push(to);
+                let keep = self.cut_path.len().saturating_sub(CUT_PATH_POINTS);
+                self.cut_path.drain(..keep);
                 self.frame_data.refresh_positions(self.session.system());
                 let system = self.session.system();
                 let springs = system
                     .springs()
                     .iter()
                     .map(|s| (s.a as usize, s.b as usize));
-                let path = (self.to_scene(from), self.to_scene(to));
+                let path: Vec<Vec2> = self.cut_path.iter().map(|&p| self.to_scene(p)).collect();
                 let (positions, viewport) = (&self.frame_data.positions, self.viewport());
-                let crossed = springs_crossed(&self.camera, viewport, path, positions, springs);
+                let crossed = springs_crossed(&self.camera, viewport, &path, positions, springs);
                 if !crossed.is_empty() {
                     let cut = self.session.system_mut().cut(&crossed);
                     log::info!("cut {cut} springs");
