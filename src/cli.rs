@@ -573,16 +573,14 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             tau * 100.0
         ));
     }
-    if p.friction > 0.0 && (p.sphere.is_some() || p.ground.is_some()) {
-        constraints.push(format!(
-            "Coulomb friction (mu = {}) on the {}",
-            p.friction,
-            match (p.sphere.is_some(), p.ground.is_some()) {
-                (true, true) => "sphere and the ground",
-                (true, false) => "sphere",
-                _ => "ground",
-            }
-        ));
+    let surfaces = [
+        ("sphere", p.sphere.map(|_| p.friction)),
+        ("ground", p.ground.map(|g| g.friction)),
+    ];
+    for (surface, mu) in surfaces {
+        if let Some(mu) = mu.filter(|&mu| mu > 0.0) {
+            constraints.push(format!("Coulomb friction (mu = {mu}) on the {surface}"));
+        }
     }
     let stability = system.stability();
     let (_, extent) = bounding_sphere(system.positions());
@@ -615,7 +613,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             "air_density": p.air_density,
             "drag_coefficient": p.drag_coefficient,
             "air_damping": p.air_damping,
-            "ground": p.ground.map(|g| json!({"height": g.height - p.thickness, "stiffness": g.stiffness, "damping": g.damping})),
+            "ground": p.ground.map(|g| json!({"height": g.height - p.thickness, "stiffness": g.stiffness, "damping": g.damping, "friction": g.friction})),
             "sphere": p.sphere.map(|s| json!({"center": s.center.to_array(), "radius": s.radius - p.thickness})),
             "friction": p.friction,
             "thickness": p.thickness,

@@ -159,6 +159,7 @@ fn threads_give_bit_identical_results_with_every_feature() {
                     height: -0.05,
                     stiffness: 50.0,
                     damping: 0.01,
+                    friction: 0.0,
                 });
                 spec.sphere = Some(Sphere {
                     center: DVec3::new(0.5, 0.3, 0.22),

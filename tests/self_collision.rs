@@ -41,7 +41,7 @@ fn folded_layers_keep_their_thickness_apart() {
     // differs between SIMD levels (when the cloth started centred over the sphere,
     // 247 pairs crossed on an AVX2 machine, 49 with AVX-512, none on the f64
     // engine); the scene now starts off-centre, and the count without
-    // self-collision is taken on the f64 engine, the same on every machine.
+    // self-collision is taken on the f64 engine, the same on every machine (146).
     let without = settled("fold", &["self_collision=false"], false, 4800);
     let h_c = without.params().thickness;
     let crossed = close_pairs(&without, h_c / 2.0);

@@ -187,6 +187,7 @@ fn threads_give_bit_identical_results_with_tearing_and_contacts() {
             height: -0.05,
             stiffness: 50.0,
             damping: 0.01,
+            friction: 0.5,
         });
         spec.sphere = Some(Sphere {
             center: DVec3::new(0.5, 0.3, 0.22),

@@ -583,10 +583,10 @@ fn contents(
                 {
                     edit(Edit::TearStrain(on.then_some(p.tear_strain.unwrap_or(0.5))));
                 }
-                if let Some(mut tau) = p.tear_strain {
-                    if slider(ui, &mut tau, 0.01..=2.0, "tear strain", true, "A spring breaks when longer than (1 + strain) times its rest length: 0.5 = 50% stretched (0.01 to 100)") {
-                        edit(Edit::TearStrain(Some(tau)));
-                    }
+                if let Some(mut tau) = p.tear_strain
+                    && slider(ui, &mut tau, 0.01..=2.0, "tear strain", true, "A spring breaks when longer than (1 + strain) times its rest length: 0.5 = 50% stretched (0.01 to 100)")
+                {
+                    edit(Edit::TearStrain(Some(tau)));
                 }
             }
         });

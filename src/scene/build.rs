@@ -444,6 +444,10 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
                 false,
                 1e12,
             )?,
+            friction: match spec.ground_friction {
+                Some(mu) => ranged(o, "ground_friction", mu, 0.0, false, FRICTION.hi)?,
+                None => FRICTION.check(o, spec.friction.unwrap_or(0.0))?,
+            },
             damping: ranged(
                 o,
                 "ground_damping",
@@ -685,7 +689,12 @@ impl Resolved {
             Edit::BarIterations(n) => p.bar_iterations = n,
             Edit::StretchLimit(t) => p.stretch_limit = Some(t),
             Edit::TearStrain(t) => p.tear_strain = t,
-            Edit::Friction(mu) => p.friction = mu,
+            Edit::Friction(mu) => {
+                p.friction = mu;
+                if let Some(g) = &mut p.ground {
+                    g.friction = mu;
+                }
+            }
             Edit::SelfCollision(on) => p.self_collision = on,
             Edit::Thickness(t) => {
                 // The contact surfaces move with the thickness; the solids stay.

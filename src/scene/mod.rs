@@ -182,9 +182,13 @@ pub struct SceneSpec {
     /// Sphere radius in m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sphere_radius: Option<f64>,
-    /// Coulomb friction coefficient of the ground and the sphere.
+    /// Coulomb friction coefficient of the sphere, the ground (unless
+    /// `ground_friction` says otherwise) and the cloth's own layers.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<f64>,
+    /// Coulomb friction coefficient of the ground, when it differs from `friction`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub ground_friction: Option<f64>,
     /// Contact thickness in m: how far above the ground and outside the sphere the
     /// cloth rests.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -553,7 +557,10 @@ impl Scene {
             Edit::TearStrain(t) => {
                 spec.tear_strain = t.map(|t| TEAR_STRAIN.check(o, t)).transpose()?
             }
-            Edit::Friction(mu) => spec.friction = Some(FRICTION.check(o, mu)?),
+            Edit::Friction(mu) => {
+                spec.friction = Some(FRICTION.check(o, mu)?);
+                spec.ground_friction = None;
+            }
             Edit::Thickness(t) => spec.thickness = Some(THICKNESS.check(o, t)?),
             Edit::SelfCollision(on) => spec.self_collision = Some(on),
             Edit::Width(n) => spec.width = Some(side(0, n)?),

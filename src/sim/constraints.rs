@@ -92,7 +92,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
 pub(crate) struct Contact {
     pub sphere: Option<Sphere>,
     pub ground: Option<Ground>,
-    /// Coulomb coefficient μ.
+    /// Coulomb coefficient μ of the sphere (the ground has its own).
     pub friction: f64,
     /// The step in s.
     pub dt: f64,
@@ -112,7 +112,7 @@ impl Contact {
     /// Whether a step has contact to resolve after it: a sphere, or a ground with
     /// friction (the ground's push is its penalty force).
     pub fn is_active(&self) -> bool {
-        self.sphere.is_some() || (self.friction > 0.0 && self.ground.is_some())
+        self.sphere.is_some() || self.ground.is_some_and(|g| g.friction > 0.0)
     }
 
     /// The contact of a free particle at `x` with velocity `v` (every other
@@ -124,7 +124,7 @@ impl Contact {
     /// stopping the particle there when that is more. Returns the new position and
     /// velocity.
     pub fn resolve(&self, x: DVec3, v: DVec3, w: f64) -> (DVec3, DVec3) {
-        let (h, mu) = (self.dt, self.friction);
+        let h = self.dt;
         let (mut x, mut v) = (x, v);
         if let Some(sphere) = self.sphere
             && let Some(outside) = out_of_sphere(x, &sphere)
@@ -132,17 +132,15 @@ impl Contact {
             let push = outside - x;
             x = outside;
             v += push / h;
-            if mu > 0.0 {
+            if self.friction > 0.0 {
                 let normal = (outside - sphere.center) / sphere.radius;
-                v = coulomb(v, normal, mu * push.length() / h);
+                v = coulomb(v, normal, self.friction * push.length() / h);
             }
         }
-        if mu > 0.0
-            && let Some(ground) = self.ground
-        {
+        if let Some(ground) = self.ground.filter(|g| g.friction > 0.0) {
             let support = ground_force(&ground, x, v);
             if support > 0.0 {
-                v = coulomb(v, DVec3::Y, mu * h * support * w);
+                v = coulomb(v, DVec3::Y, ground.friction * h * support * w);
             }
         }
         (x, v)

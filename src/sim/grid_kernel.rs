@@ -138,9 +138,9 @@ pub struct GridSpec {
     pub ground: Option<Ground>,
     /// Sphere collider, if any: particles inside are projected onto its surface.
     pub sphere: Option<Sphere>,
-    /// Coulomb friction coefficient μ of the ground and the sphere (see
-    /// [`constraints::Contact::resolve`]); with friction the sphere is resolved
-    /// after the step rather than inside it.
+    /// Coulomb friction coefficient μ of the sphere (the ground's is its own, see
+    /// [`constraints::Contact::resolve`]); with friction on either the sphere is
+    /// resolved after the step rather than inside it.
     pub friction: f64,
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart
     /// ([`super::self_collision`]).
@@ -510,6 +510,7 @@ impl<E: Real> Params<E> {
         // XPBD's springs are constraints (`constrain`), not forces: the fused pass
         // predicts with every other force.
         let xpbd = spec.integrator == Integrator::Xpbd;
+        let frictional = spec.friction > 0.0 || spec.ground.is_some_and(|g| g.friction > 0.0);
         let force = |kind: SpringCoefficients| {
             if xpbd {
                 SpringCoefficients::default()
@@ -544,10 +545,11 @@ impl<E: Real> Params<E> {
             verlet: spec.integrator == Integrator::Verlet,
             compensated: spec.precision == Precision::Mixed,
             // With a stretch limit or XPBD the sphere comes after them, in the
-            // constraint pass, and so with friction.
+            // constraint pass, and so with friction (the sphere's or the ground's:
+            // the pass resolves both, in the f64 engine's order).
             sphere: spec
                 .sphere
-                .filter(|_| spec.stretch_limit.is_none() && !xpbd && spec.friction == 0.0)
+                .filter(|_| spec.stretch_limit.is_none() && !xpbd && !frictional)
                 .map(|s| {
                     let r = E::of(s.radius);
                     (s.center.to_array().map(E::of), r, r * r)
@@ -2683,7 +2685,7 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const
     assert!(ctx.col_mask.len() >= g.stride + nv);
     for mask in ctx.torn.iter().flatten() {
         // Read up to one past the row's last block (the other diagonal's).
-        assert!(mask.len() >= b[0] + nv + 1);
+        assert!(mask.len() > b[0] + nv);
     }
     for a in ctx.x.iter().chain(&ctx.xl).chain(&ctx.v) {
         assert_eq!(a.len(), g.len());

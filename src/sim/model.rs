@@ -14,6 +14,8 @@ pub struct Ground {
     pub stiffness: f64,
     /// Damping of the normal velocity while in contact, N·s/m.
     pub damping: f64,
+    /// Coulomb friction coefficient μ of the ground (0: frictionless).
+    pub friction: f64,
 }
 
 /// A solid sphere that particles cannot enter (seed 003's collider), enforced by
@@ -47,7 +49,9 @@ pub struct Params {
     /// Sphere collider the particles touch, if any: its radius is the solid's plus
     /// the contact `thickness`.
     pub sphere: Option<Sphere>,
-    /// Coulomb friction coefficient μ of the ground and the sphere (0: frictionless).
+    /// Coulomb friction coefficient μ of the sphere and between the cloth's own
+    /// layers (self-collision); the ground has its own, [`Ground::friction`]
+    /// (scenes give both the same unless they set `ground_friction`).
     pub friction: f64,
     /// Contact thickness in m: the cloth rests this far above the floor and outside
     /// the solid sphere (already added to `ground` and `sphere`, which are where the
