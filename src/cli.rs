@@ -72,6 +72,9 @@ pub enum Command {
     Scenes,
     /// Render a scene after N steps to a PNG, off-screen (no window or display).
     Screenshot(crate::app::screenshot::ScreenshotArgs),
+    /// Record N simulated seconds of a scene off-screen as an animated GIF
+    /// (`--out NAME.gif`) or numbered PNGs (`--out frame-%04d.png` or `--out DIR/`).
+    Record(crate::app::record::RecordArgs),
     /// Measure error against run time and stability of every integrator; write CSV,
     /// SVG plots and REPORT.md.
     Report(ReportArgs),
@@ -154,6 +157,14 @@ pub fn run_command(command: Command) -> ExitCode {
             Ok(ExitCode::SUCCESS)
         }
         Command::Screenshot(args) => match crate::app::screenshot::run(&args) {
+            Ok(()) => Ok(ExitCode::SUCCESS),
+            Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
+                eprintln!("error: {e:#}");
+                return ExitCode::from(EXIT_DIVERGED);
+            }
+            Err(e) => Err(format!("{e:#}")),
+        },
+        Command::Record(args) => match crate::app::record::run(&args) {
             Ok(()) => Ok(ExitCode::SUCCESS),
             Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
                 eprintln!("error: {e:#}");

@@ -7,6 +7,7 @@ pub mod gfx;
 pub mod help;
 pub mod input;
 pub mod panel;
+pub mod record;
 pub mod screenshot;
 
 use std::sync::Arc;

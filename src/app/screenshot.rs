@@ -57,7 +57,7 @@ pub struct ScreenshotArgs {
 }
 
 /// Parses `WIDTHxHEIGHT`.
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;

@@ -1,0 +1,416 @@
+//! `cloth record`: run a scene for N simulated seconds and render it off-screen,
+//! frame by frame, to an animated GIF or a numbered PNG sequence, with the app's
+//! renderer (no window or display needed, as `cloth screenshot`).
+//!
+//! Frame i shows the simulation at `t = i / fps` (the step nearest to it), so
+//! `--seconds 4 --fps 25` is 100 frames that play back in real time. The camera
+//! frames the scene as it starts and stays put, so the motion shows.
+//!
+//! Where the frames go is read from `--out`, by one rule:
+//! - a name ending in `.gif`: one animated GIF (each frame quantised to 256
+//!   colours, looping);
+//! - a `.png` name with `%d` or `%0Nd` in it (`frame-%04d.png`): one PNG per
+//!   frame, numbered from 0;
+//! - a folder (ending in `/`, or one that exists): `frame-0000.png`, ... in it;
+//!   the folder is made if missing and must be empty (unless `--force`), so no
+//!   earlier recording is mixed in or overwritten.
+//!
+//! Everything is checked before the simulation starts: the frame count and the
+//! steps, the output path, and the graphics adapter.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context as _, anyhow, bail};
+
+use super::frame::{self, FrameData};
+use super::screenshot::{Diverged, parse_size};
+use crate::render::ViewOptions;
+use crate::render::offscreen::{Offscreen, write_png};
+use cloth_sandbox::limits::{self, PendingFile};
+use cloth_sandbox::session::Session;
+use cloth_sandbox::view::OrbitCamera;
+
+/// Most frames one recording may have (at 25 fps, 400 s).
+pub const MAX_FRAMES: u64 = 10_000;
+
+/// Arguments of `cloth record`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct RecordArgs {
+    /// Scene to load (a built-in name or a scene file).
+    #[arg(long, default_value = "cloth")]
+    pub scene: String,
+    /// Override a scene parameter (same keys as the panel and `--set` elsewhere); repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Simulated seconds to record.
+    #[arg(long, default_value_t = 4.0, allow_hyphen_values = true)]
+    pub seconds: f64,
+    /// Frames per simulated second, which is also the playback rate: 1 to 50 (GIF
+    /// players do not go faster).
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=50))]
+    pub fps: u32,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x400", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Where the frames go: `NAME.gif` writes an animated GIF; a `.png` name with
+    /// `%d` or `%0Nd` for the frame number (e.g. `frame-%04d.png`) writes one PNG
+    /// per frame, numbered from 0; a folder (`DIR/`, made if missing, and empty
+    /// unless `--force`) gets `DIR/frame-0000.png`, `DIR/frame-0001.png`, ...
+    #[arg(long, value_name = "FILE.gif|PATTERN.png|DIR/")]
+    pub out: PathBuf,
+    /// With `--out DIR/`: write into a folder that is not empty, replacing frames of
+    /// the same names (without it, such a folder is refused before the recording).
+    #[arg(long)]
+    pub force: bool,
+    /// Camera yaw in degrees (0 looks along -z).
+    #[arg(long, allow_negative_numbers = true)]
+    pub yaw: Option<f32>,
+    /// Camera pitch in degrees (positive looks down on the scene).
+    #[arg(long, allow_negative_numbers = true)]
+    pub pitch: Option<f32>,
+}
+
+/// Where the frames go, as `--out` says.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// One animated GIF.
+    Gif(PathBuf),
+    /// One PNG per frame, named by a pattern.
+    Pattern(Sequence),
+    /// One PNG per frame in a new or empty folder.
+    Folder(Sequence),
+}
+
+/// Numbered PNG file names: `folder/{head}{i:0digits$}{tail}`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sequence {
+    folder: PathBuf,
+    head: String,
+    digits: usize,
+    tail: String,
+}
+
+impl Sequence {
+    /// The file of frame `i`.
+    pub fn path(&self, i: u64) -> PathBuf {
+        let digits = self.digits;
+        self.folder
+            .join(format!("{}{i:0digits$}{}", self.head, self.tail))
+    }
+}
+
+const OUT_RULE: &str = "give a name ending in .gif (an animated GIF), a .png name with %d or %04d \
+    for the frame number such as frame-%04d.png, or a folder ending in / (frame-0000.png, ... in it)";
+
+/// Reads `--out` by the rule in the module docs; the error says the rule.
+pub fn parse_out(out: &Path) -> Result<Output, String> {
+    let text = out.to_string_lossy();
+    let shown = limits::echo(&text);
+    let lower = text.to_lowercase();
+    if text.ends_with('/') || out.is_dir() {
+        return Ok(Output::Folder(Sequence {
+            folder: out.to_path_buf(),
+            head: "frame-".to_string(),
+            digits: 4,
+            tail: ".png".to_string(),
+        }));
+    }
+    if lower.ends_with(".gif") {
+        return Ok(Output::Gif(out.to_path_buf()));
+    }
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if !lower.ends_with(".png") {
+        return Err(format!("--out {shown}: {OUT_RULE}"));
+    }
+    let Some(at) = name.find('%') else {
+        return Err(format!(
+            "--out {shown}: a PNG sequence needs the frame number in the name, e.g. frame-%04d.png; or {OUT_RULE}"
+        ));
+    };
+    let (head, rest) = name.split_at(at);
+    let rest = &rest[1..];
+    let width: String = rest.chars().take_while(char::is_ascii_digit).collect();
+    let Some(tail) = rest[width.len()..].strip_prefix('d') else {
+        return Err(format!(
+            "--out {shown}: the frame number is written %d or %0Nd (e.g. %04d), and a name has one of them"
+        ));
+    };
+    if tail.contains('%') {
+        return Err(format!(
+            "--out {shown}: only one %d may stand for the frame number"
+        ));
+    }
+    let digits = width.parse::<usize>().unwrap_or(0);
+    if digits > 9 {
+        return Err(format!(
+            "--out {shown}: at most 9 digits for the frame number, got {digits}"
+        ));
+    }
+    let folder = out.parent().map(Path::to_path_buf).unwrap_or_default();
+    Ok(Output::Pattern(Sequence {
+        folder,
+        head: head.to_string(),
+        digits,
+        tail: tail.to_string(),
+    }))
+}
+
+/// Frames for `seconds` at `fps`: at least one, at most [`MAX_FRAMES`].
+pub fn frame_count(seconds: f64, fps: u32) -> Result<u64, String> {
+    if !(seconds.is_finite() && seconds > 0.0) {
+        return Err(format!(
+            "--seconds {} must be a number of seconds above 0",
+            limits::number(seconds)
+        ));
+    }
+    let frames = (seconds * f64::from(fps)).round().max(1.0);
+    if frames > MAX_FRAMES as f64 {
+        return Err(format!(
+            "--seconds {} at --fps {fps} is {} frames: a recording has at most {MAX_FRAMES} frames",
+            limits::number(seconds),
+            limits::number(frames)
+        ));
+    }
+    Ok(frames as u64)
+}
+
+/// The GIF delay of frame `i` in hundredths of a second: the rounding of each
+/// frame is carried to the next, so the whole plays in `frames / fps` seconds even
+/// when `100 / fps` is not whole.
+pub fn gif_delay(i: u64, fps: u32) -> u16 {
+    let at = |k: u64| (100 * k + u64::from(fps) / 2) / u64::from(fps);
+    (at(i + 1) - at(i)) as u16
+}
+
+/// Where frames are written as they come.
+enum Sink {
+    Gif {
+        file: PendingFile,
+        encoder: Option<gif::Encoder<std::io::BufWriter<std::fs::File>>>,
+        fps: u32,
+    },
+    Pngs(Sequence),
+}
+
+impl Sink {
+    /// Checks the output and makes it ready, before any work.
+    fn open(out: &Output, args: &RecordArgs) -> anyhow::Result<Self> {
+        let shown = args.out.display();
+        match out {
+            Output::Gif(path) => {
+                let (width, height) = args.size;
+                let mut file =
+                    PendingFile::create(path).map_err(|e| anyhow!("--out {shown}: {e}"))?;
+                let writer = file
+                    .writer()
+                    .try_clone()
+                    .with_context(|| format!("opening {shown}"))?;
+                let mut encoder = gif::Encoder::new(
+                    std::io::BufWriter::new(writer),
+                    width as u16,
+                    height as u16,
+                    &[],
+                )
+                .with_context(|| format!("writing {shown}"))?;
+                encoder
+                    .set_repeat(gif::Repeat::Infinite)
+                    .with_context(|| format!("writing {shown}"))?;
+                Ok(Sink::Gif {
+                    file,
+                    encoder: Some(encoder),
+                    fps: args.fps,
+                })
+            }
+            Output::Folder(sequence) => {
+                limits::prepare_output_folder(&sequence.folder, args.force)
+                    .map_err(|e| anyhow!("--out: {e}"))?;
+                Ok(Sink::Pngs(sequence.clone()))
+            }
+            Output::Pattern(sequence) => {
+                // The first frame's file, made and dropped: the folder exists and
+                // can be written.
+                PendingFile::create(&sequence.path(0))
+                    .map_err(|e| anyhow!("--out {shown}: {e}"))?;
+                Ok(Sink::Pngs(sequence.clone()))
+            }
+        }
+    }
+
+    /// Adds frame `i` (RGBA8 rows, top first).
+    fn push(&mut self, i: u64, size: (u32, u32), mut rgba: Vec<u8>) -> anyhow::Result<()> {
+        let (width, height) = size;
+        match self {
+            Sink::Gif { encoder, fps, .. } => {
+                let encoder = encoder.as_mut().context("the GIF is already finished")?;
+                // Opaque: an alpha of 0 would make a pixel transparent.
+                for px in rgba.chunks_exact_mut(4) {
+                    px[3] = 255;
+                }
+                let mut frame =
+                    gif::Frame::from_rgba_speed(width as u16, height as u16, &mut rgba, 10);
+                frame.delay = gif_delay(i, *fps);
+                encoder.write_frame(&frame).context("writing a GIF frame")?;
+            }
+            Sink::Pngs(sequence) => {
+                let path = sequence.path(i);
+                let file = PendingFile::create(&path)
+                    .map_err(|e| anyhow!("frame {i}, {}: {e}", path.display()))?;
+                write_png(file, width, height, &rgba)
+                    .with_context(|| format!("writing frame {i} to {}", path.display()))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Finishes the GIF (its trailer) and renames it over the target.
+    fn finish(self) -> anyhow::Result<()> {
+        if let Sink::Gif {
+            file, mut encoder, ..
+        } = self
+        {
+            let encoder = encoder.take().context("the GIF is already finished")?;
+            let mut writer = encoder.into_inner().context("finishing the GIF")?;
+            writer.flush().context("finishing the GIF")?;
+            drop(writer);
+            file.commit().context("finishing the GIF")?;
+        }
+        Ok(())
+    }
+}
+
+/// Runs the scene and writes the frames.
+pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let (width, height) = args.size;
+    let output = parse_out(&args.out).map_err(|e| anyhow!(e))?;
+    let frames = frame_count(args.seconds, args.fps).map_err(|e| anyhow!(e))?;
+    let mut session = Session::load_with(&args.scene, &args.set).map_err(|e| anyhow!("{e}"))?;
+    // The step that runs (safe stepping may have made it smaller than the scene's).
+    let dt = session.system().params().dt;
+    let fps = f64::from(args.fps);
+    let step_at = |i: u64| (i as f64 / fps / dt).round();
+    let last = step_at(frames - 1);
+    if !(last.is_finite() && last <= limits::MAX_STEPS as f64) {
+        bail!(
+            "--seconds {}: at dt = {} s that is {} steps; a run may take at most {} steps",
+            limits::number(args.seconds),
+            limits::number(dt),
+            limits::number(last),
+            limits::MAX_STEPS
+        );
+    }
+    let particles = session.system().particle_count();
+    limits::total_steps(last as u64, 1, particles).map_err(|e| anyhow!("--seconds: {e}"))?;
+    // The output and the adapter before the simulation: whatever is missing is
+    // said before any work.
+    let mut sink = Sink::open(&output, args)?;
+    let mut offscreen = Offscreen::new(width, height)?;
+
+    let surfaceless = session.system().triangles().is_empty();
+    let options = ViewOptions {
+        springs: surfaceless,
+        particles: surfaceless,
+        ..ViewOptions::default()
+    };
+    let mut camera = OrbitCamera::default();
+    let (lo, hi) = frame::scene_bounds(&session);
+    camera.frame(lo, hi);
+    if let Some(y) = args.yaw {
+        camera.yaw = y.to_radians();
+    }
+    if let Some(p) = args.pitch {
+        camera.pitch = p.to_radians().clamp(-1.5, 1.5);
+    }
+    let mut data = FrameData::default();
+    for i in 0..frames {
+        let target = step_at(i) as u64;
+        let due = target.saturating_sub(session.system().steps_taken());
+        if let Err(d) = session.system_mut().run(due) {
+            let kept = match (&output, i) {
+                (Output::Gif(_), _) | (_, 0) => "nothing was written".to_string(),
+                (Output::Pattern(s) | Output::Folder(s), _) => format!(
+                    "frames 0 to {} are in {} and the following",
+                    i - 1,
+                    s.path(0).display()
+                ),
+            };
+            return Err(Diverged {
+                steps: target,
+                message: format!("{d} (at frame {i} of {frames}; {kept})"),
+            }
+            .into());
+        }
+        data.build(session.system(), &options, false);
+        let frame = data.scene_frame(session.system(), None);
+        let pixels = offscreen.render(&frame, &camera, &options)?;
+        sink.push(i, args.size, pixels)?;
+    }
+    sink.finish()?;
+    let written = match &output {
+        Output::Gif(path) => path.display().to_string(),
+        Output::Pattern(sequence) | Output::Folder(sequence) => format!(
+            "{} to {}",
+            sequence.path(0).display(),
+            sequence.path(frames - 1).display()
+        ),
+    };
+    eprintln!(
+        "wrote {written}: {frames} frames of {width}x{height} at {} fps, t = 0 to {:.3} s, in {:.1} s (adapter {})",
+        args.fps,
+        session.system().time(),
+        started.elapsed().as_secs_f64(),
+        offscreen.adapter_name()
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn delays_add_up_to_the_recording() {
+        for fps in [1, 7, 24, 25, 30, 50] {
+            let total: u64 = (0..fps as u64 * 3)
+                .map(|i| u64::from(gif_delay(i, fps)))
+                .sum();
+            assert_eq!(total, 300, "fps {fps}");
+        }
+        assert_eq!(gif_delay(0, 25), 4);
+    }
+
+    #[test]
+    fn out_rule() {
+        assert_eq!(
+            parse_out(Path::new("a/b.GIF")),
+            Ok(Output::Gif("a/b.GIF".into()))
+        );
+        let Ok(Output::Pattern(s)) = parse_out(Path::new("shots/f-%03d.png")) else {
+            panic!("a pattern")
+        };
+        assert_eq!(s.path(7), Path::new("shots/f-007.png"));
+        let Ok(Output::Pattern(s)) = parse_out(Path::new("x%d.png")) else {
+            panic!("a pattern")
+        };
+        assert_eq!(s.path(12), Path::new("x12.png"));
+        let Ok(Output::Folder(s)) = parse_out(Path::new("new-folder/")) else {
+            panic!("a folder")
+        };
+        assert_eq!(s.path(3), Path::new("new-folder/frame-0003.png"));
+        for bad in [
+            "a.png",
+            "a.mp4",
+            "a-%x.png",
+            "a-%d-%d.png",
+            "a-%012d.png",
+            "a",
+        ] {
+            assert!(parse_out(Path::new(bad)).is_err(), "{bad}");
+        }
+    }
+}
