@@ -347,6 +347,8 @@ impl App {
                 Err(e) => self.panel.error = Some(e.to_string()),
             },
             Action::Save => self.save(),
+            Action::ExportObj => self.export_obj(),
+            Action::Screenshot => self.screenshot(),
             Action::Undo | Action::Redo | Action::Defaults => {
                 let particles = self.session.system().particle_count();
                 let done = match action {
@@ -397,6 +399,78 @@ impl App {
         }
     }
 
+    /// Writes the cloth's surface as `cloth-<scene>-N.obj` in the working
+    /// directory and says where in the panel.
+    fn export_obj(&mut self) {
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        let scene = self.session.name();
+        match cloth_sandbox::export::export_obj_in(self.session.system(), scene, &dir) {
+            Ok(path) => {
+                log::info!("exported the cloth to {}", path.display());
+                self.panel.error = None;
+                self.panel.wrote = Some(format!("Exported the cloth to {}", path.display()));
+            }
+            Err(e) => {
+                let text = format!("cannot export OBJ in {}: {e}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+    }
+
+    /// Renders the view (the scene without the panel, at its size in pixels) to
+    /// `screenshot-N.png` in the working directory and says where in the panel.
+    fn screenshot(&mut self) {
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        match self.write_screenshot(&dir) {
+            Ok(path) => {
+                log::info!("saved a screenshot to {}", path.display());
+                self.panel.error = None;
+                self.panel.wrote = Some(format!("Screenshot saved to {}", path.display()));
+            }
+            Err(e) => {
+                let text = format!("cannot save a screenshot in {}: {e:#}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+    }
+
+    fn write_screenshot(&mut self, dir: &std::path::Path) -> anyhow::Result<std::path::PathBuf> {
+        let Some(gfx) = self.gfx.as_ref() else {
+            anyhow::bail!("the window is not drawn yet");
+        };
+        let (_, size) = gfx.renderer.viewport();
+        let (width, height) = (
+            size.x.round().max(1.0) as u32,
+            size.y.round().max(1.0) as u32,
+        );
+        let mut offscreen = crate::render::offscreen::Offscreen::with_device(
+            gfx.device.clone(),
+            gfx.queue.clone(),
+            gfx.adapter_name.clone(),
+            gfx.renderer.sample_count(),
+            width,
+            height,
+        )?;
+        self.frame_data
+            .build(self.session.system(), &self.view, self.panel.strain_colors);
+        let frame = self.frame_data.scene_frame(self.session.system(), None);
+        let pixels = offscreen.render(&frame, &self.camera, &self.view)?;
+        // The name is taken first (never replacing a file), then the picture is
+        // written beside it and renamed over it whole.
+        let (path, reserved) = cloth_sandbox::export::create_numbered(dir, "screenshot", "png")?;
+        drop(reserved);
+        let written = cloth_sandbox::limits::PendingFile::create(&path)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+            .and_then(|file| crate::render::offscreen::write_png(file, width, height, &pixels));
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&path);
+            return Err(e);
+        }
+        Ok(path)
+    }
+
     fn key(&mut self, event: &KeyEvent, event_loop: &ActiveEventLoop) {
         let PhysicalKey::Code(code) = event.physical_key else {
             return;
@@ -437,6 +511,7 @@ impl App {
             KeyCode::Space => self.apply(Action::TogglePause, event_loop),
             KeyCode::KeyF | KeyCode::Home => self.apply(Action::ResetView, event_loop),
             KeyCode::Period => self.apply(Action::Step, event_loop),
+            KeyCode::F12 => self.apply(Action::Screenshot, event_loop),
             _ => {}
         }
     }

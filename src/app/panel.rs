@@ -38,6 +38,10 @@ pub enum Action {
     WindOn(bool),
     /// Save the setup as a scene file (Ctrl+S).
     Save,
+    /// Write the cloth's surface as `cloth-<scene>-N.obj`.
+    ExportObj,
+    /// Save the view as `screenshot-N.png` (F12).
+    Screenshot,
     /// Show or hide the help overlay (F1, ?).
     ToggleHelp,
     /// Take back the last change of parameters or pins (Ctrl+Z).
@@ -57,6 +61,8 @@ pub struct PanelState {
     pub error: Option<String>,
     /// Where the setup was last saved.
     pub saved: Option<String>,
+    /// The last OBJ export or screenshot: what was written where.
+    pub wrote: Option<String>,
     /// Whether the help overlay is open.
     pub help: bool,
     sim_ms: f64,
@@ -331,8 +337,29 @@ fn contents(
             actions.push(Action::Defaults);
         }
     });
+    ui.horizontal(|ui| {
+        let surface = !session.system().triangles().is_empty();
+        if ui
+            .add_enabled(surface, egui::Button::new("Export OBJ"))
+            .on_hover_text("Write the cloth as it is now (positions, texture coordinates, normals) as cloth-<scene>-N.obj in the working directory, for Blender or any 3D tool")
+            .on_disabled_hover_text("This scene has no surface (no triangles) to export")
+            .clicked()
+        {
+            actions.push(Action::ExportObj);
+        }
+        if ui
+            .button("Screenshot")
+            .on_hover_text("Save the view as screenshot-N.png in the working directory (F12)")
+            .clicked()
+        {
+            actions.push(Action::Screenshot);
+        }
+    });
     if let Some(path) = &state.saved {
         ui.label(RichText::new(format!("Saved to {path}")).small());
+    }
+    if let Some(text) = &state.wrote {
+        ui.label(RichText::new(text).small());
     }
     // The scene's own steps per frame (its speed); safe stepping may run more,
     // smaller steps over the same simulated time.
