@@ -72,8 +72,10 @@ pub enum Command {
     Scenes,
     /// Render a scene after N steps to a PNG, off-screen (no window or display).
     Screenshot(crate::app::screenshot::ScreenshotArgs),
-    /// Record N simulated seconds of a scene off-screen as an animated GIF
-    /// (`--out NAME.gif`) or numbered PNGs (`--out frame-%04d.png` or `--out DIR/`).
+    /// Record N simulated seconds of a scene off-screen, as a GIF or numbered PNGs.
+    ///
+    /// `--out NAME.gif` writes an animated GIF, `--out frame-%04d.png` or `--out DIR/`
+    /// one PNG per frame; no window or display is needed.
     Record(crate::app::record::RecordArgs),
     /// Measure error against run time and stability of every integrator; write CSV,
     /// SVG plots and REPORT.md.

@@ -147,7 +147,7 @@ pub fn write_obj(system: &System, scene: &str, out: &mut impl Write) -> Result<(
 /// and returns the path.
 pub fn export_obj_in(system: &System, scene: &str, dir: &Path) -> Result<PathBuf, ExportError> {
     check_surface(system, scene)?;
-    let stem = format!("cloth-{}", crate::session::save_stem(scene));
+    let stem = format!("cloth-{}", scene_stem(scene));
     let (path, mut file) = create_numbered(dir, &stem, "obj")?;
     let written = write_obj(system, scene, &mut file)
         .and_then(|()| file.sync_all().map_err(ExportError::from));
@@ -156,6 +156,13 @@ pub fn export_obj_in(system: &System, scene: &str, dir: &Path) -> Result<PathBuf
         let _ = std::fs::remove_file(&path);
     }
     written.map(|()| path)
+}
+
+/// The scene part of an output file's name, as Save names its files: a built-in
+/// scene's name, or a scene file's stem without an earlier save's `saved-` and
+/// `-N`, in letters, digits, `-` and `_`.
+pub fn scene_stem(scene: &str) -> String {
+    crate::session::save_stem(scene)
 }
 
 /// Creates `<stem>-N.<extension>` in `dir` for the first N from 1 that names no
@@ -188,7 +195,7 @@ pub fn create_numbered(dir: &Path, stem: &str, extension: &str) -> io::Result<(P
 
 /// The scene's name as an OBJ object name: no spaces or line breaks.
 fn object_name(scene: &str) -> String {
-    let name = crate::session::save_stem(scene);
+    let name = scene_stem(scene);
     if name.is_empty() {
         "cloth".to_string()
     } else {

@@ -131,6 +131,8 @@ struct App {
     hovered: Option<usize>,
     /// The last points (px) of the cut the mouse is drawing (Ctrl + left drag).
     cut_path: Vec<Vec2>,
+    /// A GIF being recorded (the panel's Record button).
+    recording: Option<record::Job>,
     fatal: Option<anyhow::Error>,
 }
 
@@ -152,6 +154,7 @@ impl App {
             frame_time: 1.0 / 60.0,
             hovered: None,
             cut_path: Vec::new(),
+            recording: None,
             fatal: None,
         };
         app.scene_loaded();
@@ -349,6 +352,7 @@ impl App {
             Action::Save => self.save(),
             Action::ExportObj => self.export_obj(),
             Action::Screenshot => self.screenshot(),
+            Action::Record(seconds) => self.record(seconds),
             Action::Undo | Action::Redo | Action::Defaults => {
                 let particles = self.session.system().particle_count();
                 let done = match action {
@@ -434,6 +438,73 @@ impl App {
                 self.panel.error = Some(text);
             }
         }
+    }
+
+    /// Starts recording `seconds` of the scene from now, as the view shows it, to
+    /// `cloth-<scene>-N.gif` in the working directory, on a thread of its own.
+    fn record(&mut self, seconds: f64) {
+        if self.recording.is_some() {
+            return;
+        }
+        let Some(gfx) = self.gfx.as_ref() else {
+            return;
+        };
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        let (_, size) = gfx.renderer.viewport();
+        let size = record::fit(
+            (size.x.round() as u32, size.y.round() as u32),
+            record::APP_MAX_SIDE,
+        );
+        let gpu = record::Gpu {
+            device: gfx.device.clone(),
+            queue: gfx.queue.clone(),
+            adapter_name: gfx.adapter_name.clone(),
+            samples: gfx.renderer.sample_count(),
+        };
+        let view = record::View {
+            camera: self.camera,
+            options: self.view,
+            by_strain: self.panel.strain_colors,
+        };
+        let system = self.session.system().clone();
+        let scene = self.session.name();
+        match record::Job::start(system, view, seconds, 25, gpu, size, &dir, scene) {
+            Ok(job) => {
+                log::info!("recording {seconds} s to {}", job.path.display());
+                self.panel.error = None;
+                self.panel.recording = Some((0, job.frames));
+                self.recording = Some(job);
+            }
+            Err(e) => {
+                let text = format!("cannot record in {}: {e:#}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+    }
+
+    /// Follows a recording: its progress in the panel, and where it went.
+    fn poll_recording(&mut self) {
+        let Some(job) = &self.recording else {
+            return;
+        };
+        self.panel.recording = Some((job.frames_done(), job.frames));
+        let Some(result) = job.finished() else {
+            return;
+        };
+        match result {
+            Ok(()) => {
+                log::info!("recorded to {}", job.path.display());
+                self.panel.wrote = Some(format!("Recorded to {}", job.path.display()));
+            }
+            Err(e) => {
+                let text = format!("the recording failed: {e:#}");
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+        self.panel.recording = None;
+        self.recording = None;
     }
 
     fn write_screenshot(&mut self, dir: &std::path::Path) -> anyhow::Result<std::path::PathBuf> {
@@ -527,6 +598,7 @@ impl App {
         }
         let report = self.session.frame(elapsed);
         self.panel.record(&report, self.frame_time);
+        self.poll_recording();
 
         let (Some(gfx), Some(egui_state)) = (self.gfx.as_mut(), self.egui_state.as_mut()) else {
             return;

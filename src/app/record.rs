@@ -20,9 +20,11 @@
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, mpsc};
 use std::time::Instant;
 
-use anyhow::{Context as _, anyhow, bail};
+use anyhow::{Context as _, anyhow};
 
 use super::frame::{self, FrameData};
 use super::screenshot::{Diverged, parse_size};
@@ -30,6 +32,7 @@ use crate::render::ViewOptions;
 use crate::render::offscreen::{Offscreen, write_png};
 use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::session::Session;
+use cloth_sandbox::sim::System;
 use cloth_sandbox::view::OrbitCamera;
 
 /// Most frames one recording may have (at 25 fps, 400 s).
@@ -198,33 +201,38 @@ enum Sink {
 }
 
 impl Sink {
+    /// A looping GIF of `size` pixels at `fps`, written to a file beside `path`
+    /// and renamed over it when finished.
+    fn gif(path: &Path, size: (u32, u32), fps: u32) -> anyhow::Result<Self> {
+        let shown = path.display();
+        let mut file = PendingFile::create(path).map_err(|e| anyhow!("{shown}: {e}"))?;
+        let writer = file
+            .writer()
+            .try_clone()
+            .with_context(|| format!("opening {shown}"))?;
+        let mut encoder = gif::Encoder::new(
+            std::io::BufWriter::new(writer),
+            size.0 as u16,
+            size.1 as u16,
+            &[],
+        )
+        .with_context(|| format!("writing {shown}"))?;
+        encoder
+            .set_repeat(gif::Repeat::Infinite)
+            .with_context(|| format!("writing {shown}"))?;
+        Ok(Sink::Gif {
+            file,
+            encoder: Some(encoder),
+            fps,
+        })
+    }
+
     /// Checks the output and makes it ready, before any work.
     fn open(out: &Output, args: &RecordArgs) -> anyhow::Result<Self> {
         let shown = args.out.display();
         match out {
             Output::Gif(path) => {
-                let (width, height) = args.size;
-                let mut file =
-                    PendingFile::create(path).map_err(|e| anyhow!("--out {shown}: {e}"))?;
-                let writer = file
-                    .writer()
-                    .try_clone()
-                    .with_context(|| format!("opening {shown}"))?;
-                let mut encoder = gif::Encoder::new(
-                    std::io::BufWriter::new(writer),
-                    width as u16,
-                    height as u16,
-                    &[],
-                )
-                .with_context(|| format!("writing {shown}"))?;
-                encoder
-                    .set_repeat(gif::Repeat::Infinite)
-                    .with_context(|| format!("writing {shown}"))?;
-                Ok(Sink::Gif {
-                    file,
-                    encoder: Some(encoder),
-                    fps: args.fps,
-                })
+                Sink::gif(path, args.size, args.fps).map_err(|e| anyhow!("--out {e:#}"))
             }
             Output::Folder(sequence) => {
                 limits::prepare_output_folder(&sequence.folder, args.force)
@@ -283,6 +291,214 @@ impl Sink {
     }
 }
 
+/// The camera and what to draw, fixed for a whole recording.
+pub struct View {
+    /// The camera.
+    pub camera: OrbitCamera,
+    /// Display options (mesh, overlays, background).
+    pub options: ViewOptions,
+    /// Springs coloured by strain rather than kind.
+    pub by_strain: bool,
+}
+
+/// The simulation step, counted from the start, that frame `i` shows at `fps`:
+/// the one nearest `i / fps` seconds, at the step `dt` that runs.
+fn step_at(i: u64, fps: u32, dt: f64) -> f64 {
+    (i as f64 / f64::from(fps) / dt).round()
+}
+
+/// Checks that `frames` frames at `fps` from `system`'s state are a run within
+/// the work limits; the error gives the limit.
+pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String> {
+    let dt = system.params().dt;
+    let last = step_at(frames.saturating_sub(1), fps, dt);
+    if !(last.is_finite() && last <= limits::MAX_STEPS as f64) {
+        return Err(format!(
+            "{frames} frames at {fps} fps and dt = {} s are {} steps; a run may take at most {} steps",
+            limits::number(dt),
+            limits::number(last),
+            limits::MAX_STEPS
+        ));
+    }
+    limits::total_steps(last as u64, 1, system.particle_count()).map(|_| ())
+}
+
+/// Steps `system` from its state and renders `frames` frames at `fps` (frame i
+/// at `i / fps` seconds after the start), handing each to `each` as RGBA8 rows.
+/// A divergence stops it with [`Diverged`], which says at which frame.
+pub fn render_frames(
+    system: &mut System,
+    view: &View,
+    fps: u32,
+    frames: u64,
+    offscreen: &mut Offscreen,
+    mut each: impl FnMut(u64, Vec<u8>) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    // The step that runs (safe stepping may have made it smaller than the scene's).
+    let dt = system.params().dt;
+    let start = system.steps_taken();
+    let mut data = FrameData::default();
+    for i in 0..frames {
+        let target = start + step_at(i, fps, dt) as u64;
+        let due = target.saturating_sub(system.steps_taken());
+        if let Err(d) = system.run(due) {
+            return Err(Diverged {
+                steps: target,
+                frame: i,
+                message: format!("{d} (at frame {i} of {frames})"),
+            }
+            .into());
+        }
+        data.build(system, &view.options, view.by_strain);
+        let frame = data.scene_frame(system, None);
+        let pixels = offscreen.render(&frame, &view.camera, &view.options)?;
+        each(i, pixels)?;
+    }
+    Ok(())
+}
+
+/// Records `seconds` of `system` from its state as a GIF at `path` (a file there,
+/// such as a name reserved with `create_new`, is replaced whole at the end) at
+/// `fps`, on `offscreen`; `progress` gets the frames done so far. The app's
+/// "Record" button runs it on a thread of its own.
+pub fn record_gif(
+    mut system: System,
+    view: &View,
+    seconds: f64,
+    fps: u32,
+    offscreen: &mut Offscreen,
+    path: &Path,
+    progress: &AtomicU64,
+) -> anyhow::Result<()> {
+    let frames = frame_count(seconds, fps).map_err(|e| anyhow!(e))?;
+    check_steps(&system, fps, frames).map_err(|e| anyhow!(e))?;
+    let size = offscreen.size();
+    let mut sink = Sink::gif(path, size, fps)?;
+    render_frames(&mut system, view, fps, frames, offscreen, |i, pixels| {
+        sink.push(i, size, pixels)?;
+        progress.store(i + 1, Ordering::Relaxed);
+        Ok(())
+    })?;
+    sink.finish()
+}
+
+/// The longest side of a recording made in the app, in pixels: the view is
+/// scaled down to it (GIFs of the full window are large and slow to quantise).
+pub const APP_MAX_SIDE: u32 = 640;
+
+/// A GIF being recorded on a thread of its own, from the app: the window keeps
+/// running while it steps a copy of the system and renders on the window's
+/// device.
+pub struct Job {
+    /// Where the GIF goes.
+    pub path: PathBuf,
+    /// Frames in all.
+    pub frames: u64,
+    progress: Arc<AtomicU64>,
+    done: mpsc::Receiver<anyhow::Result<()>>,
+}
+
+/// The GPU a [`Job`] renders with: the window's device.
+pub struct Gpu {
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// The adapter, in words.
+    pub adapter_name: String,
+    /// MSAA samples per pixel.
+    pub samples: u32,
+}
+
+impl Job {
+    /// Starts recording `seconds` of `system` from its state as `view` shows it,
+    /// at `fps`, `size` pixels, into `cloth-<scene>-N.gif` in `dir` (the name is
+    /// taken now, so no file is replaced). Errors that need no work (the length,
+    /// the folder) come back at once; the rest from [`Job::finished`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn start(
+        system: System,
+        view: View,
+        seconds: f64,
+        fps: u32,
+        gpu: Gpu,
+        size: (u32, u32),
+        dir: &Path,
+        scene: &str,
+    ) -> anyhow::Result<Job> {
+        let frames = frame_count(seconds, fps).map_err(|e| anyhow!(e))?;
+        check_steps(&system, fps, frames).map_err(|e| anyhow!(e))?;
+        let stem = format!("cloth-{}", cloth_sandbox::export::scene_stem(scene));
+        let (path, reserved) = cloth_sandbox::export::create_numbered(dir, &stem, "gif")?;
+        drop(reserved);
+        let progress = Arc::new(AtomicU64::new(0));
+        let (send, done) = mpsc::channel();
+        let job = Job {
+            path: path.clone(),
+            frames,
+            progress: progress.clone(),
+            done,
+        };
+        std::thread::Builder::new()
+            .name("record".to_string())
+            .spawn(move || {
+                let result = Offscreen::with_device(
+                    gpu.device,
+                    gpu.queue,
+                    gpu.adapter_name,
+                    gpu.samples,
+                    size.0,
+                    size.1,
+                )
+                .and_then(|mut offscreen| {
+                    record_gif(
+                        system,
+                        &view,
+                        seconds,
+                        fps,
+                        &mut offscreen,
+                        &path,
+                        &progress,
+                    )
+                });
+                if result.is_err() {
+                    // Not the reserved, empty name left looking like a recording.
+                    let _ = std::fs::remove_file(&path);
+                }
+                let _ = send.send(result);
+            })
+            .context("starting the recording thread")?;
+        Ok(job)
+    }
+
+    /// Frames rendered so far.
+    pub fn frames_done(&self) -> u64 {
+        self.progress.load(Ordering::Relaxed)
+    }
+
+    /// The outcome once the recording is over; `None` while it runs.
+    pub fn finished(&self) -> Option<anyhow::Result<()>> {
+        match self.done.try_recv() {
+            Ok(result) => Some(result),
+            Err(mpsc::TryRecvError::Empty) => None,
+            Err(mpsc::TryRecvError::Disconnected) => Some(Err(anyhow!(
+                "the recording thread stopped without a result"
+            ))),
+        }
+    }
+}
+
+/// `size` scaled down, keeping its shape, so that no side is over `max` pixels.
+pub fn fit(size: (u32, u32), max: u32) -> (u32, u32) {
+    let longest = size.0.max(size.1).max(1);
+    if longest <= max {
+        return (size.0.max(1), size.1.max(1));
+    }
+    let scale = f64::from(max) / f64::from(longest);
+    let side = |s: u32| ((f64::from(s) * scale).round() as u32).clamp(1, max);
+    (side(size.0), side(size.1))
+}
+
 /// Runs the scene and writes the frames.
 pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     let started = Instant::now();
@@ -290,22 +506,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     let output = parse_out(&args.out).map_err(|e| anyhow!(e))?;
     let frames = frame_count(args.seconds, args.fps).map_err(|e| anyhow!(e))?;
     let mut session = Session::load_with(&args.scene, &args.set).map_err(|e| anyhow!("{e}"))?;
-    // The step that runs (safe stepping may have made it smaller than the scene's).
-    let dt = session.system().params().dt;
-    let fps = f64::from(args.fps);
-    let step_at = |i: u64| (i as f64 / fps / dt).round();
-    let last = step_at(frames - 1);
-    if !(last.is_finite() && last <= limits::MAX_STEPS as f64) {
-        bail!(
-            "--seconds {}: at dt = {} s that is {} steps; a run may take at most {} steps",
-            limits::number(args.seconds),
-            limits::number(dt),
-            limits::number(last),
-            limits::MAX_STEPS
-        );
-    }
-    let particles = session.system().particle_count();
-    limits::total_steps(last as u64, 1, particles).map_err(|e| anyhow!("--seconds: {e}"))?;
+    check_steps(session.system(), args.fps, frames).map_err(|e| anyhow!("--seconds: {e}"))?;
     // The output and the adapter before the simulation: whatever is missing is
     // said before any work.
     let mut sink = Sink::open(&output, args)?;
@@ -326,29 +527,39 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     if let Some(p) = args.pitch {
         camera.pitch = p.to_radians().clamp(-1.5, 1.5);
     }
-    let mut data = FrameData::default();
-    for i in 0..frames {
-        let target = step_at(i) as u64;
-        let due = target.saturating_sub(session.system().steps_taken());
-        if let Err(d) = session.system_mut().run(due) {
-            let kept = match (&output, i) {
-                (Output::Gif(_), _) | (_, 0) => "nothing was written".to_string(),
-                (Output::Pattern(s) | Output::Folder(s), _) => format!(
-                    "frames 0 to {} are in {} and the following",
-                    i - 1,
-                    s.path(0).display()
-                ),
-            };
-            return Err(Diverged {
-                steps: target,
-                message: format!("{d} (at frame {i} of {frames}; {kept})"),
-            }
-            .into());
+    let view = View {
+        camera,
+        options,
+        by_strain: false,
+    };
+    let outcome = render_frames(
+        session.system_mut(),
+        &view,
+        args.fps,
+        frames,
+        &mut offscreen,
+        |i, pixels| sink.push(i, args.size, pixels),
+    );
+    if let Err(e) = outcome {
+        let Some(diverged) = e.downcast_ref::<Diverged>() else {
+            return Err(e);
+        };
+        let frame = diverged.frame;
+        // What a user finds of the recording: a GIF is all or nothing.
+        let kept = match (&output, frame) {
+            (Output::Gif(_), _) | (_, 0) => "nothing was written".to_string(),
+            (Output::Pattern(s) | Output::Folder(s), i) => format!(
+                "frames 0 to {} were written, from {}",
+                i - 1,
+                s.path(0).display()
+            ),
+        };
+        return Err(Diverged {
+            steps: diverged.steps,
+            frame,
+            message: format!("{}; {kept}", diverged.message),
         }
-        data.build(session.system(), &options, false);
-        let frame = data.scene_frame(session.system(), None);
-        let pixels = offscreen.render(&frame, &camera, &options)?;
-        sink.push(i, args.size, pixels)?;
+        .into());
     }
     sink.finish()?;
     let written = match &output {
@@ -382,6 +593,13 @@ mod tests {
             assert_eq!(total, 300, "fps {fps}");
         }
         assert_eq!(gif_delay(0, 25), 4);
+    }
+
+    #[test]
+    fn fit_keeps_the_shape() {
+        assert_eq!(fit((894, 760), 640), (640, 544));
+        assert_eq!(fit((320, 200), 640), (320, 200));
+        assert_eq!(fit((4000, 1), 640), (640, 1));
     }
 
     #[test]

@@ -69,6 +69,11 @@ impl Offscreen {
         })
     }
 
+    /// Image size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.renderer.size()
+    }
+
     /// The adapter in use, in words.
     pub fn adapter_name(&self) -> &str {
         &self.adapter_name
