@@ -20,7 +20,7 @@
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::Instant;
 
@@ -359,8 +359,8 @@ pub fn render_frames(
 
 /// Records `seconds` of `system` from its state as a GIF at `path` (a file there,
 /// such as a name reserved with `create_new`, is replaced whole at the end) at
-/// `fps`, on `offscreen`; `progress` gets the frames done so far. The app's
-/// "Record" button runs it on a thread of its own.
+/// `fps`, on `offscreen`; `progress` gets the frames done so far and can stop it.
+/// The app's "Record" button runs it on a thread of its own.
 pub fn record_gif(
     mut system: System,
     view: &View,
@@ -368,15 +368,18 @@ pub fn record_gif(
     fps: u32,
     offscreen: &mut Offscreen,
     path: &Path,
-    progress: &AtomicU64,
+    progress: &Progress,
 ) -> anyhow::Result<()> {
     let frames = frame_count(seconds, fps).map_err(|e| anyhow!(e))?;
     check_steps(&system, fps, frames).map_err(|e| anyhow!(e))?;
     let size = offscreen.size();
     let mut sink = Sink::gif(path, size, fps)?;
     render_frames(&mut system, view, fps, frames, offscreen, |i, pixels| {
+        if progress.cancel.load(Ordering::Relaxed) {
+            anyhow::bail!("the recording was cancelled");
+        }
         sink.push(i, size, pixels)?;
-        progress.store(i + 1, Ordering::Relaxed);
+        progress.frames_done.store(i + 1, Ordering::Relaxed);
         Ok(())
     })?;
     sink.finish()
@@ -394,8 +397,18 @@ pub struct Job {
     pub path: PathBuf,
     /// Frames in all.
     pub frames: u64,
-    progress: Arc<AtomicU64>,
+    progress: Arc<Progress>,
     done: mpsc::Receiver<anyhow::Result<()>>,
+    thread: Option<std::thread::JoinHandle<()>>,
+}
+
+/// How far a recording has got, and a request to stop it.
+#[derive(Default)]
+pub struct Progress {
+    /// Frames written so far.
+    pub frames_done: AtomicU64,
+    /// Set to stop the recording at the next frame (its file is then removed).
+    pub cancel: AtomicBool,
 }
 
 /// The GPU a [`Job`] renders with: the window's device.
@@ -431,15 +444,16 @@ impl Job {
         let stem = format!("cloth-{}", cloth_sandbox::export::scene_stem(scene));
         let (path, reserved) = cloth_sandbox::export::create_numbered(dir, &stem, "gif")?;
         drop(reserved);
-        let progress = Arc::new(AtomicU64::new(0));
+        let progress = Arc::new(Progress::default());
         let (send, done) = mpsc::channel();
-        let job = Job {
+        let mut job = Job {
             path: path.clone(),
             frames,
             progress: progress.clone(),
             done,
+            thread: None,
         };
-        std::thread::Builder::new()
+        let thread = std::thread::Builder::new()
             .name("record".to_string())
             .spawn(move || {
                 let result = Offscreen::with_device(
@@ -468,12 +482,13 @@ impl Job {
                 let _ = send.send(result);
             })
             .context("starting the recording thread")?;
+        job.thread = Some(thread);
         Ok(job)
     }
 
     /// Frames rendered so far.
     pub fn frames_done(&self) -> u64 {
-        self.progress.load(Ordering::Relaxed)
+        self.progress.frames_done.load(Ordering::Relaxed)
     }
 
     /// The outcome once the recording is over; `None` while it runs.
@@ -484,6 +499,17 @@ impl Job {
             Err(mpsc::TryRecvError::Disconnected) => Some(Err(anyhow!(
                 "the recording thread stopped without a result"
             ))),
+        }
+    }
+}
+
+impl Drop for Job {
+    /// Quitting the app during a recording stops it at the next frame and waits
+    /// for the thread, which removes the unfinished file.
+    fn drop(&mut self) {
+        self.progress.cancel.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
         }
     }
 }
