@@ -17,6 +17,10 @@
 //!
 //! Everything is checked before the simulation starts: the frame count and the
 //! steps, the output path, and the graphics adapter.
+//!
+//! The app's "Record GIF" button runs the same frame loop ([`render_frames`]) on
+//! a copy of the running system, on a thread of its own with the window's device
+//! ([`Job`]), so the window keeps running while it records.
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
