@@ -72,6 +72,11 @@ pub enum Command {
     Scenes,
     /// Render a scene after N steps to a PNG, off-screen (no window or display).
     Screenshot(crate::app::screenshot::ScreenshotArgs),
+    /// Record N simulated seconds of a scene off-screen, as a GIF or numbered PNGs.
+    ///
+    /// `--out NAME.gif` writes an animated GIF, `--out frame-%04d.png` or `--out DIR/`
+    /// one PNG per frame; no window or display is needed.
+    Record(crate::app::record::RecordArgs),
     /// Measure error against run time and stability of every integrator; write CSV,
     /// SVG plots and REPORT.md.
     Report(ReportArgs),
@@ -115,6 +120,11 @@ pub struct RunArgs {
     /// Write the final positions as CSV `index,x,y,z`.
     #[arg(long, value_name = "FILE.csv")]
     dump: Option<std::path::PathBuf>,
+    /// Write the cloth's surface at the end of the run as a Wavefront OBJ file:
+    /// positions, texture coordinates and vertex normals (scenes without a surface,
+    /// such as `chain`, are refused before the run).
+    #[arg(long, value_name = "FILE.obj")]
+    obj: Option<std::path::PathBuf>,
     /// Safe stepping: split each step of dt into the fewest substeps that keep the
     /// step below half the integrator's critical step (Gershgorin estimate).
     #[arg(long)]
@@ -149,6 +159,14 @@ pub fn run_command(command: Command) -> ExitCode {
             Ok(ExitCode::SUCCESS)
         }
         Command::Screenshot(args) => match crate::app::screenshot::run(&args) {
+            Ok(()) => Ok(ExitCode::SUCCESS),
+            Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
+                eprintln!("error: {e:#}");
+                return ExitCode::from(EXIT_DIVERGED);
+            }
+            Err(e) => Err(format!("{e:#}")),
+        },
+        Command::Record(args) => match crate::app::record::run(&args) {
             Ok(()) => Ok(ExitCode::SUCCESS),
             Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
                 eprintln!("error: {e:#}");
@@ -269,6 +287,10 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         Some(path) => Some(prepare_dump(path, &args.scene.scene)?),
         None => None,
     };
+    let mut obj = match &args.obj {
+        Some(path) => Some(prepare_obj(&system, path, &args)?),
+        None => None,
+    };
     system.set_fast_path(!args.exact);
     let engine = system.engine();
     // Setup is not timed: zero steps build the engine's buffers (and thread pool),
@@ -283,15 +305,33 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     let wall = start.elapsed().as_secs_f64();
     let summary = Summary::of(&system, wall, engine);
     let mut dumped = None;
+    if (dump.is_some() || obj.is_some())
+        && let Err(d) = &outcome
+    {
+        // The state at the divergence is not finite (or ran away): the CSV and
+        // the OBJ hold the last state before it, which the run then replays to.
+        system.set_state(start_state);
+        let _ = system.run(d.step().saturating_sub(1));
+        dumped = Some((system.steps_taken(), system.time()));
+    }
     if let (Some(file), Some(path)) = (dump.take(), &args.dump) {
-        if let Err(d) = &outcome {
-            // The state at the divergence is not finite (or ran away): the CSV
-            // holds the last state before it, which the run then replays to.
-            system.set_state(start_state);
-            let _ = system.run(d.step().saturating_sub(1));
-            dumped = Some((system.steps_taken(), system.time()));
-        }
         write_csv(&system, file).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    if let (Some(file), Some(path)) = (obj.take(), &args.obj) {
+        let scene = &args.scene.scene;
+        match write_obj(&system, scene, file) {
+            Ok(()) => eprintln!(
+                "wrote {} ({} vertices, {} triangles, t = {:.4} s)",
+                path.display(),
+                system.particle_count(),
+                system.triangles().len(),
+                system.time()
+            ),
+            // After a divergence the exit code says so; the note below tells why
+            // there is no file.
+            Err(e) if outcome.is_err() => eprintln!("note: {} not written: {e}", path.display()),
+            Err(e) => return Err(format!("cannot write {}: {e}", path.display())),
+        }
     }
     if args.json {
         let mut value = summary.to_json();
@@ -312,15 +352,22 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         Ok(()) => Ok(ExitCode::SUCCESS),
         Err(divergence) => {
             report_divergence(&system, &divergence);
+            let finite = system.positions().iter().all(|p| p.is_finite());
             if let (Some((step, time)), Some(path)) = (dumped, &args.dump) {
                 eprintln!(
                     "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s){}",
                     path.display(),
-                    if system.positions().iter().all(|p| p.is_finite()) {
+                    if finite {
                         ""
                     } else {
                         ", and even it is not finite"
                     }
+                );
+            }
+            if let (Some((step, time)), Some(path), true) = (dumped, &args.obj, finite) {
+                eprintln!(
+                    "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s)",
+                    path.display(),
                 );
             }
             Ok(ExitCode::from(EXIT_DIVERGED))
@@ -340,6 +387,42 @@ fn prepare_dump(path: &Path, scene: &str) -> Result<PendingFile, String> {
         ));
     }
     PendingFile::create(path).map_err(|e| format!("--dump {shown}: {e}"))
+}
+
+/// The `--obj` file made ready before the run, as `--dump` is: the scene must have
+/// a surface, and the path must be writable and neither the scene file nor the
+/// `--dump` file.
+fn prepare_obj(system: &System, path: &Path, args: &RunArgs) -> Result<PendingFile, String> {
+    let shown = path.display();
+    cloth_sandbox::export::check_surface(system, &args.scene.scene)
+        .map_err(|e| format!("--obj {shown}: {e}"))?;
+    let scene = Path::new(&args.scene.scene);
+    if scene.is_file() && limits::same_file(path, scene) {
+        return Err(format!(
+            "--obj {shown} is the scene file being run: refusing to overwrite it; give another file name"
+        ));
+    }
+    if args
+        .dump
+        .as_deref()
+        .is_some_and(|dump| dump == path || limits::same_file(dump, path))
+    {
+        return Err(format!(
+            "--obj {shown} is also the --dump file: give them different names"
+        ));
+    }
+    PendingFile::create(path).map_err(|e| format!("--obj {shown}: {e}"))
+}
+
+/// Writes the surface as OBJ into the prepared file and renames it over the target.
+fn write_obj(
+    system: &System,
+    scene: &str,
+    mut file: PendingFile,
+) -> Result<(), cloth_sandbox::export::ExportError> {
+    cloth_sandbox::export::write_obj(system, scene, file.writer())?;
+    file.commit()?;
+    Ok(())
 }
 
 fn hint(system: &System) -> String {

@@ -31,6 +31,7 @@
 //! # Ok::<(), cloth_sandbox::scene::SceneError>(())
 //! ```
 
+pub mod export;
 pub mod limits;
 #[cfg(feature = "report")]
 pub mod report;

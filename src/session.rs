@@ -720,7 +720,7 @@ impl Session {
 
 /// The scene part of a saved file's name: a built-in scene's name, or a scene file's
 /// stem without an earlier save's `saved-` and `-N`, in letters, digits, `-` and `_`.
-fn save_stem(name: &str) -> String {
+pub(crate) fn save_stem(name: &str) -> String {
     let stem = Path::new(name)
         .file_stem()
         .map_or(name.into(), |s| s.to_string_lossy());

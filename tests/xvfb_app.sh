@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
-# another, resize the window, press R, F1 twice (help), Ctrl+S (save), Ctrl+Z and
-# Ctrl+Shift+Z (undo, redo), Esc; passes when the app logged each action, exited 0
-# and its log holds no error or panic.
+# another, resize the window, press R, F1 twice (help), Ctrl+S (save), F12
+# (screenshot), Ctrl+Z and Ctrl+Shift+Z (undo, redo), Esc; passes when the app
+# logged each action, exited 0 and its log holds no error or panic.
 #
 # Needs: Xvfb, xdotool (and ImageMagick's `import` when SHOT_DIR is set, to save
 # screenshots there), a Vulkan or GL driver (Mesa's lavapipe will do).
@@ -110,6 +110,14 @@ grep -q "saved the setup to" "$LOG" || fail "Ctrl+S did not save"
 [[ -s $WORK/cwd/saved-cloth-1.toml ]] || fail "Ctrl+S wrote no saved-cloth-1.toml"
 grep -q '^layout = "grid"' "$WORK/cwd/saved-cloth-1.toml" || fail "the saved file is no scene"
 
+# F12 saves the view as a PNG in the working directory.
+xdotool windowfocus --sync "$WID"
+xdotool key F12
+sleep 1
+grep -q "saved a screenshot to" "$LOG" || fail "F12 saved no screenshot"
+[[ $(head -c 8 "$WORK/cwd/screenshot-1.png" | od -An -tx1 | tr -d ' \n') == 89504e470d0a1a0a ]] ||
+    fail "F12 wrote no PNG screenshot-1.png"
+
 # Ctrl+Z takes back the last change (the pin clicked above); Ctrl+Shift+Z redoes it.
 xdotool windowfocus --sync "$WID"
 xdotool key ctrl+z
@@ -135,4 +143,4 @@ APP_PID=""
 if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
     fail "the log has errors"
 fi
-echo "xvfb_app: ok (pin, drag, resize, reset, help, save, undo, redo, quit; exit 0, clean log)"
+echo "xvfb_app: ok (pin, drag, resize, reset, help, save, screenshot, undo, redo, quit; exit 0, clean log)"

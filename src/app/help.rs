@@ -24,6 +24,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
     (". (period)", "one step while paused"),
     ("R", "reset the scene (keeps your edits and pins)"),
     ("Ctrl+S", "save the setup as saved-<scene>-N.toml"),
+    ("F12", "save the view as screenshot-N.png"),
     (
         "Ctrl+Z / Ctrl+Shift+Z or Ctrl+Y",
         "undo / redo a parameter or pin change",

@@ -7,6 +7,7 @@ pub mod gfx;
 pub mod help;
 pub mod input;
 pub mod panel;
+pub mod record;
 pub mod screenshot;
 
 use std::sync::Arc;
@@ -130,6 +131,8 @@ struct App {
     hovered: Option<usize>,
     /// The last points (px) of the cut the mouse is drawing (Ctrl + left drag).
     cut_path: Vec<Vec2>,
+    /// A GIF being recorded (the panel's Record button).
+    recording: Option<record::Job>,
     fatal: Option<anyhow::Error>,
 }
 
@@ -151,6 +154,7 @@ impl App {
             frame_time: 1.0 / 60.0,
             hovered: None,
             cut_path: Vec::new(),
+            recording: None,
             fatal: None,
         };
         app.scene_loaded();
@@ -346,6 +350,9 @@ impl App {
                 Err(e) => self.panel.error = Some(e.to_string()),
             },
             Action::Save => self.save(),
+            Action::ExportObj => self.export_obj(),
+            Action::Screenshot => self.screenshot(),
+            Action::Record(seconds) => self.record(seconds),
             Action::Undo | Action::Redo | Action::Defaults => {
                 let particles = self.session.system().particle_count();
                 let done = match action {
@@ -396,6 +403,145 @@ impl App {
         }
     }
 
+    /// Writes the cloth's surface as `cloth-<scene>-N.obj` in the working
+    /// directory and says where in the panel.
+    fn export_obj(&mut self) {
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        let scene = self.session.name();
+        match cloth_sandbox::export::export_obj_in(self.session.system(), scene, &dir) {
+            Ok(path) => {
+                log::info!("exported the cloth to {}", path.display());
+                self.panel.error = None;
+                self.panel.wrote = Some(format!("Exported the cloth to {}", path.display()));
+            }
+            Err(e) => {
+                let text = format!("cannot export OBJ in {}: {e}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+    }
+
+    /// Renders the view (the scene without the panel, at its size in pixels) to
+    /// `screenshot-N.png` in the working directory and says where in the panel.
+    fn screenshot(&mut self) {
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        match self.write_screenshot(&dir) {
+            Ok(path) => {
+                log::info!("saved a screenshot to {}", path.display());
+                self.panel.error = None;
+                self.panel.wrote = Some(format!("Screenshot saved to {}", path.display()));
+            }
+            Err(e) => {
+                let text = format!("cannot save a screenshot in {}: {e:#}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+    }
+
+    /// Starts recording `seconds` of the scene from now, as the view shows it, to
+    /// `cloth-<scene>-N.gif` in the working directory, on a thread of its own.
+    fn record(&mut self, seconds: f64) {
+        if self.recording.is_some() {
+            return;
+        }
+        let Some(gfx) = self.gfx.as_ref() else {
+            return;
+        };
+        let dir = std::env::current_dir().unwrap_or_else(|_| ".".into());
+        let (_, size) = gfx.renderer.viewport();
+        let size = record::fit(
+            (size.x.round() as u32, size.y.round() as u32),
+            record::APP_MAX_SIDE,
+        );
+        let gpu = record::Gpu {
+            device: gfx.device.clone(),
+            queue: gfx.queue.clone(),
+            adapter_name: gfx.adapter_name.clone(),
+            samples: gfx.renderer.sample_count(),
+        };
+        let view = record::View {
+            camera: self.camera,
+            options: self.view,
+            by_strain: self.panel.strain_colors,
+        };
+        let system = self.session.system().clone();
+        let scene = self.session.name();
+        match record::Job::start(system, view, seconds, 25, gpu, size, &dir, scene) {
+            Ok(job) => {
+                log::info!("recording {seconds} s to {}", job.path.display());
+                self.panel.error = None;
+                self.panel.recording = Some((0, job.frames));
+                self.recording = Some(job);
+            }
+            Err(e) => {
+                let text = format!("cannot record in {}: {e:#}", dir.display());
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+    }
+
+    /// Follows a recording: its progress in the panel, and where it went.
+    fn poll_recording(&mut self) {
+        let Some(job) = &self.recording else {
+            return;
+        };
+        self.panel.recording = Some((job.frames_done(), job.frames));
+        let Some(result) = job.finished() else {
+            return;
+        };
+        match result {
+            Ok(()) => {
+                log::info!("recorded to {}", job.path.display());
+                self.panel.wrote = Some(format!("Recorded to {}", job.path.display()));
+            }
+            Err(e) => {
+                let text = format!("the recording failed: {e:#}");
+                log::warn!("{text}");
+                self.panel.error = Some(text);
+            }
+        }
+        self.panel.recording = None;
+        self.recording = None;
+    }
+
+    fn write_screenshot(&mut self, dir: &std::path::Path) -> anyhow::Result<std::path::PathBuf> {
+        let Some(gfx) = self.gfx.as_ref() else {
+            anyhow::bail!("the window is not drawn yet");
+        };
+        let (_, size) = gfx.renderer.viewport();
+        let (width, height) = (
+            size.x.round().max(1.0) as u32,
+            size.y.round().max(1.0) as u32,
+        );
+        let mut offscreen = crate::render::offscreen::Offscreen::with_device(
+            gfx.device.clone(),
+            gfx.queue.clone(),
+            gfx.adapter_name.clone(),
+            gfx.renderer.sample_count(),
+            width,
+            height,
+        )?;
+        self.frame_data
+            .build(self.session.system(), &self.view, self.panel.strain_colors);
+        let frame = self.frame_data.scene_frame(self.session.system(), None);
+        let pixels = offscreen.render(&frame, &self.camera, &self.view)?;
+        // The name is taken first (never replacing a file), then the picture is
+        // written beside it and renamed over it whole.
+        let (path, reserved) = cloth_sandbox::export::create_numbered(dir, "screenshot", "png")?;
+        drop(reserved);
+        let written = cloth_sandbox::limits::PendingFile::create(&path)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+            .and_then(|file| crate::render::offscreen::write_png(file, width, height, &pixels));
+        if let Err(e) = written {
+            let _ = std::fs::remove_file(&path);
+            return Err(e);
+        }
+        Ok(path)
+    }
+
     fn key(&mut self, event: &KeyEvent, event_loop: &ActiveEventLoop) {
         let PhysicalKey::Code(code) = event.physical_key else {
             return;
@@ -436,6 +582,7 @@ impl App {
             KeyCode::Space => self.apply(Action::TogglePause, event_loop),
             KeyCode::KeyF | KeyCode::Home => self.apply(Action::ResetView, event_loop),
             KeyCode::Period => self.apply(Action::Step, event_loop),
+            KeyCode::F12 => self.apply(Action::Screenshot, event_loop),
             _ => {}
         }
     }
@@ -451,6 +598,7 @@ impl App {
         }
         let report = self.session.frame(elapsed);
         self.panel.record(&report, self.frame_time);
+        self.poll_recording();
 
         let (Some(gfx), Some(egui_state)) = (self.gfx.as_mut(), self.egui_state.as_mut()) else {
             return;

@@ -38,6 +38,12 @@ pub enum Action {
     WindOn(bool),
     /// Save the setup as a scene file (Ctrl+S).
     Save,
+    /// Write the cloth's surface as `cloth-<scene>-N.obj`.
+    ExportObj,
+    /// Save the view as `screenshot-N.png` (F12).
+    Screenshot,
+    /// Record this many seconds of the view as `cloth-<scene>-N.gif`.
+    Record(f64),
     /// Show or hide the help overlay (F1, ?).
     ToggleHelp,
     /// Take back the last change of parameters or pins (Ctrl+Z).
@@ -57,6 +63,12 @@ pub struct PanelState {
     pub error: Option<String>,
     /// Where the setup was last saved.
     pub saved: Option<String>,
+    /// The last OBJ export, screenshot or recording: what was written where.
+    pub wrote: Option<String>,
+    /// Seconds the Record button records (4 until changed).
+    pub record_seconds: f64,
+    /// A recording under way: frames done and frames in all.
+    pub recording: Option<(u64, u64)>,
     /// Whether the help overlay is open.
     pub help: bool,
     sim_ms: f64,
@@ -331,8 +343,56 @@ fn contents(
             actions.push(Action::Defaults);
         }
     });
+    ui.horizontal(|ui| {
+        let surface = !session.system().triangles().is_empty();
+        if ui
+            .add_enabled(surface, egui::Button::new("Export OBJ"))
+            .on_hover_text("Write the cloth as it is now (positions, texture coordinates, normals) as cloth-<scene>-N.obj in the working directory, for Blender or any 3D tool")
+            .on_disabled_hover_text("This scene has no surface (no triangles) to export")
+            .clicked()
+        {
+            actions.push(Action::ExportObj);
+        }
+        if ui
+            .button("Screenshot")
+            .on_hover_text("Save the view as screenshot-N.png in the working directory (F12)")
+            .clicked()
+        {
+            actions.push(Action::Screenshot);
+        }
+    });
+    ui.horizontal(|ui| match state.recording {
+        Some((done, all)) => {
+            ui.add(
+                egui::ProgressBar::new(done as f32 / all.max(1) as f32)
+                    .text(format!("recording frame {done} of {all}")),
+            );
+        }
+        None => {
+            if state.record_seconds <= 0.0 {
+                state.record_seconds = 4.0;
+            }
+            if ui
+                .button("Record GIF")
+                .on_hover_text("Record the next seconds of the simulation from now, as the view shows it, at 25 frames per second, as cloth-<scene>-N.gif in the working directory (at most 640 pixels a side). A copy of the scene is stepped on its own thread, so the window keeps running; `cloth record` does the same from the command line")
+                .clicked()
+            {
+                actions.push(Action::Record(state.record_seconds));
+            }
+            ui.add(
+                egui::DragValue::new(&mut state.record_seconds)
+                    .range(0.5..=60.0)
+                    .speed(0.1)
+                    .suffix(" s"),
+            )
+            .on_hover_text("Simulated seconds the recording lasts, 0.5 to 60");
+        }
+    });
     if let Some(path) = &state.saved {
         ui.label(RichText::new(format!("Saved to {path}")).small());
+    }
+    if let Some(text) = &state.wrote {
+        ui.label(RichText::new(text).small());
     }
     // The scene's own steps per frame (its speed); safe stepping may run more,
     // smaller steps over the same simulated time.

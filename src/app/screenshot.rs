@@ -57,7 +57,7 @@ pub struct ScreenshotArgs {
 }
 
 /// Parses `WIDTHxHEIGHT`.
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WIDTHxHEIGHT, got {s:?}"))?;
@@ -82,6 +82,8 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
 pub struct Diverged {
     /// Steps asked for.
     pub steps: u64,
+    /// The frame being made (0 for a screenshot).
+    pub frame: u64,
     /// The core's description (what and when).
     pub message: String,
 }
@@ -101,6 +103,7 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
         if let Some(d) = session.divergence() {
             return Err(Diverged {
                 steps: args.steps,
+                frame: 0,
                 message: d.message.clone(),
             }
             .into());

@@ -536,6 +536,11 @@ impl Renderer {
         self.size
     }
 
+    /// MSAA samples per pixel (1 for none).
+    pub fn sample_count(&self) -> u32 {
+        self.sample_count
+    }
+
     /// Draws the scene only in the rectangle at `origin` (px) of `size` (px),
     /// clamped to the output (the rest is still cleared to the background).
     pub fn set_viewport(&mut self, origin: Vec2, size: Vec2) {

@@ -1,6 +1,6 @@
 //! Off-screen rendering: the same `Renderer` drawing into a texture that is
-//! copied back to memory, for `cloth screenshot` and the render tests. No window,
-//! no display.
+//! copied back to memory, for `cloth screenshot`, `cloth record`, the app's
+//! screenshots (F12) and the render tests. No window, no display.
 
 use anyhow::{Context as _, bail};
 use cloth_sandbox::view::OrbitCamera;
@@ -22,17 +22,29 @@ pub struct Offscreen {
 impl Offscreen {
     /// Opens an adapter (no surface) and prepares `width × height` targets.
     pub fn new(width: u32, height: u32) -> anyhow::Result<Self> {
-        if width == 0 || height == 0 || width > 8192 || height > 8192 {
-            bail!("image size {width}x{height} is out of range (1..=8192 on each side)");
-        }
+        check_image_range(width, height)?;
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = pollster::block_on(gpu::adapter(&instance, None))?;
         let adapter_name = gpu::describe(&adapter);
         log::info!("off-screen adapter: {adapter_name}");
         let (device, queue) = pollster::block_on(gpu::device(&adapter))?;
-        check_image_size(&device.limits(), width, height)?;
         let samples = super::pick_sample_count(&adapter, FORMAT);
+        Self::with_device(device, queue, adapter_name, samples, width, height)
+    }
+
+    /// Prepares `width × height` targets on a device already open (the window's,
+    /// for a screenshot of the view), with `samples` MSAA samples.
+    pub fn with_device(
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+        adapter_name: String,
+        samples: u32,
+        width: u32,
+        height: u32,
+    ) -> anyhow::Result<Self> {
+        check_image_range(width, height)?;
+        check_image_size(&device.limits(), width, height)?;
         let renderer = Renderer::new(&device, &queue, FORMAT, samples, (width, height));
         let texture = device.create_texture(&wgpu::TextureDescriptor {
             label: Some("off-screen colour"),
@@ -55,6 +67,11 @@ impl Offscreen {
             texture,
             adapter_name,
         })
+    }
+
+    /// Image size in pixels.
+    pub fn size(&self) -> (u32, u32) {
+        self.renderer.size()
     }
 
     /// The adapter in use, in words.
@@ -133,6 +150,14 @@ impl Offscreen {
         readback.unmap();
         Ok(pixels)
     }
+}
+
+/// Refuses an empty image, or one over 8192 pixels a side, before any GPU work.
+fn check_image_range(width: u32, height: u32) -> anyhow::Result<()> {
+    if width == 0 || height == 0 || width > 8192 || height > 8192 {
+        bail!("image size {width}x{height} is out of range (1..=8192 on each side)");
+    }
+    Ok(())
 }
 
 /// Refuses an image the device cannot hold: a side over its largest texture, or
