@@ -650,6 +650,9 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             p.thickness, p.friction
         ));
     }
+    if let Some(max_speed) = p.max_speed {
+        constraints.push(format!("speed limit ({max_speed} m/s)"));
+    }
     if let Some(tau) = p.tear_strain {
         constraints.push(format!(
             "tearing (a spring breaks past {:.0}% stretch)",
@@ -708,6 +711,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             "bar_iterations": p.bar_iterations,
             "stretch_limit": p.stretch_limit,
             "tear_strain": p.tear_strain,
+            "max_speed": p.max_speed,
         },
         "extent": 2.0 * extent,
         "stability": {

@@ -38,6 +38,7 @@ fn live_edits() -> Vec<Edit> {
         Edit::Integrator(Integrator::Verlet),
         Edit::StretchLimit(0.2),
         Edit::TearStrain(Some(0.8)),
+        Edit::MaxSpeed(Some(7.0)),
         Edit::Friction(0.4),
         Edit::Thickness(0.01),
         Edit::SelfCollision(true),
@@ -83,6 +84,7 @@ fn assert_applied(s: &Session, edit: Edit) {
         Edit::BarIterations(n) => assert_eq!(p.bar_iterations, n),
         Edit::StretchLimit(t) => assert_eq!(p.stretch_limit, Some(t)),
         Edit::TearStrain(t) => assert_eq!(p.tear_strain, t),
+        Edit::MaxSpeed(v) => assert_eq!(p.max_speed, v),
         Edit::Friction(mu) => assert_eq!(p.friction, mu),
         Edit::Thickness(t) => assert_eq!(p.thickness, t),
         Edit::SelfCollision(on) => assert_eq!(p.self_collision, on),
@@ -289,6 +291,7 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         Edit::SelfCollision(on) => on.to_string(),
         // Tearing off is the key's absence, which has no `--set` form.
         Edit::TearStrain(t) => t.expect("tearing on").to_string(),
+        Edit::MaxSpeed(v) => v.expect("a speed limit").to_string(),
     };
     (edit.key(), value)
 }

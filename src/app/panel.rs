@@ -649,6 +649,22 @@ fn contents(
                     edit(Edit::TearStrain(Some(tau)));
                 }
             }
+            let mut limited = p.max_speed.is_some();
+            if ui
+                .checkbox(&mut limited, "speed limit")
+                .on_hover_text(
+                    "Slow every particle faster than the limit down to it after each step \
+                     (seed 000's vLim): a last resort against runaways, off by default",
+                )
+                .changed()
+            {
+                edit(Edit::MaxSpeed(limited.then_some(p.max_speed.unwrap_or(10.0))));
+            }
+            if let Some(mut v) = p.max_speed
+                && slider(ui, &mut v, 0.1..=100.0, "max speed (m/s)", true, "Speed limit in m/s: no particle leaves a step faster than this (above 0, up to 1e6)")
+            {
+                edit(Edit::MaxSpeed(Some(v)));
+            }
         });
 
     if let Some(on) = wind_switch {

@@ -170,6 +170,8 @@ pub const DT: NumberRange<'static> = number("dt", 0.0, true, 1.0);
 pub const STRETCH_LIMIT: NumberRange<'static> = number("stretch_limit", 0.0, false, 100.0);
 /// `tear_strain` (a fraction of the rest length).
 pub const TEAR_STRAIN: NumberRange<'static> = number("tear_strain", 0.0, true, 100.0);
+/// `max_speed` in m/s.
+pub const MAX_SPEED: NumberRange<'static> = number("max_speed", 0.0, true, 1e6);
 /// `friction`, the Coulomb coefficient μ of the colliders.
 pub const FRICTION: NumberRange<'static> = number("friction", 0.0, false, 10.0);
 /// `thickness` in m: contact thickness of the cloth on the colliders.
@@ -512,6 +514,9 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         tear_strain: (spec.tear_strain)
             .map(|t| TEAR_STRAIN.check(o, t))
             .transpose()?,
+        max_speed: (spec.max_speed)
+            .map(|v| MAX_SPEED.check(o, v))
+            .transpose()?,
         seed: spec.seed.unwrap_or(1),
     };
     let substeps = SUBSTEPS.check(o, spec.substeps.unwrap_or(16))?;
@@ -689,6 +694,7 @@ impl Resolved {
             Edit::BarIterations(n) => p.bar_iterations = n,
             Edit::StretchLimit(t) => p.stretch_limit = Some(t),
             Edit::TearStrain(t) => p.tear_strain = t,
+            Edit::MaxSpeed(v) => p.max_speed = v,
             Edit::Friction(mu) => {
                 p.friction = mu;
                 if let Some(g) = &mut p.ground {

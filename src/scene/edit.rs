@@ -44,6 +44,8 @@ pub enum Edit {
     StretchLimit(f64),
     /// Strain past which a spring tears (`tear_strain`); `None`: springs never tear.
     TearStrain(Option<f64>),
+    /// Speed limit in m/s (`max_speed`); `None`: no limit.
+    MaxSpeed(Option<f64>),
     /// Coulomb friction coefficient μ of the ground and the sphere (`friction`).
     Friction(f64),
     /// Contact thickness in m on the ground and the sphere (`thickness`).
@@ -76,6 +78,7 @@ impl Edit {
             Self::BarIterations(_) => "bar_iterations",
             Self::StretchLimit(_) => "stretch_limit",
             Self::TearStrain(_) => "tear_strain",
+            Self::MaxSpeed(_) => "max_speed",
             Self::Friction(_) => "friction",
             Self::Thickness(_) => "thickness",
             Self::SelfCollision(_) => "self_collision",

@@ -14,8 +14,8 @@ use serde::{Deserialize, Serialize};
 
 pub use build::GRID_MAX_SIDE;
 use build::{
-    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, FRICTION, GRAVITY, GUST, PARTICLE_MASS, REST_LENGTH,
-    STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND, side_ranges,
+    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, FRICTION, GRAVITY, GUST, MAX_SPEED, PARTICLE_MASS,
+    REST_LENGTH, STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND, side_ranges,
 };
 pub use edit::Edit;
 pub use values::{PinPreset, Pins, Vector};
@@ -206,6 +206,9 @@ pub struct SceneSpec {
     /// Absent: springs never tear.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tear_strain: Option<f64>,
+    /// Speed limit in m/s (seed 000's `vLim`). Absent: no limit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_speed: Option<f64>,
 }
 
 /// Keys that give the same quantity: setting one clears the others.
@@ -557,6 +560,7 @@ impl Scene {
             Edit::TearStrain(t) => {
                 spec.tear_strain = t.map(|t| TEAR_STRAIN.check(o, t)).transpose()?
             }
+            Edit::MaxSpeed(v) => spec.max_speed = v.map(|v| MAX_SPEED.check(o, v)).transpose()?,
             Edit::Friction(mu) => {
                 spec.friction = Some(FRICTION.check(o, mu)?);
                 spec.ground_friction = None;

@@ -147,6 +147,19 @@ impl Contact {
     }
 }
 
+/// The factor a particle's velocity `v` is scaled by under the speed limit
+/// `max_speed` (m/s): `max_speed / |v|` when it is faster, else 1 (also for a
+/// non-finite `v`, which is a divergence, not a speed to limit). Under Verlet the
+/// update velocity `(x - x_prev) / h` is scaled by the same factor.
+pub fn speed_limit(v: DVec3, max_speed: f64) -> f64 {
+    let speed = v.length();
+    if speed > max_speed && speed.is_finite() {
+        max_speed / speed
+    } else {
+        1.0
+    }
+}
+
 /// `v` with its part along the surface of unit normal `normal` shortened by
 /// `most` (m/s), or removed when it is slower than that.
 fn coulomb(v: DVec3, normal: DVec3, most: f64) -> DVec3 {

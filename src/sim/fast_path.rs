@@ -386,6 +386,7 @@ impl System {
             bar_iterations: _, // bars are refused below
             stretch_limit,
             tear_strain,
+            max_speed,
             friction,
             thickness,
             self_collision,
@@ -430,6 +431,7 @@ impl System {
             self_collision: self_collision.then_some(thickness).filter(|&t| t > 0.0),
             stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
             tear_strain,
+            max_speed,
             integrator,
             present: springs.present,
             precision: Precision::Single,

@@ -150,6 +150,8 @@ pub struct GridSpec {
     /// Tear strain `tau`, if springs tear ([`super::tearing`]): a spring longer
     /// than `(1 + tau) L` at the end of a step breaks.
     pub tear_strain: Option<f64>,
+    /// Speed limit in m/s, if any ([`constraints::speed_limit`]).
+    pub max_speed: Option<f64>,
     /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
     pub integrator: Integrator,
     /// Which kinds of spring exist (structural, shear, bend); an absent kind has
@@ -254,6 +256,7 @@ impl GridSpec {
             self_collision: None,
             stretch_limit: None,
             tear_strain: None,
+            max_speed: None,
             integrator: Integrator::SymplecticEuler,
             present: [true; 3],
             precision: Precision::Single,
@@ -1084,8 +1087,36 @@ impl<E: Real> Kernel<E> {
         if contact.is_active() && self.params.sphere.is_none() {
             self.resolve_contact(&contact);
         }
+        if let Some(max_speed) = self.spec.max_speed {
+            self.limit_speed(max_speed);
+        }
         if let Some(tau) = self.spec.tear_strain {
             self.tear_pass(tau);
+        }
+    }
+
+    /// The speed limit, as the f64 engine applies it ([`constraints::speed_limit`]):
+    /// a cheap check in the kernel's precision, then the particle's velocity (and
+    /// Verlet's update velocity) scaled in f64.
+    fn limit_speed(&mut self, max_speed: f64) {
+        let limit2 = E::of(max_speed * max_speed);
+        let verlet = self.params.verlet;
+        for p in 0..self.grid.w * self.grid.h {
+            let i = self.grid.index(p);
+            let [vx, vy, vz] = self.cur.v.each_ref().map(|a| a.as_slice()[i]);
+            if vx * vx + vy * vy + vz * vz <= limit2 {
+                continue;
+            }
+            let v = DVec3::new(vx.f64(), vy.f64(), vz.f64());
+            let factor = constraints::speed_limit(v, max_speed);
+            for a in 0..3 {
+                let v = &mut self.cur.v[a].as_mut_slice()[i];
+                *v = E::of(v.f64() * factor);
+                if verlet {
+                    let u = &mut self.cur.u[a].as_mut_slice()[i];
+                    *u = E::of(u.f64() * factor);
+                }
+            }
         }
     }
 

@@ -95,6 +95,7 @@ impl MeshParams {
             bar_iterations,
             stretch_limit,
             tear_strain,
+            max_speed,
             friction,
             thickness: _, // already in `ground` and `sphere`
             self_collision,
@@ -107,10 +108,10 @@ impl MeshParams {
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
         } = model.terms;
-        // Self-collision and tearing run on the f64 engine for topologies other
-        // than grids.
-        let tears = tear_strain.is_some();
-        if aero || self_collision || tears || !MeshKernel::supports(integrator) {
+        // Self-collision, tearing and the speed limit run on the f64 engine for
+        // topologies other than grids.
+        let (tears, limited) = (tear_strain.is_some(), max_speed.is_some());
+        if aero || self_collision || tears || limited || !MeshKernel::supports(integrator) {
             return None;
         }
         Some(Self {

@@ -71,6 +71,9 @@ pub struct Params {
     /// Strain `tau` past which a spring tears ([`super::tearing`]): it breaks when
     /// longer than `(1 + tau) L` at the end of a step. `None`: springs never tear.
     pub tear_strain: Option<f64>,
+    /// Speed limit in m/s (seed 000's `vLim`): after each step a particle faster
+    /// than this is slowed to it ([`super::constraints::speed_limit`]). `None`: no limit.
+    pub max_speed: Option<f64>,
     /// Seed of the gusts.
     pub seed: u64,
 }
@@ -94,6 +97,7 @@ impl Default for Params {
             bar_iterations: 0,
             stretch_limit: None,
             tear_strain: None,
+            max_speed: None,
             seed: 0,
         }
     }

@@ -1,7 +1,8 @@
 //! [`System`]: a model, its state and the scratch space a step needs, and the step
 //! itself, read in one place ([`System::step`]): forces and integration
-//! ([`super::integrators`]), then constraints ([`super::constraints`]), then
-//! tearing ([`super::tearing`]), then the divergence check ([`super::divergence`]).
+//! ([`super::integrators`]), then constraints ([`super::constraints`]), then the
+//! speed limit and tearing ([`super::tearing`]), then the divergence check
+//! ([`super::divergence`]).
 //!
 //! The system ties together parts that live in their own files: the [`Model`],
 //! the [`State`] (with its [`super::VerletHistory`]), the [`Workspace`], the user's
@@ -367,6 +368,9 @@ impl System {
                 .clone_from(&self.state.positions);
             constraints::apply(&self.model, &mut self.state, &mut self.work);
         }
+        if let Some(max_speed) = self.model.params.max_speed {
+            self.limit_speed(max_speed);
+        }
         if let Some(tau) = self.model.params.tear_strain {
             self.tear(tau);
         }
@@ -499,6 +503,26 @@ impl System {
             ..
         } = &mut self.state;
         verlet.restart(&self.model, positions, velocities, *time, &mut self.work);
+    }
+
+    /// The speed limit ([`constraints::speed_limit`]): every particle faster than
+    /// `max_speed` is slowed to it, and under Verlet its history with it.
+    fn limit_speed(&mut self, max_speed: f64) {
+        let State {
+            positions,
+            velocities,
+            verlet,
+            ..
+        } = &mut self.state;
+        for (i, v) in velocities.iter_mut().enumerate() {
+            let factor = constraints::speed_limit(*v, max_speed);
+            if factor < 1.0 {
+                *v *= factor;
+                if let Some(prev) = verlet.positions.get_mut(i) {
+                    *prev = positions[i] - (positions[i] - *prev) * factor;
+                }
+            }
+        }
     }
 
     /// After the user moves, pins or releases particle `i`, its Verlet history must
