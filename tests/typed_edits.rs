@@ -30,6 +30,7 @@ fn live_edits() -> Vec<Edit> {
         Edit::RestLength(0.04),
         Edit::ParticleMass(0.003),
         Edit::Gravity(DVec3::new(0.5, -3.0, 0.0)),
+        Edit::Force(DVec3::new(0.001, 0.0, -0.002)),
         Edit::Wind(DVec3::new(1.0, 2.0, -3.0)),
         Edit::Gust(2.5),
         Edit::AirDamping(0.01),
@@ -75,6 +76,7 @@ fn assert_applied(s: &Session, edit: Edit) {
         }
         Edit::ParticleMass(m) => assert!(sys.masses().iter().all(|&x| x == m)),
         Edit::Gravity(g) => assert_eq!(p.gravity, g),
+        Edit::Force(f) => assert_eq!(p.force, f),
         Edit::Wind(w) => assert_eq!(p.wind, w),
         Edit::Gust(g) => assert_eq!(p.gust, g),
         Edit::AirDamping(c) => assert_eq!(p.air_damping, c),
@@ -281,7 +283,7 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::StretchLimit(x)
         | Edit::Friction(x)
         | Edit::Thickness(x) => x.to_string(),
-        Edit::Gravity(v) | Edit::Wind(v) => vec3(v),
+        Edit::Gravity(v) | Edit::Wind(v) | Edit::Force(v) => vec3(v),
         Edit::Substeps(n)
         | Edit::BarIterations(n)
         | Edit::Width(n)

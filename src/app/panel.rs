@@ -172,6 +172,11 @@ fn pin_presets(ui: &mut Ui, layout: Layout, pinned: usize, actions: &mut Vec<Act
                 PinPreset::LeftEdge,
                 "Pin the whole left column (a flag on its pole)",
             ),
+            (
+                "left every 4th",
+                PinPreset::LeftEdgeEveryFourth,
+                "Pin every fourth particle of the left column (seed 001's cloth)",
+            ),
         ],
         Layout::Lattice => &[(
             "ends",
@@ -558,6 +563,22 @@ fn contents(
             let mut g = p.gravity;
             if slider(ui, &mut g.y, -30.0..=10.0, "gravity y (m/s²)", false, "Gravitational acceleration along y in m/s² (negative is down; Earth: -9.81)") {
                 edit(Edit::Gravity(g));
+            }
+            // Seed 001's force vector: a force on every particle, in every scene.
+            // The sliders reach a few times the particle's weight (or the force set).
+            let mut f = p.force;
+            let reach = (20.0 * m * 9.81).max(2.0 * p.force.abs().max_element()).min(1e6);
+            ui.label("Force on every particle (N)").on_hover_text(
+                "Seed 001's force vector: a force in N on every particle besides gravity, \
+                 e.g. a push or a steady wind on the cloth of bars",
+            );
+            let mut changed = false;
+            for (value, axis) in [(&mut f.x, "x"), (&mut f.y, "y"), (&mut f.z, "z")] {
+                let tip = format!("Force along {axis} in N on every particle");
+                changed |= slider(ui, value, -reach..=reach, &format!("force {axis} (N)"), false, &tip);
+            }
+            if changed {
+                edit(Edit::Force(f));
             }
             if has_surface {
                 // Wind acts through the aerodynamic drag only: without it (seed

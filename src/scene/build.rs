@@ -44,6 +44,8 @@ pub struct Resolved {
     pub shear_scale: f64,
     /// Bend stiffness multiple.
     pub bend_scale: f64,
+    /// Whether a grid is made of rigid bars (seed 001) rather than springs.
+    pub bars: bool,
     /// Pinned particles.
     pub pins: Vec<usize>,
     /// Steps per displayed frame.
@@ -176,6 +178,11 @@ pub const MAX_SPEED: NumberRange<'static> = number("max_speed", 0.0, true, 1e6);
 pub const FRICTION: NumberRange<'static> = number("friction", 0.0, false, 10.0);
 /// `thickness` in m: contact thickness of the cloth on the colliders.
 pub const THICKNESS: NumberRange<'static> = number("thickness", 0.0, false, 10.0);
+/// `force` in N.
+pub const FORCE: VectorRange = VectorRange {
+    field: "force",
+    max_norm: 1e6,
+};
 /// `gravity` in m/s².
 pub const GRAVITY: VectorRange = VectorRange {
     field: "gravity",
@@ -199,15 +206,16 @@ pub const BAR_ITERATIONS: CountRange = CountRange {
     hi: 10_000,
 };
 
-/// `bar_iterations = n` on `layout`, checked: only a rope has bars (on any other
+/// `bar_iterations = n` on `layout`, checked: only a rope and a grid of bars
+/// (`bars = true`) have bars (on any other
 /// layout the key would do nothing, so it is refused), and `n` in its range.
-pub fn bar_iterations(origin: &str, layout: Layout, n: u32) -> Result<u32, SceneError> {
-    if layout != Layout::Rope {
+pub fn bar_iterations(origin: &str, layout: Layout, bars: bool, n: u32) -> Result<u32, SceneError> {
+    if layout != Layout::Rope && !(layout == Layout::Grid && bars) {
         return Err(invalid(
             origin,
             "bar_iterations",
             format!(
-                "does not apply to a {} layout: only a rope has bars to relax",
+                "does not apply to a {} layout without bars: only a rope and a grid with `bars = true` have bars to relax",
                 layout.name()
             ),
         ));
@@ -401,6 +409,19 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         None => 0.01,
     };
     let (stiffness, damping) = spring_constants(spec, o, particle_mass)?;
+    let bars = match spec.bars {
+        Some(true) if layout != Layout::Grid => {
+            return Err(invalid(
+                o,
+                "bars",
+                format!(
+                    "does not apply to a {} layout: only a grid can be made of bars (a rope always is)",
+                    layout.name()
+                ),
+            ));
+        }
+        bars => bars.unwrap_or(false),
+    };
     let shear_scale = ranged(
         o,
         "shear_scale",
@@ -480,6 +501,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
     };
     let params = Params {
         gravity: GRAVITY.check(o, spec.gravity.map_or(DVec3::new(0.0, -9.81, 0.0), |v| v.0))?,
+        force: FORCE.check(o, spec.force.map_or(DVec3::ZERO, |v| v.0))?,
         wind: WIND.check(o, spec.wind.map_or(DVec3::ZERO, |v| v.0))?,
         gust: GUST.check(o, spec.gust.unwrap_or(0.0))?,
         air_density: ranged(
@@ -507,7 +529,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         integrator,
         dt: DT.check(o, spec.dt.unwrap_or(1.0 / 960.0))?,
         bar_iterations: match spec.bar_iterations {
-            Some(n) => bar_iterations(o, layout, n)?,
+            Some(n) => bar_iterations(o, layout, bars, n)?,
             None => 0,
         },
         stretch_limit,
@@ -542,6 +564,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         damping,
         shear_scale,
         bend_scale,
+        bars,
         pins,
         substeps,
         origin: anchor(spec, o, [width, height], rest_length)?,
@@ -638,6 +661,7 @@ fn preset_pins(preset: PinPreset, layout: Layout, w: usize, h: usize, n: usize) 
             PinPreset::TopCorners => vec![0, w - 1],
             PinPreset::TopEdge => (0..w).collect(),
             PinPreset::LeftEdge => (0..h).map(|r| r * w).collect(),
+            PinPreset::LeftEdgeEveryFourth => (0..h).step_by(4).map(|r| r * w).collect(),
             _ => vec![],
         },
         // Off a grid, the grid presets mean the ends of the line or block.
@@ -685,6 +709,7 @@ impl Resolved {
                 self.rest_length = l;
             }
             Edit::Gravity(g) => p.gravity = g,
+            Edit::Force(f) => p.force = f,
             Edit::Wind(w) => p.wind = w,
             Edit::Gust(g) => p.gust = g,
             Edit::AirDamping(c) => p.air_damping = c,
@@ -825,33 +850,40 @@ impl Resolved {
                 }
                 let p = |r: usize, c: usize| r * w + c;
                 let diagonal = l * std::f64::consts::SQRT_2;
+                // Springs, or on a grid of bars (seed 001) a bar for each structural
+                // and shear pair and nothing for bending.
+                let mut join = |a: usize, b: usize, rest: f64, kind: SpringKind| {
+                    if !self.bars {
+                        springs.push(spring(a, b, rest, kind));
+                    } else if kind != SpringKind::Bend {
+                        bars.push(Bar {
+                            a: a as u32,
+                            b: b as u32,
+                            length: rest,
+                        });
+                    }
+                };
+                let (shear, bend) = (
+                    self.bars || self.shear_scale > 0.0,
+                    !self.bars && self.bend_scale > 0.0,
+                );
                 for r in 0..h {
                     for c in 0..w {
                         if c + 1 < w {
-                            springs.push(spring(p(r, c), p(r, c + 1), l, SpringKind::Structural));
+                            join(p(r, c), p(r, c + 1), l, SpringKind::Structural);
                         }
                         if r + 1 < h {
-                            springs.push(spring(p(r, c), p(r + 1, c), l, SpringKind::Structural));
+                            join(p(r, c), p(r + 1, c), l, SpringKind::Structural);
                         }
-                        if self.shear_scale > 0.0 && r + 1 < h && c + 1 < w {
-                            springs.push(spring(
-                                p(r, c),
-                                p(r + 1, c + 1),
-                                diagonal,
-                                SpringKind::Shear,
-                            ));
-                            springs.push(spring(
-                                p(r, c + 1),
-                                p(r + 1, c),
-                                diagonal,
-                                SpringKind::Shear,
-                            ));
+                        if shear && r + 1 < h && c + 1 < w {
+                            join(p(r, c), p(r + 1, c + 1), diagonal, SpringKind::Shear);
+                            join(p(r, c + 1), p(r + 1, c), diagonal, SpringKind::Shear);
                         }
-                        if self.bend_scale > 0.0 && c + 2 < w {
-                            springs.push(spring(p(r, c), p(r, c + 2), 2.0 * l, SpringKind::Bend));
+                        if bend && c + 2 < w {
+                            join(p(r, c), p(r, c + 2), 2.0 * l, SpringKind::Bend);
                         }
-                        if self.bend_scale > 0.0 && r + 2 < h {
-                            springs.push(spring(p(r, c), p(r + 2, c), 2.0 * l, SpringKind::Bend));
+                        if bend && r + 2 < h {
+                            join(p(r, c), p(r + 2, c), 2.0 * l, SpringKind::Bend);
                         }
                         if r + 1 < h && c + 1 < w {
                             let (a, b, d, e) = (p(r, c), p(r, c + 1), p(r + 1, c), p(r + 1, c + 1));

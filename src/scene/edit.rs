@@ -26,6 +26,8 @@ pub enum Edit {
     ParticleMass(f64),
     /// Gravitational acceleration in m/s² (`gravity`).
     Gravity(DVec3),
+    /// Force in N on every particle besides gravity (`force`).
+    Force(DVec3),
     /// Mean wind velocity in m/s (`wind`).
     Wind(DVec3),
     /// Gust amplitude in m/s (`gust`).
@@ -69,6 +71,7 @@ impl Edit {
             Self::RestLength(_) => "rest_length",
             Self::ParticleMass(_) => "particle_mass",
             Self::Gravity(_) => "gravity",
+            Self::Force(_) => "force",
             Self::Wind(_) => "wind",
             Self::Gust(_) => "gust",
             Self::AirDamping(_) => "air_damping",

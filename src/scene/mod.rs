@@ -14,8 +14,9 @@ use serde::{Deserialize, Serialize};
 
 pub use build::GRID_MAX_SIDE;
 use build::{
-    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, FRICTION, GRAVITY, GUST, MAX_SPEED, PARTICLE_MASS,
-    REST_LENGTH, STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND, side_ranges,
+    AIR_DAMPING, BAR_ITERATIONS, DAMPING, DT, FORCE, FRICTION, GRAVITY, GUST, MAX_SPEED,
+    PARTICLE_MASS, REST_LENGTH, STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND,
+    side_ranges,
 };
 pub use edit::Edit;
 pub use values::{PinPreset, Pins, Vector};
@@ -123,6 +124,11 @@ pub struct SceneSpec {
     /// Bend springs' stiffness as a multiple of k (grid; default 1, 0 = none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bend_scale: Option<f64>,
+    /// A grid of rigid bars instead of springs (seed 001's cloth): each particle
+    /// is joined to its right and lower neighbours and both diagonals of its cell
+    /// by bars relaxed `bar_iterations` times per step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bars: Option<bool>,
     /// Wind velocity in m/s, `"x,y,z"`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub wind: Option<Vector>,
@@ -141,6 +147,10 @@ pub struct SceneSpec {
     /// Gravity in m/s², `"x,y,z"` or just the y component.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub gravity: Option<Vector>,
+    /// A force in N on every particle besides gravity (seed 001's force vector),
+    /// `"x,y,z"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force: Option<Vector>,
     /// Pinned particles: `corners`, `top-corners`, `top-edge`, `left-edge`, `first`,
     /// `none`, or a list of indices.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -399,6 +409,7 @@ const BUILTINS: &[BuiltinScene] = &[
     builtin!("chain"),
     builtin!("jelly"),
     builtin!("hanging"),
+    builtin!("bars"),
     builtin!("rope"),
     builtin!("bench"),
     builtin!("bench-wind"),
@@ -547,6 +558,7 @@ impl Scene {
                 spec.total_mass = None;
             }
             Edit::Gravity(g) => spec.gravity = Some(Vector(GRAVITY.check(o, g)?)),
+            Edit::Force(f) => spec.force = Some(Vector(FORCE.check(o, f)?)),
             Edit::Wind(w) => spec.wind = Some(Vector(WIND.check(o, w)?)),
             Edit::Gust(g) => spec.gust = Some(GUST.check(o, g)?),
             Edit::AirDamping(c) => spec.air_damping = Some(AIR_DAMPING.check(o, c)?),
@@ -554,7 +566,8 @@ impl Scene {
             Edit::Substeps(n) => spec.substeps = Some(SUBSTEPS.check(o, n)?),
             Edit::Integrator(i) => spec.integrator = Some(i.name().to_string()),
             Edit::BarIterations(n) => {
-                spec.bar_iterations = Some(build::bar_iterations(o, spec.layout, n)?)
+                let bars = spec.bars.unwrap_or(false);
+                spec.bar_iterations = Some(build::bar_iterations(o, spec.layout, bars, n)?)
             }
             Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
             Edit::TearStrain(t) => {

@@ -80,6 +80,8 @@ pub enum PinPreset {
     TopEdge,
     /// The whole left column.
     LeftEdge,
+    /// Every fourth particle of the left column, from the top (seed 001's cloth).
+    LeftEdgeEveryFourth,
     /// The first particle (chain, rope, spring).
     First,
     /// Nothing pinned.
@@ -88,11 +90,12 @@ pub enum PinPreset {
 
 impl PinPreset {
     /// Every preset with its name.
-    pub const ALL: [(&'static str, PinPreset); 6] = [
+    pub const ALL: [(&'static str, PinPreset); 7] = [
         ("corners", Self::Corners),
         ("top-corners", Self::TopCorners),
         ("top-edge", Self::TopEdge),
         ("left-edge", Self::LeftEdge),
+        ("left-edge-every-4th", Self::LeftEdgeEveryFourth),
         ("first", Self::First),
         ("none", Self::None),
     ];

@@ -67,7 +67,11 @@ impl EnergyBudget {
             .map(|(m, _)| m)
             .sum();
         let size = 2.0 * bounding_sphere(positions).1;
-        let falling = free_mass * p.gravity.length() * size;
+        // The applied force moves each free particle across the system too.
+        let free = (0..model.mass.len())
+            .filter(|&i| model.inv_mass[i] > 0.0)
+            .count();
+        let falling = (free_mass * p.gravity.length() + free as f64 * p.force.length()) * size;
         let wind = if model.terms.aero {
             let speed = model.wind.base.length() + model.wind.gust.abs();
             let area: f64 = (model.triangles.iter())

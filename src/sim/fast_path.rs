@@ -374,6 +374,7 @@ impl System {
         let (shape, springs) = (model.grid?, self.engines.grid_springs?);
         let super::Params {
             gravity,
+            force,
             wind,
             gust: _, // the wind's gusts are set step by step (`run_on_grid`)
             air_density,
@@ -398,6 +399,7 @@ impl System {
             aero,
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
+            applied,
         } = model.terms;
         if !GridCloth::supports(integrator)
             || (!model.bars.is_empty() && model.params.bar_iterations > 0)
@@ -419,7 +421,15 @@ impl System {
             structural,
             shear,
             bend,
-            gravity: if gravity_on { gravity } else { DVec3::ZERO }.to_array(),
+            // The applied force on every particle of the grid's one mass is an
+            // acceleration like gravity.
+            gravity: (if gravity_on { gravity } else { DVec3::ZERO }
+                + if applied {
+                    force / springs.mass
+                } else {
+                    DVec3::ZERO
+                })
+            .to_array(),
             wind: wind.to_array(),
             air_density,
             drag_coefficient,

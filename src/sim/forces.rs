@@ -6,7 +6,8 @@
 //! - aerodynamic drag per triangle (seed 000): `v_rel` = mean vertex velocity minus
 //!   wind, `F = -1/2 rho C_d A (v_rel·n) |v_rel| n`, a third to each vertex;
 //! - viscous air damping `-c v` (seed 002);
-//! - ground penalty contact `k_c d n - c_g (v·n) n` for a particle at depth `d > 0`.
+//! - ground penalty contact `k_c d n - c_g (v·n) n` for a particle at depth `d > 0`;
+//! - the applied force `F` on every particle (seed 001's force vector).
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -38,6 +39,8 @@ pub struct ForceTerms {
     pub air_damping: bool,
     /// Ground penalty contact (the scene has a ground).
     pub ground: bool,
+    /// The applied force on every particle (it is non-zero).
+    pub applied: bool,
 }
 
 impl ForceTerms {
@@ -50,6 +53,7 @@ impl ForceTerms {
             (self.aero, "aero-drag"),
             (self.air_damping, "air-damping"),
             (self.ground, "ground-contact"),
+            (self.applied, "applied-force"),
         ] {
             if on {
                 names.push(name);
@@ -106,6 +110,10 @@ impl Model {
         }
         if self.terms.ground {
             self.add_ground_forces(x, v, out);
+        }
+        if self.terms.applied {
+            let force = self.params.force;
+            out.iter_mut().for_each(|f| *f += force);
         }
     }
 

@@ -56,6 +56,8 @@ const B_END: u32 = 1 << 31;
 pub struct MeshParams {
     /// Gravitational acceleration in m/s² (zero when the term is off).
     pub gravity: DVec3,
+    /// The applied force on every particle in N (zero when the term is off).
+    pub force: DVec3,
     /// Viscous air damping `c` in N·s/m (0: off).
     pub air_damping: f64,
     /// Ground plane, if any.
@@ -83,6 +85,7 @@ impl MeshParams {
     pub fn of(model: &Model) -> Option<Self> {
         let super::Params {
             gravity,
+            force,
             wind: _,             // only the aerodynamic drag uses it (refused below)
             gust: _,             // likewise
             air_density: _,      // likewise
@@ -107,6 +110,7 @@ impl MeshParams {
             aero,
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
+            applied,
         } = model.terms;
         // Self-collision, tearing and the speed limit run on the f64 engine for
         // topologies other than grids.
@@ -116,6 +120,7 @@ impl MeshParams {
         }
         Some(Self {
             gravity: if gravity_on { gravity } else { DVec3::ZERO },
+            force: if applied { force } else { DVec3::ZERO },
             air_damping: if air_damping_on { air_damping } else { 0.0 },
             ground,
             sphere,
@@ -362,6 +367,7 @@ fn advance(ctx: &Ctx, mut out: Out) {
         if let Some(ground) = &p.ground {
             f.y += ground_force(ground, xi, vi);
         }
+        f += p.force;
         let w = ctx.inv_mass[i];
         let a = if w > 0.0 {
             f * w + p.gravity

@@ -33,6 +33,9 @@ pub struct Sphere {
 pub struct Params {
     /// Gravitational acceleration in m/s² (default: (0, -9.81, 0)).
     pub gravity: DVec3,
+    /// A force in N on every free particle besides gravity (seed 001's force
+    /// vector, whose direction and strength the user sets).
+    pub force: DVec3,
     /// Mean wind velocity in m/s.
     pub wind: DVec3,
     /// Gust amplitude in m/s (0: steady).
@@ -82,6 +85,7 @@ impl Default for Params {
     fn default() -> Self {
         Self {
             gravity: DVec3::new(0.0, -9.81, 0.0),
+            force: DVec3::ZERO,
             wind: DVec3::ZERO,
             gust: 0.0,
             air_density: 1.2,
@@ -164,6 +168,7 @@ impl Model {
             aero: !self.triangles.is_empty() && p.air_density > 0.0 && p.drag_coefficient > 0.0,
             air_damping: p.air_damping > 0.0,
             ground: p.ground.is_some(),
+            applied: p.force != DVec3::ZERO,
         };
     }
 
@@ -178,7 +183,8 @@ impl Model {
         }
     }
 
-    /// Energy of positions `x` and velocities `v`; gravity relative to y = 0. With
+    /// Energy of positions `x` and velocities `v`; gravity relative to y = 0, with
+    /// the applied force's potential `-F·x` counted in it. With
     /// XPBD the springs hold the energy of the stiffness it simulates at its step.
     pub fn energy(&self, x: &[DVec3], v: &[DVec3]) -> Energy {
         let mut e = Energy::default();
@@ -188,7 +194,7 @@ impl Model {
             }
             let m = self.mass[i];
             e.kinetic += 0.5 * m * v[i].length_squared();
-            e.gravity -= m * self.params.gravity.dot(x[i]);
+            e.gravity -= m * self.params.gravity.dot(x[i]) + self.params.force.dot(x[i]);
             if let Some(g) = self.params.ground {
                 let depth = g.height - x[i].y;
                 if depth > 0.0 {
