@@ -665,6 +665,8 @@ struct Kernel<E: Real> {
     /// Springs torn by the steps since [`GridCloth::take_torn`]: (particle in cloth
     /// order, stencil direction).
     torn_log: Vec<(usize, usize)>,
+    /// The tear scan's verdict per stencil direction and row (scratch).
+    tear_rows: Vec<bool>,
 }
 
 /// Which kind of spring each stencil direction holds, as an index into
@@ -876,6 +878,7 @@ impl<E: Real> Kernel<E> {
             }),
             torn: None,
             torn_log: Vec::new(),
+            tear_rows: Vec::new(),
             grid,
             spec,
         }
@@ -1091,7 +1094,7 @@ impl<E: Real> Kernel<E> {
             self.limit_speed(max_speed);
         }
         if let Some(tau) = self.spec.tear_strain {
-            self.tear_pass(tau);
+            self.tear_pass(tau, parallel);
         }
     }
 
@@ -1133,49 +1136,78 @@ impl<E: Real> Kernel<E> {
     }
 
     /// Tearing, the step's last phase ([`super::tearing`]): breaks every spring
-    /// past the tear strain `tau`. A vectorisable scan of each row in the kernel's
-    /// precision finds the rows that may hold one, with a margin; there
-    /// [`super::tearing::overstretched`] decides in f64, as in the f64 engine.
-    fn tear_pass(&mut self, tau: f64) {
+    /// past the tear strain `tau`. A scan of each row of each stencil direction in
+    /// the kernel's precision (vectorised, its rows split over the pool's threads
+    /// when `parallel`) finds the rows that may hold one, with a margin; there
+    /// [`super::tearing::overstretched`] decides in f64, as in the f64 engine, in
+    /// a fixed order, so the breaks do not depend on the threads.
+    fn tear_pass(&mut self, tau: f64, parallel: bool) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let mut broke = false;
-        for (d, ((dr, dc), rest, present, _)) in self.stencil().into_iter().enumerate() {
+        // Per direction: first column, columns, rows, rest length, scan bound.
+        let lines = self.stencil().map(|((dr, dc), rest, present, _)| {
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
-            if !present || len == 0 || dr >= h {
-                continue;
-            }
             let longest = (1.0 + tau) * rest;
             // f32 lengths are good to about 1e-6 of themselves: the scan's margin.
             let scan2 = E::of(longest * longest * (1.0 - 1e-4));
-            for r in 0..h - dr {
-                let (a, b) = (r * st + c0, ((r + dr) * st + c0).wrapping_add_signed(dc));
-                let alive = self
-                    .torn
-                    .as_ref()
-                    .map(|t| &t.springs[d].as_slice()[a..a + len]);
-                if !row_may_tear(&self.cur, a, b, len, alive, scan2) {
-                    continue;
+            let rows = if present && len > 0 {
+                h.saturating_sub(dr)
+            } else {
+                0
+            };
+            (c0, len, rows, rest, scan2)
+        });
+        let mut flags = std::mem::take(&mut self.tear_rows);
+        flags.clear();
+        flags.resize(6 * h, false);
+        {
+            let (cur, torn, simd) = (&self.cur, self.torn.as_ref(), self.simd);
+            // Row by row, all six directions of a row together: the rows they
+            // read stay in cache.
+            let scan = |k: usize, flag: &mut bool| {
+                let (d, r) = (k % 6, k / 6);
+                let (c0, len, rows, _, scan2) = lines[d];
+                if r >= rows {
+                    return;
                 }
-                for c in c0..c0 + len {
-                    let p = r * w + c;
-                    let q = (p + dr * w).wrapping_add_signed(dc);
-                    let there = self.torn.as_ref().is_none_or(|t| t.has(p, d));
-                    let (i, j) = (self.grid.index(p), self.grid.index(q));
-                    let (xi, xj) = (self.position_at(i), self.position_at(j));
-                    if there && super::tearing::overstretched(xi, xj, rest, tau) {
-                        let present = self.spec.present;
-                        let grid = self.grid;
-                        let torn = self.torn.get_or_insert_with(|| {
-                            Torn::new(Torn::<E>::whole(&grid, present), &grid)
-                        });
-                        torn.break_spring(p, d, w);
-                        self.torn_log.push((p, d));
-                        broke = true;
-                    }
+                let (dr, dc) = STENCIL_DIRECTIONS[d];
+                let (a, b) = (r * st + c0, ((r + dr) * st + c0).wrapping_add_signed(dc));
+                let alive = torn.map(|t| &t.springs[d].as_slice()[a..a + len]);
+                *flag = row_may_tear_dispatch(simd, cur, (a, b, len), alive, scan2);
+            };
+            if parallel && w * h >= PARALLEL_MIN_PARTICLES {
+                use rayon::prelude::*;
+                flags
+                    .par_iter_mut()
+                    .enumerate()
+                    .for_each(|(k, f)| scan(k, f));
+            } else {
+                flags.iter_mut().enumerate().for_each(|(k, f)| scan(k, f));
+            }
+        }
+        let mut broke = false;
+        for k in (0..6 * h).filter(|&k| flags[k]) {
+            let (d, r) = (k % 6, k / 6);
+            let (c0, len, _, rest, _) = lines[d];
+            let (dr, dc) = STENCIL_DIRECTIONS[d];
+            for c in c0..c0 + len {
+                let p = r * w + c;
+                let q = (p + dr * w).wrapping_add_signed(dc);
+                let there = self.torn.as_ref().is_none_or(|t| t.has(p, d));
+                let (i, j) = (self.grid.index(p), self.grid.index(q));
+                let (xi, xj) = (self.position_at(i), self.position_at(j));
+                if there && super::tearing::overstretched(xi, xj, rest, tau) {
+                    let (present, grid) = (self.spec.present, self.grid);
+                    let torn = self
+                        .torn
+                        .get_or_insert_with(|| Torn::new(Torn::<E>::whole(&grid, present), &grid));
+                    torn.break_spring(p, d, w);
+                    self.torn_log.push((p, d));
+                    broke = true;
                 }
             }
         }
+        self.tear_rows = flags;
         if broke && let Some(torn) = &mut self.torn {
             torn.refresh(&self.grid);
         }
@@ -2071,7 +2103,8 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, Ctx, Out, Portable, Real, Simd, StretchLine, row_variant, stretch_limit_line,
+        Band, Ctx, Out, Portable, Real, Simd, State, StretchLine, row_may_tear, row_variant,
+        stretch_limit_line,
     };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -2097,6 +2130,20 @@ mod x86 {
         own: bool,
     ) {
         row_variant(Avx512(()), ctx, band, row, out, lo, own);
+    }
+
+    /// The tear scan's `row_may_tear`, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn row_may_tear_avx2<E: Real>(
+        state: &State<E>,
+        ends: (usize, usize, usize),
+        alive: Option<&[E]>,
+        scan2: E,
+    ) -> bool {
+        row_may_tear(state, ends, alive, scan2)
     }
 
     /// The stretch limit's `stretch_limit_line`, compiled for AVX2 and FMA.
@@ -2473,11 +2520,10 @@ fn stretch_limit_line<E: Real>(
 /// `state`) that `alive` keeps (all without a mask) is longer than `sqrt(scan2)`,
 /// in the state's precision. Written as a plain loop over slices for the compiler
 /// to vectorise.
+#[inline(always)]
 fn row_may_tear<E: Real>(
     state: &State<E>,
-    a: usize,
-    b: usize,
-    len: usize,
+    (a, b, len): (usize, usize, usize),
     alive: Option<&[E]>,
     scan2: E,
 ) -> bool {
@@ -2489,18 +2535,52 @@ fn row_may_tear<E: Real>(
     let [(xa, xb), (ya, yb), (za, zb)] = state.x.each_ref().map(ends);
     // The low parts are zeros when the positions have none.
     let [(la, lb), (ma, mb), (na, nb)] = state.xl.each_ref().map(ends);
-    let mut over = false;
-    for j in 0..len {
-        let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
-        let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
-        let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
-        let mut l2 = dx * dx + dy * dy + dz * dz;
-        if let Some(alive) = alive {
-            l2 = l2 * alive[j];
-        }
-        over |= l2 > scan2;
+    // Every slice `len` long, in the compiler's sight, so the loops below carry no
+    // bounds checks and vectorise; the verdict is an integer OR. (A macro, not a
+    // closure: a closure is not inlined into the AVX2 entry point.)
+    let [xa, xb, ya, yb, za, zb] = [xa, xb, ya, yb, za, zb].map(|s| &s[..len]);
+    let [la, lb, ma, mb, na, nb] = [la, lb, ma, mb, na, nb].map(|s| &s[..len]);
+    macro_rules! l2 {
+        ($j:expr) => {{
+            let j = $j;
+            let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
+            let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
+            let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
+            dx * dx + dy * dy + dz * dz
+        }};
     }
-    over
+    let mut over = 0u8;
+    match alive {
+        Some(alive) => {
+            for (j, &m) in alive[..len].iter().enumerate() {
+                over |= u8::from(l2!(j) * m > scan2);
+            }
+        }
+        None => {
+            for j in 0..len {
+                over |= u8::from(l2!(j) > scan2);
+            }
+        }
+    }
+    over != 0
+}
+
+/// [`row_may_tear`] with the best code this CPU has.
+fn row_may_tear_dispatch<E: Real>(
+    simd: SimdLevel,
+    state: &State<E>,
+    ends: (usize, usize, usize),
+    alive: Option<&[E]>,
+    scan2: E,
+) -> bool {
+    match simd {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
+        SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
+            x86::row_may_tear_avx2(state, ends, alive, scan2)
+        },
+        _ => row_may_tear(state, ends, alive, scan2),
+    }
 }
 
 /// One colour class of XPBD's springs on a grid: the stencil direction `(dr, dc)`
