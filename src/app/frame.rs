@@ -4,6 +4,7 @@
 
 use cloth_sandbox::session::Session;
 use cloth_sandbox::sim::{SpringKind, System};
+use cloth_sandbox::view::OrbitCamera;
 use glam::{Vec2, Vec3};
 
 use crate::render::geometry::{kind_color, strain_color};
@@ -100,6 +101,21 @@ impl FrameData {
                 .map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32)),
         }
     }
+}
+
+/// The camera the off-screen commands (`cloth screenshot`, `cloth record`) start
+/// from: the scene framed, turned to `yaw` and `pitch` (degrees) where given.
+pub fn framed_camera(session: &Session, yaw: Option<f32>, pitch: Option<f32>) -> OrbitCamera {
+    let mut camera = OrbitCamera::default();
+    let (lo, hi) = scene_bounds(session);
+    camera.frame(lo, hi);
+    if let Some(y) = yaw {
+        camera.yaw = y.to_radians();
+    }
+    if let Some(p) = pitch {
+        camera.pitch = p.to_radians().clamp(-1.5, 1.5);
+    }
+    camera
 }
 
 /// The box to frame when a scene loads: its particles and its sphere, if any.

@@ -548,15 +548,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
         particles: surfaceless,
         ..ViewOptions::default()
     };
-    let mut camera = OrbitCamera::default();
-    let (lo, hi) = frame::scene_bounds(&session);
-    camera.frame(lo, hi);
-    if let Some(y) = args.yaw {
-        camera.yaw = y.to_radians();
-    }
-    if let Some(p) = args.pitch {
-        camera.pitch = p.to_radians().clamp(-1.5, 1.5);
-    }
+    let camera = frame::framed_camera(&session, args.yaw, args.pitch);
     let view = View {
         camera,
         options,

@@ -10,7 +10,6 @@ use crate::render::ViewOptions;
 use crate::render::offscreen::{Offscreen, write_png};
 use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::session::Session;
-use cloth_sandbox::view::OrbitCamera;
 
 /// Arguments of `cloth screenshot`.
 #[derive(Debug, Clone, clap::Args)]
@@ -119,15 +118,7 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
         textured: !args.no_texture,
         ..ViewOptions::default()
     };
-    let mut camera = OrbitCamera::default();
-    let (lo, hi) = frame::scene_bounds(&session);
-    camera.frame(lo, hi);
-    if let Some(y) = args.yaw {
-        camera.yaw = y.to_radians();
-    }
-    if let Some(p) = args.pitch {
-        camera.pitch = p.to_radians().clamp(-1.5, 1.5);
-    }
+    let camera = frame::framed_camera(&session, args.yaw, args.pitch);
     let mut data = FrameData::default();
     data.build(session.system(), &options, args.strain);
     let frame = data.scene_frame(session.system(), None);
