@@ -43,8 +43,9 @@
 //! The drape's particle-steps per second without self-collision over with it,
 //! best of 3 runs of `cloth run --scene drape --set width=N --set height=N --steps
 //! 960 --warmup 16 --json` with and without `--set self_collision=false` (grid-mixed,
-//! AVX-512, 2 cores shared with another build, 2026-11-23; ±20%): 3.0x at 64, 2.6x
-//! at 128, 2.5x at 256, against 3.9x, 4.6x and 5.4x for the one-thread pass before
+//! AVX-512, 2 cores shared with another build at load 1.5, 2026-11-23; ±20%): 2.7x
+//! at 64, 2.3x at 128, 2.2x at 256, against 4.1x, 4.3x and 6.1x for the one-thread
+//! pass before
 //! (same run). Nearly all of it is the rebuild's search, 88 rebuilds at 128; the
 //! target, 2x at 128, is not reached.
 //!
