@@ -45,9 +45,8 @@
 //! 960 --warmup 16 --json` with and without `--set self_collision=false` (grid-mixed,
 //! AVX-512, 2 cores shared with another build at load 1.5, 2026-11-23; ±20%): 2.7x
 //! at 64, 2.3x at 128, 2.2x at 256, against 4.1x, 4.3x and 6.1x for the one-thread
-//! pass before
-//! (same run). Nearly all of it is the rebuild's search, 88 rebuilds at 128; the
-//! target, 2x at 128, is not reached.
+//! pass before (same run). Nearly all of it is the rebuild's search, 88 rebuilds at
+//! 128; the target, 2x at 128, is not reached.
 //!
 //! # What it cannot catch
 //! It is particle against particle. A particle can pass through a patch of cloth
