@@ -80,4 +80,30 @@ fn no_allocation_in_1000_steps() {
             }
         }
     }
+    // Self-collision, threaded from 48 x 48 on: a thickness of 2.3 spacings keeps
+    // pairs in contact on every step and its list is rebuilt as the cloth swings
+    // in the wind; after the warm-up its buffers have their size.
+    for (n, threads) in [(32, 1), (64, 1), (64, 2), (128, 2)] {
+        let mut spec = GridSpec::peer_bench(n, true);
+        spec.self_collision = Some(2.3 * spec.spacing);
+        spec.friction = 0.5;
+        let mut cloth = GridCloth::new(spec);
+        cloth.set_threads(threads);
+        cloth.steps(dt, 200);
+        let mut counts = Vec::new();
+        for _ in 0..3 {
+            let before = ALLOCATIONS.load(Ordering::SeqCst);
+            cloth.steps(dt, 500);
+            counts.push(ALLOCATIONS.load(Ordering::SeqCst) - before);
+            if counts.last() == Some(&0) {
+                break;
+            }
+        }
+        println!(
+            "self-collision N={n} threads={threads}: {} contacts, windows counted {counts:?}",
+            cloth.self_collision_contacts()
+        );
+        assert!(cloth.self_collision_contacts() > 0);
+        assert_eq!(counts.into_iter().min(), Some(0), "N={n} threads={threads}");
+    }
 }

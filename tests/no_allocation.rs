@@ -100,6 +100,16 @@ fn stepping_allocates_nothing() {
         n <= 1,
         "the threaded mesh engine allocated {n} times in 1,000 steps"
     );
+    // Self-collision on the grid engine (the drape at its default size, and at
+    // 64 x 64, where the pass runs on threads), falling onto its sphere while
+    // its candidate list is rebuilt.
+    for size in [&[][..], &["width=64", "height=64"][..]] {
+        let n = allocations_on(true, "drape", size, 500);
+        assert_eq!(
+            n, 0,
+            "the drape {size:?} on the grid engine allocated {n} times"
+        );
+    }
     // Big enough for the threaded force path.
     let n = allocations_during("bench", &["width=128", "height=128"], 200);
     assert!(

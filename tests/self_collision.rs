@@ -109,3 +109,57 @@ fn the_engines_agree_with_self_collision() {
     assert!(contacts.0 > 100 && contacts.0 == contacts.1, "{contacts:?}");
     assert!(apart < 1e-5, "{apart}");
 }
+
+/// The pass on two threads gives the result of one, bit for bit, on both engines:
+/// the grid kernel on its own pool (`GridCloth::set_threads`), the f64 engine in
+/// `System::run`'s scope on the pool it is run in. Each run ends with pairs in
+/// contact, so the list, its rebuilds and the pushes all count.
+#[test]
+fn one_and_two_threads_give_bit_identical_results() {
+    use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, Precision};
+    use glam::DVec3;
+
+    // The grid kernel: the peers' 64 x 64 cloth hanging in a gusty wind, with a
+    // thickness of 2.3 spacings (in contact from the start, as in the test above).
+    let grid = |threads: usize| {
+        let mut spec = GridSpec::peer_bench(64, true);
+        spec.precision = Precision::Mixed;
+        spec.self_collision = Some(2.3 * spec.spacing);
+        spec.friction = 0.5;
+        let mut cloth = GridCloth::new(spec);
+        cloth.set_threads(threads);
+        cloth.steps(1.0 / 960.0, 300);
+        let mut x = vec![DVec3::ZERO; cloth.len()];
+        cloth.positions_into(&mut x);
+        let mut v = x.clone();
+        cloth.velocities_into(&mut v);
+        (x, v, cloth.self_collision_contacts(), cloth.is_parallel())
+    };
+    let (one, two) = (grid(1), grid(2));
+    println!("grid kernel: {} contacts", one.2);
+    assert!(two.3 && !one.3);
+    assert!(one.2 > 100, "{}", one.2);
+    assert!(one.0 == two.0 && one.1 == two.1 && one.2 == two.2);
+
+    // The f64 engine: the fold scene at 64 x 64 (enough springs for its threads)
+    // landing in folds on the ground.
+    let exact = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let system = settled("fold", &["width=64", "height=64"], false, 1500);
+            let contacts = system.self_collision_contacts();
+            (
+                system.positions().to_vec(),
+                system.velocities().to_vec(),
+                contacts,
+            )
+        })
+    };
+    let (one, two) = (exact(1), exact(2));
+    println!("f64 engine: {} contacts", one.2);
+    assert!(one.2 > 10, "{}", one.2);
+    assert!(one.0 == two.0 && one.1 == two.1 && one.2 == two.2);
+}

@@ -66,7 +66,11 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     if p.self_collision {
         let joined = |i, j| model.adjacency.joins(&model.springs, i, j);
         let (start, w) = (&work.step_start, &model.inv_mass);
-        (work.self_collision).apply(x, start, w, p.thickness, p.friction, joined);
+        let particle = |i: usize| (start[i], w[i]);
+        // On the threads of the spring forces (`System::run`'s scope), with the
+        // same result as on one.
+        let parallel = super::forces::uses_threads(model);
+        (work.self_collision).apply(x, particle, p.thickness, p.friction, joined, parallel);
     }
     let h = p.dt;
     let contact = Contact::of(p);

@@ -1077,7 +1077,7 @@ impl<E: Real> Kernel<E> {
             self.stretch_limit_pass(tau, dt, parallel);
         }
         if let Some(thickness) = self.spec.self_collision {
-            self.self_collision_pass(thickness, dt);
+            self.self_collision_pass(thickness, dt, parallel);
         }
         let contact = constraints::Contact {
             sphere: self.spec.sphere,
@@ -1384,11 +1384,41 @@ impl<E: Real> Kernel<E> {
         self.f64_copies_scratch = s;
     }
 
-    /// Self-collision ([`super::self_collision`]) at thickness `h_c`, on f64 copies
-    /// of the positions; springs are the stencil's kinds that exist.
-    fn self_collision_pass(&mut self, h_c: f64, dt: f64) {
-        let mut s = self.f64_copies();
-        let width = self.grid.w;
+    /// Self-collision ([`super::self_collision`]) at thickness `h_c`, on an f64
+    /// copy of the positions (made on the pool's threads with `parallel`); springs
+    /// are the stencil's kinds that exist. The pass reads the positions at the
+    /// start of the step and the inverse masses from the kernel's arrays, for the
+    /// pairs in contact only, and only the particles it moved are written back,
+    /// each with its move over `dt` added to its velocity.
+    fn self_collision_pass(&mut self, h_c: f64, dt: f64, parallel: bool) {
+        let (width, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let n = width * h;
+        let parallel = parallel && n >= super::self_collision::PARALLEL_MIN_PARTICLES;
+        let mut x = std::mem::take(&mut self.f64_copies_scratch.moved);
+        x.resize(n, DVec3::ZERO);
+        let (hi, lo) = (&self.cur.x, &self.cur.xl);
+        // Blocks of 8 rows, each row's arrays read as slices.
+        let copy = |(k, out): (usize, &mut [DVec3])| {
+            for (r, out) in out.chunks_exact_mut(width).enumerate() {
+                let at = (8 * k + r) * st..(8 * k + r) * st + width;
+                let [x, y, z] = hi.each_ref().map(|a| &a.as_slice()[at.clone()]);
+                let [xl, yl, zl] = lo.each_ref().map(|a| &a.as_slice()[at.clone()]);
+                for (c, p) in out.iter_mut().enumerate() {
+                    *p = DVec3::new(
+                        x[c].f64() + xl[c].f64(),
+                        y[c].f64() + yl[c].f64(),
+                        z[c].f64() + zl[c].f64(),
+                    );
+                }
+            }
+        };
+        if parallel {
+            use rayon::prelude::*;
+            x.par_chunks_mut(8 * width).enumerate().for_each(copy);
+        } else {
+            x.chunks_mut(8 * width).enumerate().for_each(copy);
+        }
+
         // The stencil's directions whose kind of spring exists, and the springs
         // left when some tore.
         let springs = self
@@ -1406,9 +1436,26 @@ impl<E: Real> Kernel<E> {
                 .position(|&s| s == ((dr, dc), true))
                 .is_some_and(|d| torn.is_none_or(|t| t.has(a, d)))
         };
+        // Each particle's position at the start of the step (the other state
+        // buffer, after the swap) and inverse mass.
+        let (start, start_lo, inv_mass) = (&self.next.x, &self.next.xl, &self.inv_mass);
+        let particle = |i: usize| {
+            let g = (i / width) * st + i % width;
+            let start = DVec3::from_array(std::array::from_fn(|a| {
+                start[a].as_slice()[g].f64() + start_lo[a].as_slice()[g].f64()
+            }));
+            (start, inv_mass.as_slice()[g].f64())
+        };
         let (friction, pass) = (self.spec.friction, &mut self.self_collision);
-        pass.apply(&mut s.moved, &s.start, &s.inv_mass, h_c, friction, joined);
-        self.write_back(s, dt);
+        pass.apply(&mut x, particle, h_c, friction, joined, parallel);
+        for k in 0..self.self_collision.moved().len() {
+            let i = self.self_collision.moved()[k] as usize;
+            let g = (i / width) * st + i % width;
+            if x[i] != self.position_at(g) {
+                self.move_particle(g, x[i], dt);
+            }
+        }
+        self.f64_copies_scratch.moved = x;
     }
 
     /// Pairs pushed apart by the last self-collision pass.
