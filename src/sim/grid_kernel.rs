@@ -1350,16 +1350,7 @@ impl<E: Real> Kernel<E> {
             st: usize,
         ) {
             for (r, out) in out.chunks_exact_mut(w).enumerate() {
-                let at = r * st..r * st + w;
-                let [x, y, z] = hi.each_ref().map(|a| &a.as_slice()[at.clone()]);
-                let [xl, yl, zl] = lo.each_ref().map(|a| &a.as_slice()[at.clone()]);
-                for (c, p) in out.iter_mut().enumerate() {
-                    *p = DVec3::new(
-                        x[c].f64() + xl[c].f64(),
-                        y[c].f64() + yl[c].f64(),
-                        z[c].f64() + zl[c].f64(),
-                    );
-                }
+                row_to_f64(out, hi, lo, r * st);
             }
         }
         rows(&mut s.moved, &self.cur.x, &self.cur.xl, w, st);
@@ -1400,16 +1391,7 @@ impl<E: Real> Kernel<E> {
         // Blocks of 8 rows, each row's arrays read as slices.
         let copy = |(k, out): (usize, &mut [DVec3])| {
             for (r, out) in out.chunks_exact_mut(width).enumerate() {
-                let at = (8 * k + r) * st..(8 * k + r) * st + width;
-                let [x, y, z] = hi.each_ref().map(|a| &a.as_slice()[at.clone()]);
-                let [xl, yl, zl] = lo.each_ref().map(|a| &a.as_slice()[at.clone()]);
-                for (c, p) in out.iter_mut().enumerate() {
-                    *p = DVec3::new(
-                        x[c].f64() + xl[c].f64(),
-                        y[c].f64() + yl[c].f64(),
-                        z[c].f64() + zl[c].f64(),
-                    );
-                }
+                row_to_f64(out, hi, lo, (8 * k + r) * st);
             }
         };
         if parallel {
@@ -2610,6 +2592,21 @@ fn row_may_tear<E: Real>(
         }
     }
     over != 0
+}
+
+/// One row of positions as f64 (high plus low part), from array index `start`
+/// on, into `out` (as many particles as it holds).
+fn row_to_f64<E: Real>(out: &mut [DVec3], hi: &[Buf<E>; 3], lo: &[Buf<E>; 3], start: usize) {
+    let at = start..start + out.len();
+    let [x, y, z] = hi.each_ref().map(|a| &a.as_slice()[at.clone()]);
+    let [xl, yl, zl] = lo.each_ref().map(|a| &a.as_slice()[at.clone()]);
+    for (c, p) in out.iter_mut().enumerate() {
+        *p = DVec3::new(
+            x[c].f64() + xl[c].f64(),
+            y[c].f64() + yl[c].f64(),
+            z[c].f64() + zl[c].f64(),
+        );
+    }
 }
 
 /// [`row_may_tear`] with the best code this CPU has.
