@@ -37,8 +37,9 @@ drag_to=$(wc -l <"$WORK/log")
 [ -n "${SHOT:-}" ] && import -window root "$SHOT"
 xdotool mouseup 1
 summary() {
-  sed -n "$(($1 + 1)),$2p" "$WORK/log" | grep -o 'frame [0-9.]* ms, simulation [0-9.]* ms' |
-    awk -v what="$3" '{f += $2; s += $5; n++} END {if (n) printf "%s: frame %.1f ms, simulation %.2f ms per frame (%d samples)\n", what, f/n, s/n, n; else print what ": no samples"}'
+  # "frame F ms, R frames/s, real-time factor X of Y asked, physics busy B%, S steps/s"
+  sed -n "$(($1 + 1)),$2p" "$WORK/log" | grep -o 'frame [0-9.]* ms, .*steps/s' | tr -d ',%' |
+    awk -v what="$3" '{f += $2; x += $8; b += $14; n++} END {if (n) printf "%s: frame %.1f ms, real-time factor %.3f, physics busy %.0f%% (%d samples)\n", what, f/n, x/n, b/n, n; else print what ": no samples"}'
 }
 summary "$idle_from" "$idle_to" "idle    "
 summary "$drag_from" "$drag_to" "dragging"

@@ -118,6 +118,8 @@ pub struct Session {
     stored_wind: Option<(DVec3, f64)>,
     /// The scene as loaded, before any edit: what "Defaults" restores.
     defaults: Scene,
+    /// Real-time factor and physics cost, measured over the last half second.
+    pace: PaceMeter,
     /// Setups before each change, oldest first, for undo.
     undo: Vec<Scene>,
     /// Setups undone, most recent last, for redo.
@@ -139,6 +141,72 @@ pub struct StepChoice {
     pub safe: bool,
     /// The stretch limit safe stepping added, if any.
     pub stretch_limit: Option<f64>,
+}
+
+/// How the simulation keeps up with the wall clock, measured over a window of
+/// about half a second of [`Session::advance`] calls.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Pace {
+    /// Simulated seconds per wall-clock second (1 is real time).
+    pub real_time_factor: f64,
+    /// The factor asked for ([`Session::speed`]); 0 while paused or diverged.
+    pub target: f64,
+    /// Share of wall-clock time spent stepping (0 to 1 on one thread).
+    pub busy: f64,
+    /// Steps per wall-clock second.
+    pub steps_per_second: f64,
+    /// Whether simulated time was dropped because the steps due could not run.
+    pub behind: bool,
+}
+
+/// Wall-clock seconds over which [`Pace`] is measured.
+const PACE_WINDOW: f64 = 0.5;
+
+/// Sums for the [`Pace`] window being measured, and the last one measured.
+#[derive(Clone, Copy, Debug, Default)]
+struct PaceMeter {
+    wall: f64,
+    simulated: f64,
+    busy_ms: f64,
+    steps: u64,
+    behind: bool,
+    target: f64,
+    shown: Pace,
+}
+
+impl PaceMeter {
+    fn add(
+        &mut self,
+        wall: f64,
+        simulated: f64,
+        busy_ms: f64,
+        steps: u32,
+        behind: bool,
+        target: f64,
+    ) {
+        if !(wall.is_finite() && wall >= 0.0) {
+            return;
+        }
+        self.wall += wall;
+        self.simulated += simulated;
+        self.busy_ms += busy_ms;
+        self.steps += u64::from(steps);
+        self.behind |= behind;
+        self.target = self.target.max(target);
+        if self.wall >= PACE_WINDOW {
+            self.shown = Pace {
+                real_time_factor: self.simulated / self.wall,
+                target: self.target,
+                busy: self.busy_ms * 1e-3 / self.wall,
+                steps_per_second: self.steps as f64 / self.wall,
+                behind: self.behind,
+            };
+            *self = Self {
+                shown: self.shown,
+                ..Self::default()
+            };
+        }
+    }
 }
 
 impl Session {
@@ -172,6 +240,7 @@ impl Session {
             safe_stepping: true,
             step_choice: None,
             stored_wind: None,
+            pace: PaceMeter::default(),
         };
         session.built();
         Ok(session)
@@ -652,23 +721,67 @@ impl Session {
     /// Advances by `elapsed` wall-clock seconds at the scene's speed, unless
     /// paused or diverged. Runs at most what fits in `STEP_BUDGET_MS`.
     pub fn frame(&mut self, elapsed: f64) -> FrameReport {
+        self.advance_by(elapsed, STEP_BUDGET_MS, true)
+    }
+
+    /// Adds `elapsed` wall-clock seconds at the scene's speed and runs the steps
+    /// due, as many as fit in `budget_ms`; the rest stay due for the next call. Up
+    /// to [`STEP_BUDGET_MS`] of steps may be due: past that backlog the simulation
+    /// falls behind real time instead of catching up in a burst. Nothing runs while
+    /// paused or diverged. A caller that calls often with a small budget (the app's
+    /// physics thread) keeps real time in short chunks.
+    ///
+    /// The steps run with [`System::run_ahead`]: until [`Session::settle`], the
+    /// system's positions may lag behind its time. Whoever reads or edits the
+    /// session between `advance` calls settles it first.
+    pub fn advance(&mut self, elapsed: f64, budget_ms: f64) -> FrameReport {
+        self.advance_by(elapsed, budget_ms, false)
+    }
+
+    fn advance_by(&mut self, elapsed: f64, budget_ms: f64, settle: bool) -> FrameReport {
         if self.paused || self.divergence.is_some() {
+            self.pace.add(elapsed, 0.0, 0.0, 0, false, 0.0);
             return FrameReport::default();
         }
         let dt = self.system.params().dt;
-        let speed = f64::from(self.substeps) * dt / FRAME_PERIOD;
-        let budget = if self.ms_per_step > 0.0 {
-            (STEP_BUDGET_MS / self.ms_per_step).floor().clamp(1.0, 1e6) as u32
-        } else {
-            self.substeps
+        let speed = self.speed();
+        let (ms_per_step, substeps) = (self.ms_per_step, self.substeps);
+        let steps_in = |ms: f64| {
+            if ms_per_step > 0.0 {
+                (ms / ms_per_step).floor().clamp(1.0, 1e6) as u32
+            } else {
+                substeps
+            }
         };
-        let max_steps = budget.min(self.substeps.saturating_mul(16)).max(1);
-        let due = self.clock.advance(elapsed, speed, dt, max_steps);
-        let report = self.run_steps(due.steps);
-        FrameReport {
-            behind: due.dropped > 0.0,
-            ..report
-        }
+        let backlog = steps_in(STEP_BUDGET_MS)
+            .min(substeps.saturating_mul(16))
+            .max(1);
+        let due = self.clock.advance(elapsed, speed, dt, backlog);
+        let now = due.steps.min(steps_in(budget_ms.max(0.0)));
+        self.clock.defer(due.steps - now, dt);
+        let report = self.run_steps(now, settle);
+        let behind = due.dropped > 0.0;
+        let simulated = f64::from(report.steps) * dt;
+        self.pace.add(
+            elapsed,
+            simulated,
+            report.sim_ms,
+            report.steps,
+            behind,
+            speed,
+        );
+        FrameReport { behind, ..report }
+    }
+
+    /// Simulated seconds per wall-clock second asked for: `substeps` steps of `dt`
+    /// per 1/60 s (1 is real time).
+    pub fn speed(&self) -> f64 {
+        f64::from(self.substeps) * self.system.params().dt / FRAME_PERIOD
+    }
+
+    /// How the simulation has kept up with the wall clock lately.
+    pub fn pace(&self) -> Pace {
+        self.pace.shown
     }
 
     /// One step, whether paused or not (the "Step" button).
@@ -676,30 +789,37 @@ impl Session {
         if self.divergence.is_some() {
             return FrameReport::default();
         }
-        self.run_steps(1)
+        self.run_steps(1, true)
     }
 
-    fn run_steps(&mut self, steps: u32) -> FrameReport {
+    /// Brings the state up to the steps [`Session::advance`] ran and checks it in
+    /// full, as [`Session::frame`] leaves it; a divergence found here is handled as
+    /// one found while stepping.
+    pub fn settle(&mut self) {
+        let before = self.system.steps_taken();
+        match self.system.settle() {
+            Ok(()) if self.last_good.steps != before => {
+                self.last_good.clone_from(self.system.state());
+            }
+            Ok(()) => {}
+            Err(d) => self.diverged(d),
+        }
+    }
+
+    /// Runs `steps` steps in one call (so that a grid cloth runs on a fast engine);
+    /// `settle`: checked in full at the end, with the state brought up to date.
+    fn run_steps(&mut self, steps: u32, settle: bool) -> FrameReport {
         let start = Instant::now();
         let before = self.system.steps_taken();
-        // One call for the whole frame, so that a grid cloth runs on the fast path.
-        let outcome = self.system.run(u64::from(steps));
+        let outcome = match settle {
+            true => self.system.run(u64::from(steps)),
+            false => self.system.run_ahead(u64::from(steps)),
+        };
         let done = (self.system.steps_taken() - before) as u32;
         match outcome {
-            Ok(()) => self.last_good.clone_from(self.system.state()),
-            Err(d) => {
-                let margin = Some(self.system.stability().margin).filter(|m| m.is_finite());
-                log::warn!("simulation diverged: {d}");
-                self.system.release();
-                self.system.set_state(self.last_good.clone());
-                self.divergence = Some(DivergenceReport {
-                    message: d.to_string(),
-                    time: d.time(),
-                    margin,
-                    shown_time: self.system.time(),
-                });
-                self.paused = true;
-            }
+            Ok(()) if settle => self.last_good.clone_from(self.system.state()),
+            Ok(()) => {}
+            Err(d) => self.diverged(d),
         }
         let sim_ms = start.elapsed().as_secs_f64() * 1e3;
         if done > 0 {
@@ -715,6 +835,23 @@ impl Session {
             sim_ms,
             behind: false,
         }
+    }
+}
+
+impl Session {
+    /// Puts back the last state that passed its checks and pauses with the report.
+    fn diverged(&mut self, d: crate::sim::Divergence) {
+        let margin = Some(self.system.stability().margin).filter(|m| m.is_finite());
+        log::warn!("simulation diverged: {d}");
+        self.system.release();
+        self.system.set_state(self.last_good.clone());
+        self.divergence = Some(DivergenceReport {
+            message: d.to_string(),
+            time: d.time(),
+            margin,
+            shown_time: self.system.time(),
+        });
+        self.paused = true;
     }
 }
 

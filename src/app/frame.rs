@@ -19,6 +19,9 @@ pub struct FrameData {
     lines: Vec<[u32; 2]>,
     colors: Vec<[f32; 4]>,
     pinned: Vec<bool>,
+    triangles: Vec<[u32; 3]>,
+    ground: Option<f32>,
+    sphere: Option<(Vec3, f32)>,
 }
 
 /// Colour index of a spring kind (see `kind_color`).
@@ -50,9 +53,19 @@ impl FrameData {
             .extend(system.positions().iter().map(|p| p.as_vec3()));
     }
 
-    /// Rebuilds everything the renderer needs from `system`.
+    /// Copies everything the renderer needs from `system`, so that the frame can
+    /// be drawn while the physics thread steps on.
     pub fn build(&mut self, system: &System, view: &ViewOptions, by_strain: bool) {
         self.refresh_positions(system);
+        if self.triangles != system.triangles() {
+            self.triangles.clear();
+            self.triangles.extend_from_slice(system.triangles());
+        }
+        // The solids, under the contact surfaces the cloth rests on.
+        let params = system.params();
+        self.ground = params.ground.map(|g| (g.height - params.thickness) as f32);
+        self.sphere =
+            (params.sphere).map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32));
         self.uvs.clear();
         self.uvs.extend(system.uvs().iter().map(|uv| uv.as_vec2()));
         self.pinned.clear();
@@ -80,25 +93,18 @@ impl FrameData {
         }
     }
 
-    /// The renderer's view of this frame.
-    pub fn scene_frame<'a>(
-        &'a self,
-        system: &'a System,
-        highlight: Option<usize>,
-    ) -> SceneFrame<'a> {
-        let params = system.params();
+    /// The renderer's view of the frame last built.
+    pub fn scene_frame(&self, highlight: Option<usize>) -> SceneFrame<'_> {
         SceneFrame {
             positions: &self.positions,
-            triangles: system.triangles(),
+            triangles: &self.triangles,
             uvs: &self.uvs,
             lines: &self.lines,
             line_colors: &self.colors,
             pinned: &self.pinned,
             highlight,
-            // The solids, under the contact surfaces the cloth rests on.
-            ground: params.ground.map(|g| (g.height - params.thickness) as f32),
-            sphere: (params.sphere)
-                .map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32)),
+            ground: self.ground,
+            sphere: self.sphere,
         }
     }
 }

@@ -88,7 +88,13 @@ impl Gfx {
         if size.width > 0 && size.height > 0 {
             surface.configure(&device, &config);
         }
-        let samples = render::pick_sample_count(&adapter, format);
+        // A software adapter (lavapipe) rasterises on the cores the physics
+        // thread steps on: every frame without MSAA leaves it more of them.
+        let samples = if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+            1
+        } else {
+            render::pick_sample_count(&adapter, format)
+        };
         log::info!("surface format {format:?}, MSAA x{samples}");
         let renderer = Renderer::new(
             &device,

@@ -7,6 +7,7 @@ pub mod gfx;
 pub mod help;
 pub mod input;
 pub mod panel;
+pub mod physics;
 pub mod record;
 pub mod screenshot;
 
@@ -30,6 +31,7 @@ use frame::FrameData;
 use gfx::Gfx;
 use input::{Button, Mouse, MouseAction};
 use panel::{Action, PanelState};
+use physics::SharedSession;
 
 /// Window title (the Xvfb test finds the window by it).
 pub const TITLE: &str = "cloth-sandbox";
@@ -71,7 +73,7 @@ pub fn main(options: AppOptions) -> std::process::ExitCode {
 pub fn run(session: Session) -> anyhow::Result<()> {
     let event_loop = new_event_loop()?;
     event_loop.set_control_flow(ControlFlow::Poll);
-    let mut app = App::new(session);
+    let mut app = App::new(session).context("cannot start the physics thread")?;
     event_loop
         .run_app(&mut app)
         .context("the window system stopped the event loop")?;
@@ -114,7 +116,9 @@ fn new_event_loop() -> anyhow::Result<EventLoop<()>> {
 
 /// The running app: window, GPU, panel and session.
 struct App {
-    session: Session,
+    /// The session, stepped on the physics thread; each window event holds it
+    /// while it runs (see [`physics`]).
+    session: SharedSession,
     gfx: Option<Gfx>,
     egui_ctx: egui::Context,
     egui_state: Option<egui_winit::State>,
@@ -137,9 +141,9 @@ struct App {
 }
 
 impl App {
-    fn new(session: Session) -> Self {
+    fn new(session: Session) -> std::io::Result<Self> {
         let mut app = Self {
-            session,
+            session: SharedSession::start(session)?,
             gfx: None,
             egui_ctx: egui::Context::default(),
             egui_state: None,
@@ -158,7 +162,8 @@ impl App {
             fatal: None,
         };
         app.scene_loaded();
-        app
+        app.session.release();
+        Ok(app)
     }
 
     /// After a scene (re)load: frame it and pick sensible display defaults.
@@ -377,7 +382,10 @@ impl App {
                 self.panel.help = !self.panel.help;
                 log::info!("help {}", if self.panel.help { "shown" } else { "hidden" });
             }
-            Action::TogglePause => self.session.set_paused(!self.session.paused()),
+            Action::TogglePause => {
+                let paused = self.session.paused();
+                self.session.set_paused(!paused);
+            }
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::Step => {
                 self.session.single_step();
@@ -526,7 +534,7 @@ impl App {
         )?;
         self.frame_data
             .build(self.session.system(), &self.view, self.panel.strain_colors);
-        let frame = self.frame_data.scene_frame(self.session.system(), None);
+        let frame = self.frame_data.scene_frame(None);
         let pixels = offscreen.render(&frame, &self.camera, &self.view)?;
         // The name is taken first (never replacing a file), then the picture is
         // written beside it and renamed over it whole.
@@ -587,6 +595,8 @@ impl App {
         }
     }
 
+    /// One frame: the panel, its actions, and the scene copied from the session;
+    /// then the session goes back to the physics thread while the frame is drawn.
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         let now = Instant::now();
         let elapsed = now.duration_since(self.last_frame).as_secs_f64().min(0.25);
@@ -596,8 +606,10 @@ impl App {
         if self.fly.any() {
             self.camera.fly(self.fly, elapsed as f32);
         }
-        let report = self.session.frame(elapsed);
-        self.panel.record(&report, self.frame_time);
+        self.panel.record(self.frame_time, self.session.pace());
+        if let Some(failure) = self.session.failure() {
+            self.panel.error = Some(failure);
+        }
         self.poll_recording();
 
         let (Some(gfx), Some(egui_state)) = (self.gfx.as_mut(), self.egui_state.as_mut()) else {
@@ -620,14 +632,6 @@ impl App {
         }
         egui_state.handle_platform_output(&gfx.window, ui_output.platform_output.clone());
 
-        self.frame_data
-            .build(self.session.system(), &self.view, self.panel.strain_colors);
-        let highlight = self.mouse.dragged().or(self.hovered);
-        let frame = self
-            .frame_data
-            .scene_frame(self.session.system(), highlight);
-        gfx.draw(&frame, &self.camera, &self.view, &self.egui_ctx, ui_output);
-
         for action in actions {
             self.apply(action, event_loop);
         }
@@ -635,11 +639,42 @@ impl App {
         if !self.egui_ctx.egui_is_using_pointer() {
             self.session.end_edit_group();
         }
+        self.frame_data
+            .build(self.session.system(), &self.view, self.panel.strain_colors);
+        self.session.release();
+
+        let Some(gfx) = self.gfx.as_mut() else {
+            return;
+        };
+        let highlight = self.mouse.dragged().or(self.hovered);
+        let frame = self.frame_data.scene_frame(highlight);
+        gfx.draw(&frame, &self.camera, &self.view, &self.egui_ctx, ui_output);
     }
 }
 
 impl ApplicationHandler for App {
     fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+        self.session.hold();
+        self.open_window(event_loop);
+        self.session.release();
+    }
+
+    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        self.session.hold();
+        self.handle(event_loop, event);
+        self.session.release();
+    }
+
+    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
+        if let Some(gfx) = &self.gfx {
+            gfx.window.request_redraw();
+        }
+    }
+}
+
+impl App {
+    /// Opens the window and its GPU surface on the first `resumed`.
+    fn open_window(&mut self, event_loop: &ActiveEventLoop) {
         if self.gfx.is_some() {
             return;
         }
@@ -678,7 +713,8 @@ impl ApplicationHandler for App {
         }
     }
 
-    fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+    /// One window event, with the session held.
+    fn handle(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) {
         let consumed = match (&mut self.egui_state, &self.gfx) {
             (Some(state), Some(gfx)) => state.on_window_event(&gfx.window, &event).consumed,
             _ => false,
@@ -763,12 +799,6 @@ impl ApplicationHandler for App {
                 self.camera.zoom(steps);
             }
             _ => {}
-        }
-    }
-
-    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
-        if let Some(gfx) = &self.gfx {
-            gfx.window.request_redraw();
         }
     }
 }

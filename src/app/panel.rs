@@ -7,7 +7,7 @@
 use std::time::Instant;
 
 use cloth_sandbox::scene::{Layout, PinPreset, Pins, Scene, builtin_scenes};
-use cloth_sandbox::session::{Edit, FrameReport, Session};
+use cloth_sandbox::session::{Edit, Pace, Session};
 use cloth_sandbox::sim::Integrator;
 use egui::{Color32, RichText, Ui};
 
@@ -71,35 +71,32 @@ pub struct PanelState {
     pub recording: Option<(u64, u64)>,
     /// Whether the help overlay is open.
     pub help: bool,
-    sim_ms: f64,
-    behind: bool,
     frame_time: f64,
-    steps_in_window: u64,
+    frames_in_window: u64,
     window_start: Option<Instant>,
-    steps_per_second: f64,
 }
 
 impl PanelState {
-    /// Folds one frame's timings into the stats.
-    pub fn record(&mut self, report: &FrameReport, frame_time: f64) {
-        self.sim_ms = 0.9 * self.sim_ms + 0.1 * report.sim_ms;
-        self.behind = report.behind;
+    /// Folds one frame's time (s, smoothed) into the stats.
+    pub fn record(&mut self, frame_time: f64, pace: Pace) {
         self.frame_time = frame_time;
-        self.steps_in_window += u64::from(report.steps);
+        self.frames_in_window += 1;
         let now = Instant::now();
         let start = *self.window_start.get_or_insert(now);
         let span = now.duration_since(start).as_secs_f64();
         if span >= 0.5 {
-            self.steps_per_second = self.steps_in_window as f64 / span;
             // For measuring the app from outside (benches/xvfb_slider_drag.sh).
             log::debug!(
                 target: "cloth::frames",
-                "frame {:.2} ms, simulation {:.2} ms per frame, {:.0} steps/s",
+                "frame {:.2} ms, {:.1} frames/s, real-time factor {:.3} of {:.3} asked, physics busy {:.1}%, {:.0} steps/s",
                 1e3 * self.frame_time,
-                self.sim_ms,
-                self.steps_per_second
+                self.frames_in_window as f64 / span,
+                pace.real_time_factor,
+                pace.target,
+                1e2 * pace.busy,
+                pace.steps_per_second
             );
-            self.steps_in_window = 0;
+            self.frames_in_window = 0;
             self.window_start = Some(now);
         }
     }
@@ -456,13 +453,22 @@ fn contents(
         // Always one line, so the controls below never jump.
         if session.paused() {
             ui.label("Paused (Space or Play resumes).");
-        } else if state.behind {
-            ui.colored_label(
-                Color32::from_rgb(255, 200, 60),
-                "Slower than real time (step budget used up).",
-            );
         } else {
-            ui.label("Running in real time.");
+            let pace = session.pace();
+            let factor = format!(
+                "{:.2} s simulated per s (asked {:.2})",
+                pace.real_time_factor, pace.target
+            );
+            if pace.behind {
+                ui.colored_label(
+                    Color32::from_rgb(255, 200, 60),
+                    format!("Slower than asked: {factor}"),
+                )
+                .on_hover_text("The physics cannot run every step due: it is busy all the time on its own thread. Fewer particles, a larger dt or fewer steps per frame make it keep up.");
+            } else {
+                ui.label(format!("Keeping up: {factor}"))
+                    .on_hover_text("The physics runs on its own thread, at the speed asked for whatever the frame rate.");
+            }
         }
     }
     if let Some(d) = session.divergence() {
@@ -703,11 +709,18 @@ fn contents(
                 system.bars().len(),
                 system.triangles().len()
             ));
+            let pace = session.pace();
             ui.label(format!(
-                "sim {:.2} ms/frame · {:.0} steps/s · frame {:.1} ms",
-                state.sim_ms,
-                state.steps_per_second,
-                state.frame_time * 1e3
+                "physics {:.3} ms/step · {:.0} steps/s · busy {:.0}%",
+                session.ms_per_step(),
+                pace.steps_per_second,
+                pace.busy * 100.0
+            ))
+            .on_hover_text("The physics thread's cost: wall time per step, steps per wall second, and the share of wall time it spends stepping.");
+            ui.label(format!(
+                "frame {:.1} ms ({:.0} frames/s)",
+                state.frame_time * 1e3,
+                1.0 / state.frame_time.max(1e-6)
             ));
             ui.label(format!(
                 "t = {:.3} s · step {}",

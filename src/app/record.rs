@@ -354,7 +354,7 @@ pub fn render_frames(
             .into());
         }
         data.build(system, &view.options, view.by_strain);
-        let frame = data.scene_frame(system, None);
+        let frame = data.scene_frame(None);
         let pixels = offscreen.render(&frame, &view.camera, &view.options)?;
         each(i, pixels)?;
     }

@@ -121,7 +121,7 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let camera = frame::framed_camera(&session, args.yaw, args.pitch);
     let mut data = FrameData::default();
     data.build(session.system(), &options, args.strain);
-    let frame = data.scene_frame(session.system(), None);
+    let frame = data.scene_frame(None);
     let mut off = Offscreen::new(width, height)?;
     let pixels = off.render(&frame, &camera, &options)?;
     write_png(out, width, height, &pixels)

@@ -44,6 +44,14 @@ impl Clock {
         }
     }
 
+    /// Puts `steps` steps of `dt` back as due: taken from [`Clock::advance`] but
+    /// not run yet.
+    pub fn defer(&mut self, steps: u32, dt: f64) {
+        if dt > 0.0 {
+            self.accumulator += f64::from(steps) * dt;
+        }
+    }
+
     /// Forgets unsimulated time (after a pause or reset).
     pub fn reset(&mut self) {
         self.accumulator = 0.0;

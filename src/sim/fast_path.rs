@@ -93,6 +93,18 @@ pub(super) struct Engines {
     /// Bumped each time springs break ([`super::tearing`]): a grid kernel that saw
     /// an older count takes the springs left from the model.
     springs_version: u64,
+    /// The engine that has run steps the f64 state has not had yet
+    /// ([`System::run_ahead`]), and the time and step count the f64 state is at.
+    ahead: Option<(Ahead, f64, u64)>,
+    /// Steps run since the last full check, counted across runs.
+    pub(super) unchecked: u64,
+}
+
+/// Which fast engine holds the latest state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Ahead {
+    Grid,
+    Mesh,
 }
 
 impl Clone for Engines {
@@ -104,6 +116,10 @@ impl Clone for Engines {
             grid_springs: self.grid_springs,
             builds: self.builds,
             springs_version: self.springs_version,
+            // A clone has no engine: its f64 state must already be the latest
+            // (see [`System::settle`]).
+            ahead: None,
+            unchecked: self.unchecked,
         }
     }
 }
@@ -331,7 +347,7 @@ impl System {
     /// Runs `n` steps on the mesh engine if allowed and it models the system
     /// exactly; `None` when the general path must run them. Call after
     /// [`Self::run_on_grid`] declined.
-    pub(super) fn run_on_mesh(&mut self, n: u64) -> Option<Result<(), Divergence>> {
+    pub(super) fn run_on_mesh(&mut self, n: u64, settle: bool) -> Option<Result<(), Divergence>> {
         if !self.engines.allowed {
             return None;
         }
@@ -345,7 +361,7 @@ impl System {
             Some(mesh) => mesh,
             None => {
                 let mut kernel = MeshKernel::new(&self.model, params);
-                kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
+                kernel.set_threads(engine_threads());
                 MeshPath {
                     kernel,
                     in_sync: false,
@@ -360,7 +376,7 @@ impl System {
             }
             mesh.in_sync = true;
         }
-        let result = self.run_in_chunks(n, &mut mesh);
+        let result = self.run_in_chunks(n, &mut mesh, settle);
         self.engines.mesh = Some(mesh);
         Some(result)
     }
@@ -455,7 +471,7 @@ impl System {
 
     /// Runs `n` steps on the kernel if allowed and possible; `None` when the general
     /// path must run them.
-    pub(super) fn run_on_grid(&mut self, n: u64) -> Option<Result<(), Divergence>> {
+    pub(super) fn run_on_grid(&mut self, n: u64, settle: bool) -> Option<Result<(), Divergence>> {
         if !self.engines.allowed {
             return None;
         }
@@ -479,7 +495,7 @@ impl System {
             None => {
                 self.engines.builds += 1;
                 let mut kernel = GridCloth::new(spec.clone());
-                kernel.set_threads(std::thread::available_parallelism().map_or(1, |n| n.get()));
+                kernel.set_threads(engine_threads());
                 FastPath {
                     kernel,
                     spec,
@@ -508,7 +524,7 @@ impl System {
             }
             fast.in_sync = true;
         }
-        let result = self.run_in_chunks(n, &mut fast);
+        let result = self.run_in_chunks(n, &mut fast, settle);
         self.engines.grid = Some(fast);
         Some(result)
     }
@@ -516,50 +532,104 @@ impl System {
     /// Runs `n` steps on a fast engine in chunks of [`CHUNK`]. Simulated time
     /// advances by whole steps, as in the general path. After each chunk a cheap scan
     /// of the engine's own arrays; the f64 state and the full check (with the
-    /// energy budget, and the message) at the end, every [`ENERGY_CHECK_STEPS`]
-    /// steps, or when the scan finds trouble.
+    /// energy budget, and the message) every [`ENERGY_CHECK_STEPS`] steps (counted
+    /// across runs), when the scan finds trouble, and at the end when `settle`.
+    /// Without `settle` the engine may end the run ahead of the f64 state: see
+    /// [`System::run_ahead`].
     ///
-    /// When the scan finds a non-finite or runaway state, the steps since the last
-    /// full check are run again one at a time from the state of that check (still
-    /// the f64 state), so that the divergence is reported at the step where it
-    /// happened rather than at the end of its chunk.
-    fn run_in_chunks(&mut self, n: u64, engine: &mut impl FastEngine) -> Result<(), Divergence> {
+    /// When the scan finds a non-finite or runaway state, the steps since the f64
+    /// state was last brought up to date (a full check, or [`System::settle`]) are
+    /// run again one at a time from it, so that the divergence is reported at the
+    /// step where it happened rather than at the end of its chunk.
+    fn run_in_chunks<E: FastEngine>(
+        &mut self,
+        n: u64,
+        engine: &mut E,
+        settle: bool,
+    ) -> Result<(), Divergence> {
         let dt = self.model.params.dt;
         let mut done = 0;
-        let mut unchecked = 0;
-        let mut checked = (self.state.time, self.state.steps);
+        let mut from = match self.engines.ahead.take() {
+            Some((_, time, steps)) => (time, steps),
+            None => (self.state.time, self.state.steps),
+        };
         while done < n {
             let chunk = CHUNK.min(n - done);
             engine.advance(self, chunk as usize);
             done += chunk;
-            unchecked += chunk;
+            self.engines.unchecked += chunk;
             for _ in 0..chunk {
                 self.state.time += dt;
             }
             self.state.steps += chunk;
             let (speed2, dist2) = engine.extremes(self.runaway.center);
             let plausible = self.runaway.plausible(speed2, dist2);
-            if !plausible && unchecked > 1 {
-                self.replay_one_by_one(engine, checked);
+            if !plausible && self.state.steps - from.1 > 1 {
+                self.replay_one_by_one(engine, from);
             }
-            if done == n || unchecked >= ENERGY_CHECK_STEPS || !plausible {
-                unchecked = 0;
+            if (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS || !plausible {
+                self.engines.unchecked = 0;
                 engine.copy_back(self);
                 self.check()?;
-                checked = (self.state.time, self.state.steps);
+                from = (self.state.time, self.state.steps);
             }
         }
+        if from.1 != self.state.steps {
+            self.engines.ahead = Some((E::KIND, from.0, from.1));
+        }
         Ok(())
+    }
+
+    /// Brings the f64 state up to the fast engine's, if the engine ran ahead.
+    pub(super) fn catch_up(&mut self) {
+        let Some((ahead, _, _)) = self.engines.ahead.take() else {
+            return;
+        };
+        match ahead {
+            Ahead::Grid => {
+                if let Some(mut fast) = self.engines.grid.take() {
+                    fast.copy_back(self);
+                    self.engines.grid = Some(fast);
+                }
+            }
+            Ahead::Mesh => {
+                if let Some(mut mesh) = self.engines.mesh.take() {
+                    mesh.copy_back(self);
+                    self.engines.mesh = Some(mesh);
+                }
+            }
+        }
+    }
+
+    /// After [`System::run_ahead`]: brings the f64 state up to the fast engine's
+    /// and checks it in full, as [`System::run`] leaves it. Does nothing when the
+    /// state was checked at this step already.
+    pub fn settle(&mut self) -> Result<(), Divergence> {
+        if self.engines.ahead.is_none() && self.engines.unchecked == 0 {
+            return Ok(());
+        }
+        self.catch_up();
+        self.engines.unchecked = 0;
+        self.check()
+    }
+
+    /// The f64 state is about to change or be read outside the fast engines:
+    /// brings it up to date first, and has the engines copy it in again before
+    /// they next run.
+    pub(super) fn mark_changed(&mut self) {
+        self.catch_up();
+        self.engines.mark_stale();
+        self.checked_energy = None;
     }
 
     /// Runs the steps from the last full check (`checked`: its time and step count,
     /// with its positions and velocities still in the f64 state) up to the current
     /// step again, one at a time, stopping at the first whose scan fails: the
     /// engine and the step count are left at that step.
-    fn replay_one_by_one(&mut self, engine: &mut impl FastEngine, checked: (f64, u64)) {
+    fn replay_one_by_one(&mut self, engine: &mut impl FastEngine, from: (f64, u64)) {
         let dt = self.model.params.dt;
         let last = self.state.steps;
-        (self.state.time, self.state.steps) = checked;
+        (self.state.time, self.state.steps) = from;
         engine.load(self);
         while self.state.steps < last {
             engine.advance(self, 1);
@@ -596,6 +666,8 @@ impl System {
 
 /// What [`System::run_in_chunks`] needs of a fast engine.
 trait FastEngine {
+    /// Which engine this is.
+    const KIND: Ahead;
     /// `steps` steps of the system's `dt`, from the system's time.
     fn advance(&mut self, system: &System, steps: usize);
     /// The largest squared speed and squared distance from `center` (infinite on
@@ -609,6 +681,7 @@ trait FastEngine {
 }
 
 impl FastEngine for FastPath {
+    const KIND: Ahead = Ahead::Grid;
     fn advance(&mut self, system: &System, steps: usize) {
         let (model, dt) = (&system.model, system.model.params.dt);
         if model.wind.gust != 0.0 && model.terms.aero {
@@ -654,6 +727,7 @@ impl FastEngine for FastPath {
 }
 
 impl FastEngine for MeshPath {
+    const KIND: Ahead = Ahead::Mesh;
     fn advance(&mut self, _: &System, steps: usize) {
         self.kernel.steps(steps);
     }
@@ -672,4 +746,9 @@ impl FastEngine for MeshPath {
             self.kernel.set_update_velocities(&u);
         }
     }
+}
+
+/// Threads a fast engine steps on: one per core.
+fn engine_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
 }

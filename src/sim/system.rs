@@ -9,6 +9,8 @@
 //! [`Grab`], the runaway yardstick and the fast engines it hands runs to
 //! ([`super::fast_path`]).
 
+use std::sync::OnceLock;
+
 use glam::{DVec2, DVec3};
 
 use super::divergence::Runaway;
@@ -50,6 +52,10 @@ pub struct System {
     pub(super) grab: Option<Grab>,
     /// The fast engines runs are handed to, when allowed.
     pub(super) engines: fast_path::Engines,
+    /// The step count and energy of the last full check, for [`Self::energy`].
+    pub(super) checked_energy: Option<(u64, Energy)>,
+    /// [`Self::stability`], until the next edit.
+    stability: OnceLock<Stability>,
 }
 
 impl System {
@@ -113,6 +119,8 @@ impl System {
             budget: None,
             grab: None,
             engines: fast_path::Engines::default(),
+            checked_energy: None,
+            stability: OnceLock::new(),
         };
         system.engines.grid_springs = fast_path::GridSprings::of(&system.model);
         system.prepare_integrator();
@@ -268,7 +276,7 @@ impl System {
 
     /// Sets the stiffness (N/m) of every spring of `kind`.
     pub fn set_spring_stiffness(&mut self, kind: SpringKind, stiffness: f64) {
-        self.budget = None;
+        self.coefficients_edited();
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.stiffness = stiffness;
         }
@@ -279,7 +287,7 @@ impl System {
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
     pub fn set_spring_damping(&mut self, kind: SpringKind, damping: f64) {
-        self.budget = None;
+        self.coefficients_edited();
         for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
             s.damping = damping;
         }
@@ -289,7 +297,7 @@ impl System {
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
     pub fn scale_rest_lengths(&mut self, factor: f64) {
-        self.budget = None;
+        self.coefficients_edited();
         if !(factor.is_finite() && factor >= 0.0) {
             return;
         }
@@ -333,7 +341,7 @@ impl System {
 
     /// Sets every particle's mass (kg), keeping pins.
     pub fn set_particle_mass(&mut self, mass: f64) {
-        self.budget = None;
+        self.coefficients_edited();
         if !(mass.is_finite() && mass > 0.0) {
             return;
         }
@@ -342,15 +350,21 @@ impl System {
         self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
     }
 
-    /// Energy now.
+    /// Energy now (as the last full check found it, when that was at this step).
     pub fn energy(&self) -> Energy {
-        self.model
-            .energy(&self.state.positions, &self.state.velocities)
+        match self.checked_energy {
+            Some((steps, energy)) if steps == self.state.steps => energy,
+            _ => self
+                .model
+                .energy(&self.state.positions, &self.state.velocities),
+        }
     }
 
-    /// Stability estimate for the current parameters.
+    /// Stability estimate for the current parameters (computed once per edit).
     pub fn stability(&self) -> Stability {
-        stability::estimate(&self.model)
+        *self
+            .stability
+            .get_or_init(|| stability::estimate(&self.model))
     }
 
     /// Advances one step of `dt`, then checks the state. On divergence the state is
@@ -388,11 +402,28 @@ impl System {
     /// threaded force path runs its whole loop on a pool thread, so the parallel loops
     /// inside go through worker-local queues and allocate nothing per step.
     pub fn run(&mut self, n: u64) -> Result<(), Divergence> {
+        self.run_settling(n, true)
+    }
+
+    /// [`Self::run`] for a caller that reads the state less often than it steps
+    /// (the app's physics thread runs a few steps at a time): a fast engine may
+    /// keep the latest state in its own arrays, and the full check at the end is
+    /// left out, so that a short run costs its steps and not a copy and a check of
+    /// the whole cloth. The state's positions and velocities may lag behind its
+    /// time until [`Self::settle`], which the caller must run before it reads
+    /// them; every edit through `&mut self` settles first. Non-finite and runaway
+    /// states are still caught at once, and the energy budget every
+    /// [`ENERGY_CHECK_STEPS`] steps.
+    pub fn run_ahead(&mut self, n: u64) -> Result<(), Divergence> {
+        self.run_settling(n, false)
+    }
+
+    fn run_settling(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
         self.budget();
-        if let Some(result) = self.run_on_grid(n) {
+        if let Some(result) = self.run_on_grid(n, settle) {
             return result;
         }
-        if let Some(result) = self.run_on_mesh(n) {
+        if let Some(result) = self.run_on_mesh(n, settle) {
             return result;
         }
         self.mark_changed();
@@ -404,10 +435,15 @@ impl System {
         } else {
             steps(self)?;
         }
-        // A run ends checked in full, as the fast engines' runs do.
-        if n > 0 && !self.state.steps.is_multiple_of(ENERGY_CHECK_STEPS) {
+        // A run ends checked in full, as the fast engines' runs do; a run ahead
+        // leaves the check of its last steps to `settle`.
+        if settle && n > 0 && !self.state.steps.is_multiple_of(ENERGY_CHECK_STEPS) {
             self.check()?;
         }
+        self.engines.unchecked = match settle {
+            true => 0,
+            false => self.state.steps % ENERGY_CHECK_STEPS,
+        };
         Ok(())
     }
 
@@ -425,7 +461,9 @@ impl System {
     /// energy against its budget ([`super::energy_budget`]).
     pub fn check(&mut self) -> Result<(), Divergence> {
         self.runaway.check(&self.state)?;
+        self.checked_energy = None;
         let energy = self.energy();
+        self.checked_energy = Some((self.state.steps, energy));
         (self.budget()).check(energy, self.state.time, self.state.steps)
     }
 
@@ -435,18 +473,22 @@ impl System {
         self.budget
     }
 
-    /// The f64 state is about to change outside the fast engines: it must be
-    /// copied in again before they next run.
-    pub(super) fn mark_changed(&mut self) {
-        self.engines.mark_stale();
-    }
-
     /// Something outside the run changed the system (a grab, a pin, a parameter):
     /// the engines must take the new state, and the energy budget starts again from
     /// it, so that the edit's own work is not counted against the run.
     pub(super) fn mark_edited(&mut self) {
         self.mark_changed();
         self.budget = None;
+        self.stability = OnceLock::new();
+    }
+
+    /// A coefficient changed (stiffness, damping, rest length, mass): the state
+    /// stays, the engines take the new coefficients in place, and the energy
+    /// budget and stability estimate start again.
+    fn coefficients_edited(&mut self) {
+        self.catch_up();
+        self.budget = None;
+        self.stability = OnceLock::new();
     }
 
     /// The energy budget, set from the state now if an edit cleared it.
