@@ -784,7 +784,16 @@ impl Session {
         self.pace.shown
     }
 
-    /// One step, whether paused or not (the "Step" button).
+    /// One frame's steps ([`Session::substeps`], 1/60 s at the speed asked for),
+    /// whether paused or not (the "Step" button and the `.` key).
+    pub fn step_frame(&mut self) -> FrameReport {
+        if self.divergence.is_some() {
+            return FrameReport::default();
+        }
+        self.run_steps(self.substeps, true)
+    }
+
+    /// One step, whether paused or not.
     pub fn single_step(&mut self) -> FrameReport {
         if self.divergence.is_some() {
             return FrameReport::default();

@@ -21,7 +21,7 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("W A S D / Q E", "fly forward, left, back, right / down, up"),
     ("F or Home", "reset the view (frame the scene)"),
     ("Space", "pause / resume"),
-    (". (period)", "one step while paused"),
+    (". (period)", "one frame (the steps of 1/60 s) while paused"),
     ("R", "reset the scene (keeps your edits and pins)"),
     ("Ctrl+S", "save the setup as saved-<scene>-N.toml"),
     ("F12", "save the view as screenshot-N.png"),

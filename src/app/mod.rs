@@ -8,6 +8,7 @@ pub mod help;
 pub mod input;
 pub mod panel;
 pub mod physics;
+pub mod plots;
 pub mod record;
 pub mod screenshot;
 
@@ -23,7 +24,7 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, ModifiersState, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use cloth_sandbox::session::Session;
+use cloth_sandbox::session::{Edit, Session};
 use cloth_sandbox::view::{FlyKeys, OrbitCamera, pick_particle, springs_crossed};
 
 use crate::render::ViewOptions;
@@ -336,8 +337,11 @@ impl App {
                 Ok(()) => {
                     log::debug!("edit {edit:?}");
                     self.panel.error = None;
+                    // A new shape or size of cloth is framed anew.
                     if edit.rebuilds() {
                         self.mouse.cancel();
+                        self.frame_camera();
+                    } else if matches!(edit, Edit::RestLength(_)) {
                         self.frame_camera();
                     }
                 }
@@ -388,7 +392,7 @@ impl App {
             }
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::Step => {
-                self.session.single_step();
+                self.session.step_frame();
             }
         }
     }
@@ -607,6 +611,7 @@ impl App {
             self.camera.fly(self.fly, elapsed as f32);
         }
         self.panel.record(self.frame_time, self.session.pace());
+        self.panel.history.record(self.session.system());
         if let Some(failure) = self.session.failure() {
             self.panel.error = Some(failure);
         }
@@ -704,6 +709,8 @@ impl App {
                 ));
                 self.gfx = Some(gfx);
                 self.last_frame = Instant::now();
+                // R, Space and Esc work at once, without a click first.
+                window.focus_window();
                 window.request_redraw();
             }
             Err(e) => {

@@ -71,6 +71,8 @@ pub struct PanelState {
     pub recording: Option<(u64, u64)>,
     /// Whether the help overlay is open.
     pub help: bool,
+    /// The readings the plots show.
+    pub history: super::plots::History,
     frame_time: f64,
     frames_in_window: u64,
     window_start: Option<Instant>,
@@ -219,9 +221,12 @@ pub fn show(
     let mut actions = Vec::new();
     super::help::show(ui.ctx(), &mut state.help);
     egui::Panel::left("controls")
-        .resizable(true)
-        .default_size(290.0)
+        .resizable(false)
+        .exact_size(PANEL_WIDTH)
         .show(ui, |ui| {
+            header(ui, &mut actions);
+            status(ui, state, session, &mut actions);
+            ui.separator();
             egui::ScrollArea::vertical().show(ui, |ui| {
                 contents(ui, state, session, view, adapter, &mut actions);
             });
@@ -229,14 +234,39 @@ pub fn show(
     (actions, ui.available_rect_before_wrap())
 }
 
-fn contents(
-    ui: &mut Ui,
-    state: &mut PanelState,
-    session: &Session,
-    view: &mut ViewOptions,
-    adapter: &str,
-    actions: &mut Vec<Action>,
-) {
+/// The strain colours' key: compressed blue, at rest grey, stretched red to
+/// pale yellow, saturating at 10%.
+fn strain_legend(ui: &mut Ui) {
+    let (rect, _) = ui.allocate_exact_size(
+        egui::vec2(ui.available_width().min(240.0), 10.0),
+        egui::Sense::hover(),
+    );
+    let painter = ui.painter_at(rect);
+    let steps = 48;
+    for i in 0..steps {
+        let strain = -0.12 + 0.24 * (i as f32 + 0.5) / steps as f32;
+        let [r, g, b, _] = crate::render::geometry::strain_color(strain);
+        let linear = egui::Rgba::from_rgb(r, g, b);
+        let x0 = rect.left() + rect.width() * i as f32 / steps as f32;
+        let x1 = rect.left() + rect.width() * (i + 1) as f32 / steps as f32;
+        let cell = egui::Rect::from_x_y_ranges(x0..=x1, rect.y_range());
+        painter.rect_filled(cell, 0.0, Color32::from(linear));
+    }
+    ui.horizontal(|ui| {
+        ui.label(RichText::new("-10% compressed").small());
+        ui.label(RichText::new("· 0 ·").small());
+        ui.label(RichText::new("+10% stretched").small());
+    });
+}
+
+/// Width of the panel (points): the same in every scene.
+const PANEL_WIDTH: f32 = 320.0;
+
+/// Height of the status box (points): messages come and go inside it, and the
+/// controls below never move.
+const STATUS_HEIGHT: f32 = 104.0;
+
+fn header(ui: &mut Ui, actions: &mut Vec<Action>) {
     ui.horizontal(|ui| {
         ui.heading("cloth-sandbox");
         if ui
@@ -254,7 +284,81 @@ fn contents(
         .small(),
     );
     ui.separator();
+}
 
+/// The status box: how the run keeps up, a divergence, the last error, what was
+/// written where. Fixed height, scrolling when a message is long.
+fn status(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mut Vec<Action>) {
+    egui::ScrollArea::vertical()
+        .id_salt("status")
+        .max_height(STATUS_HEIGHT)
+        .show(ui, |ui| {
+            ui.set_min_height(STATUS_HEIGHT);
+            ui.set_width(ui.available_width());
+            status_lines(ui, state, session, actions);
+        });
+}
+
+fn status_lines(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mut Vec<Action>) {
+    if let Some(d) = session.divergence() {
+        ui.horizontal(|ui| {
+            ui.colored_label(Color32::from_rgb(255, 110, 90), "Diverged and paused.");
+            if ui
+                .button("Reset scene")
+                .on_hover_text("Start the scene again from its setup (R)")
+                .clicked()
+            {
+                actions.push(Action::Reset);
+            }
+        });
+        ui.label(format!(
+            "Showing the last good frame, t = {:.3} s.",
+            d.shown_time
+        ));
+        ui.label("Lower dt or the stiffness, or try another integrator, then reset.");
+        match d.margin {
+            Some(m) => ui.label(format!("At t = {:.3} s, dt / dt_crit = {m:.2}:", d.time)),
+            None => ui.label(format!("At t = {:.3} s:", d.time)),
+        };
+        ui.label(RichText::new(&d.message).small());
+    } else if session.paused() {
+        ui.label("Paused (Space or Play resumes).");
+    } else {
+        let pace = session.pace();
+        let factor = format!(
+            "{:.2} s simulated per s (asked {:.2})",
+            pace.real_time_factor, pace.target
+        );
+        if pace.behind {
+            ui.colored_label(
+                Color32::from_rgb(255, 200, 60),
+                format!("Slower than asked: {factor}"),
+            )
+            .on_hover_text("The physics cannot run every step due: it is busy all the time on its own thread. Fewer particles, a larger dt or fewer steps per frame make it keep up.");
+        } else {
+            ui.label(format!("Keeping up: {factor}"))
+                .on_hover_text("The physics runs on its own thread, at the speed asked for whatever the frame rate.");
+        }
+    }
+    if let Some(e) = &state.error {
+        ui.colored_label(Color32::from_rgb(255, 170, 60), e);
+    }
+    if let Some(path) = &state.saved {
+        ui.label(RichText::new(format!("Saved to {path}")).small());
+    }
+    if let Some(text) = &state.wrote {
+        ui.label(RichText::new(text).small());
+    }
+}
+
+fn contents(
+    ui: &mut Ui,
+    state: &mut PanelState,
+    session: &Session,
+    view: &mut ViewOptions,
+    adapter: &str,
+    actions: &mut Vec<Action>,
+) {
     // Scene and integrator.
     let mut scene = session.name().to_string();
     egui::ComboBox::from_label("Scene")
@@ -301,8 +405,12 @@ fn contents(
         }
         if ui
             .add_enabled(session.paused(), egui::Button::new("Step"))
-            .on_hover_text("Run one step of dt (. key)")
-            .on_disabled_hover_text("Pause first: Step runs one step of dt")
+            .on_hover_text(format!(
+                "Run one frame: {} steps of dt, {:.4} s (. key)",
+                session.substeps(),
+                f64::from(session.substeps()) * session.system().params().dt
+            ))
+            .on_disabled_hover_text("Pause first: Step runs one frame (the steps of 1/60 s)")
             .clicked()
         {
             actions.push(Action::Step);
@@ -390,12 +498,6 @@ fn contents(
             .on_hover_text("Simulated seconds the recording lasts, 0.5 to 60");
         }
     });
-    if let Some(path) = &state.saved {
-        ui.label(RichText::new(format!("Saved to {path}")).small());
-    }
-    if let Some(text) = &state.wrote {
-        ui.label(RichText::new(text).small());
-    }
     // The scene's own steps per frame (its speed); safe stepping may run more,
     // smaller steps over the same simulated time.
     let mut substeps = r.substeps;
@@ -404,13 +506,20 @@ fn contents(
             egui::Slider::new(&mut substeps, 1..=2000)
                 .logarithmic(true)
                 .clamping(egui::SliderClamping::Edits)
-                .text("speed (steps/frame)"),
+                .text("steps of dt per frame"),
         )
-        .on_hover_text("The scene's steps of dt per displayed frame (1/60 s of wall time): the simulation's speed. Safe stepping may split them into more, smaller steps. Slider: 1 to 2000, logarithmic")
+        .on_hover_text("The scene's steps of dt per 1/60 s of wall time: the simulation's speed (steps x dt x 60 simulated seconds per second). Safe stepping may split them into more, smaller steps over the same simulated time. Slider: 1 to 2000, logarithmic")
         .changed()
     {
         actions.push(Action::Edit(Edit::Substeps(substeps)));
     }
+    ui.label(format!(
+        "speed {:.2}x real time ({} x {:.3e} s per 1/60 s)",
+        f64::from(r.substeps) * p.dt * 60.0,
+        r.substeps,
+        p.dt
+    ))
+    .on_hover_text("Simulated seconds per wall-clock second asked for. The status above says what the physics thread reaches.");
     let mut safe = session.safe_stepping();
     if ui
         .checkbox(&mut safe, "safe stepping")
@@ -426,10 +535,15 @@ fn contents(
             let limit = (c.stretch_limit)
                 .map(|t| format!(", stretch <= {:.0}%", t * 100.0))
                 .unwrap_or_default();
-            ui.label(format!(
-                "{} substeps/frame of dt = {:.3e} s{limit}",
-                c.substeps, c.dt
-            ));
+            let text = if c.substeps == r.substeps && c.dt == p.dt {
+                format!("safe: dt is below half of dt_crit{limit}")
+            } else {
+                format!(
+                    "safe: runs them as {} steps of {:.3e} s{limit}",
+                    c.substeps, c.dt
+                )
+            };
+            ui.label(text);
         }
         Some(_) => {
             ui.colored_label(
@@ -441,58 +555,8 @@ fn contents(
             );
         }
         None => {
-            ui.label(format!(
-                "{} substeps/frame of dt = {:.3e} s (unchecked)",
-                session.substeps(),
-                p.dt
-            ));
+            ui.label("unchecked: dt and steps as set");
         }
-    }
-
-    if session.divergence().is_none() {
-        // Always one line, so the controls below never jump.
-        if session.paused() {
-            ui.label("Paused (Space or Play resumes).");
-        } else {
-            let pace = session.pace();
-            let factor = format!(
-                "{:.2} s simulated per s (asked {:.2})",
-                pace.real_time_factor, pace.target
-            );
-            if pace.behind {
-                ui.colored_label(
-                    Color32::from_rgb(255, 200, 60),
-                    format!("Slower than asked: {factor}"),
-                )
-                .on_hover_text("The physics cannot run every step due: it is busy all the time on its own thread. Fewer particles, a larger dt or fewer steps per frame make it keep up.");
-            } else {
-                ui.label(format!("Keeping up: {factor}"))
-                    .on_hover_text("The physics runs on its own thread, at the speed asked for whatever the frame rate.");
-            }
-        }
-    }
-    if let Some(d) = session.divergence() {
-        ui.separator();
-        ui.colored_label(
-            Color32::from_rgb(255, 110, 90),
-            "Simulation diverged and was paused:",
-        );
-        ui.label(&d.message);
-        match d.margin {
-            Some(m) => ui.label(format!("dt / dt_crit = {m:.2} at t = {:.3} s", d.time)),
-            None => ui.label(format!("at t = {:.3} s", d.time)),
-        };
-        ui.label(format!(
-            "Showing the last good frame, t = {:.3} s.",
-            d.shown_time
-        ));
-        ui.label("Lower dt or the stiffness, or try another integrator, then reset.");
-        if ui.button("Reset scene").clicked() {
-            actions.push(Action::Reset);
-        }
-    }
-    if let Some(e) = &state.error {
-        ui.colored_label(Color32::from_rgb(255, 170, 60), e);
     }
 
     // Pins.
@@ -619,8 +683,12 @@ fn contents(
                 );
             }
             let mut dt = p.dt;
-            if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true, "Time step in s; safe stepping may run smaller steps over the same simulated time") {
+            if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true, "Time step in s, 1e-5 to 0.05. The speed stays: the steps per frame change with it, so a larger dt means coarser steps, not a faster run. Safe stepping may run smaller steps over the same simulated time") {
                 edit(Edit::Dt(dt));
+                let steps = (f64::from(r.substeps) * p.dt / dt).round().clamp(1.0, 2000.0) as u32;
+                if steps != r.substeps {
+                    edit(Edit::Substeps(steps));
+                }
             }
             if !system.bars().is_empty() {
                 let mut it = p.bar_iterations;
@@ -699,6 +767,14 @@ fn contents(
     }
 
     // Stats.
+    egui::CollapsingHeader::new("Plots")
+        .default_open(false)
+        .show(ui, |ui| state.history.show(ui))
+        .header_response
+        .on_hover_text(format!(
+            "Energy and dt / dt_crit over the last {} s of simulated time",
+            super::plots::WINDOW_S
+        ));
     egui::CollapsingHeader::new("Stats")
         .default_open(true)
         .show(ui, |ui| {
@@ -744,7 +820,28 @@ fn contents(
             } else {
                 Color32::from_rgb(120, 220, 120)
             };
-            ui.colored_label(color, format!("stability dt / dt_crit = {margin:.3}"));
+            match s.dt_critical {
+                Some(c) if c.is_infinite() => {
+                    let why = if s.omega_max == 0.0 {
+                        "nothing here oscillates on a step (bars and constraints only)"
+                    } else {
+                        "this integrator is stable at any dt"
+                    };
+                    ui.label(format!("stability: no step limit ({why})"));
+                }
+                Some(c) => {
+                    ui.colored_label(
+                        color,
+                        format!("stability dt / dt_crit = {margin:.3} (dt_crit {c:.3e} s)"),
+                    );
+                }
+                None => {
+                    ui.colored_label(
+                        color,
+                        format!("stability: {} has no stable step here without damping", p.integrator),
+                    );
+                }
+            }
             if let Some(budget) = system.energy_budget() {
                 // How much of the energy rise the budget allows is used.
                 let used = (e.total() - budget.base) / budget.allowed;
@@ -796,6 +893,9 @@ fn contents(
                         "Colour springs by strain (stretch over rest length) instead of kind",
                     );
             });
+            if view.springs && state.strain_colors {
+                strain_legend(ui);
+            }
             ui.horizontal_wrapped(|ui| {
                 ui.checkbox(&mut view.particles, "particles")
                     .on_hover_text("Draw every particle as a dot");
