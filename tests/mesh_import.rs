@@ -52,7 +52,7 @@ fn springs(system: &System, kind: SpringKind) -> Vec<(u32, u32, f64)> {
         .filter(|s| s.kind == kind)
         .map(|s| (s.a.min(s.b), s.a.max(s.b), s.rest))
         .collect();
-    s.sort_by(|x, y| (x.0, x.1).cmp(&(y.0, y.1)));
+    s.sort_by_key(|x| (x.0, x.1));
     s
 }
 

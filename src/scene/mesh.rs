@@ -446,14 +446,13 @@ fn check_triangle(t: [u32; 3], positions: &[DVec3]) -> Result<(), String> {
     Ok(())
 }
 
+/// Two vertices, `[a, b]` with `a < b`.
+type Pair = [u32; 2];
+
 /// The structural edges and bend pairs of `triangles` (see [`Mesh`]); an edge of
 /// more than two triangles (non-manifold) or a triangle given twice is an error
 /// naming the lines.
-#[allow(clippy::type_complexity)]
-fn springs(
-    triangles: &[[u32; 3]],
-    lines: &[u32],
-) -> Result<(Vec<[u32; 2]>, Vec<[u32; 2]>), String> {
+fn springs(triangles: &[[u32; 3]], lines: &[u32]) -> Result<(Vec<Pair>, Vec<Pair>), String> {
     // (a, b, opposite vertex, triangle), a < b.
     let mut sides: Vec<(u32, u32, u32, u32)> = Vec::with_capacity(3 * triangles.len());
     for (t, &[a, b, c]) in triangles.iter().enumerate() {
