@@ -131,7 +131,7 @@ pub struct SceneSpec {
     /// Shear springs' stiffness as a multiple of k (grid; default 1, 0 = none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shear_scale: Option<f64>,
-    /// Bend springs' stiffness as a multiple of k (grid; default 1, 0 = none).
+    /// Bend springs' stiffness as a multiple of k (grid, mesh; default 1, 0 = none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bend_scale: Option<f64>,
     /// A grid of rigid bars instead of springs (seed 001's cloth): each particle
@@ -182,10 +182,11 @@ pub struct SceneSpec {
     #[serde(skip_serializing_if = "Option::is_none", with = "values::seed")]
     pub seed: Option<u64>,
     /// Position of particle 0 in m (grid, chain, rope: the first particle; lattice:
-    /// the block's centre; spring: the fixed end).
+    /// the block's centre; spring: the fixed end; mesh: where the file's origin goes).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub origin: Option<Vector>,
-    /// Rotation in degrees, applied about z, then x, then y (lattice).
+    /// Rotation in degrees, applied about z, then x, then y (lattice: about its
+    /// centre; mesh: about the file's origin).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rotation: Option<Vector>,
     /// Initial stretch of the spring beyond its rest length in m (spring).
