@@ -422,6 +422,13 @@ fn the_tablecloth_scene_loads_from_its_file_and_the_binary_alike() {
             "{p}"
         );
     }
+    // The copy built into the binary (used where no file is at the path) is the
+    // file, and builds the same cloth.
+    let path = "assets/meshes/tablecloth.obj";
+    let builtin_text = cloth_sandbox::scene::mesh::builtin_text(path).expect("built in");
+    assert_eq!(builtin_text, std::fs::read_to_string(path).unwrap());
+    let mesh = cloth_sandbox::scene::mesh::from_text(builtin_text).unwrap();
+    assert_eq!(mesh.positions.len(), TABLECLOTH_V);
     // The built-in scene is in the list the app and `cloth scenes` show.
     assert!(
         cloth_sandbox::scene::builtin_scenes()
@@ -589,4 +596,13 @@ fn cloth_info_names_the_mesh_engine_and_run_json_works() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("mesh layout"), "{}", stderr(&o));
+    // From a folder without assets/: the mesh built into the binary.
+    let elsewhere = scratch("elsewhere");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_cloth"))
+        .args(["info", "--scene", "tablecloth"])
+        .current_dir(&elsewhere)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("particles: 1801"), "{}", stdout(&o));
 }

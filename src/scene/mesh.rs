@@ -30,8 +30,9 @@ pub const MAX_MESH_FILE_BYTES: u64 = 256 << 20;
 const MAX_COORDINATE: f64 = 1e6;
 
 /// The meshes built into the program, by the path the built-in scenes give them
-/// (their `../meshes/NAME.obj` from `assets/scenes/`), so that the installed
-/// binary finds them from any folder.
+/// (their `../meshes/NAME.obj` from `assets/scenes/`): used where no file is at
+/// that path, so that the installed binary finds them from any folder (and a
+/// changed file in the source tree is read as it is).
 const BUILTIN_MESHES: &[(&str, &str)] = &[(
     "assets/meshes/tablecloth.obj",
     include_str!("../../assets/meshes/tablecloth.obj"),
@@ -97,24 +98,29 @@ pub fn join_relative(base: &std::path::Path, path: &str) -> String {
         .into_owned()
 }
 
-/// Reads and checks the mesh at `path` (a built-in mesh's path, or a file). The
-/// error is a sentence to follow "the mesh file PATH", starting with ": " or with
-/// ", line N: ".
+/// The text of the built-in mesh at `path` (as the built-in scenes name it), if
+/// there is one.
+pub fn builtin_text(path: &str) -> Option<&'static str> {
+    BUILTIN_MESHES
+        .iter()
+        .find(|(p, _)| *p == path)
+        .map(|(_, text)| *text)
+}
+
+/// Reads and checks the mesh at `path`: the file, or where there is none, a
+/// built-in mesh of that path. The error is a sentence to follow "file PATH",
+/// starting with ": " or with ", line N: ".
 pub fn load(path: &str) -> Result<Mesh, String> {
-    let text = match BUILTIN_MESHES.iter().find(|(p, _)| *p == path) {
-        Some((_, text)) => std::borrow::Cow::Borrowed(*text),
-        None => {
-            let file = std::path::Path::new(path);
-            if !file.exists() {
-                return Err(": no such file (a relative path in a scene file starts from the scene file's folder; on the command line, from the working folder)".to_string());
-            }
-            std::borrow::Cow::Owned(
-                crate::limits::read_text_file(file, MAX_MESH_FILE_BYTES)
-                    .map_err(|why| format!(": cannot be read: {why}"))?,
-            )
-        }
-    };
-    from_text(&text)
+    let file = std::path::Path::new(path);
+    if file.exists() {
+        let text = crate::limits::read_text_file(file, MAX_MESH_FILE_BYTES)
+            .map_err(|why| format!(": cannot be read: {why}"))?;
+        return from_text(&text);
+    }
+    match builtin_text(path) {
+        Some(text) => from_text(text),
+        None => Err(": no such file (a relative path in a scene file starts from the scene file's folder; on the command line, from the working folder)".to_string()),
+    }
 }
 
 /// The error at line `line` (1-based).
@@ -345,7 +351,10 @@ pub fn from_text(text: &str) -> Result<Mesh, String> {
                 return Err(mismatch(face + 1));
             }
             for (k, &vertex) in scan.face(face).iter().enumerate() {
-                let local = m.indices[c + k] as usize;
+                let Some(&local) = m.indices.get(c + k) else {
+                    return Err(mismatch(face + 1));
+                };
+                let local = local as usize;
                 let v = vertex as usize;
                 positions[v] = DVec3::new(
                     m.positions[3 * local],
