@@ -118,6 +118,11 @@ fn a_closed_tetrahedron_has_six_edges_and_its_bend_pairs_collapse_onto_them() {
     assert_eq!(springs(&system, SpringKind::Structural).len(), 6);
     assert!(springs(&system, SpringKind::Bend).is_empty());
     assert_eq!(system.springs().len(), 6);
+    // The mesh itself lists no bend pair that is an edge (the system would drop the
+    // duplicate anyway, keeping the structural spring).
+    let mesh = cloth_sandbox::scene::mesh::from_text(tetra).unwrap();
+    assert_eq!(mesh.edges.len(), 6);
+    assert!(mesh.bends.is_empty(), "{:?}", mesh.bends);
 }
 
 #[test]
