@@ -611,3 +611,17 @@ fn cloth_info_names_the_mesh_engine_and_run_json_works() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stdout(&o).contains("particles: 1801"), "{}", stdout(&o));
 }
+
+#[test]
+fn a_mesh_file_changed_on_disk_is_read_again() {
+    // The last file read is kept while its length and modification time stay.
+    let dir = scratch("changed");
+    let path = write(&dir, "m.obj", SQUARE);
+    assert_eq!(build(&path, "").particle_count(), 4);
+    assert_eq!(build(&path, "").particle_count(), 4);
+    write(&dir, "m.obj", &format!("{SQUARE}v 2 0 0\nf 2 5 3\n"));
+    assert_eq!(build(&path, "").particle_count(), 5);
+    write(&dir, "m.obj", "v 0 0 0\n");
+    let e = mesh_scene(&path, "").unwrap_err().to_string();
+    assert!(e.contains("no faces"), "{e}");
+}

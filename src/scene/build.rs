@@ -134,7 +134,7 @@ fn layout_mesh(spec: &SceneSpec, o: &str) -> Result<Option<Arc<Mesh>>, SceneErro
     };
     let mesh = mesh::load(path)
         .map_err(|why| invalid(o, "mesh", format!("file {}{why}", mesh::shown_path(path))))?;
-    Ok(Some(Arc::new(mesh)))
+    Ok(Some(mesh))
 }
 
 fn invalid(origin: &str, field: &str, message: String) -> SceneError {

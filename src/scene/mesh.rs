@@ -10,6 +10,8 @@
 //! vertex order (particle `i` is the file's vertex `i + 1`, across all objects)
 //! and each face's line, for messages that point at it.
 
+use std::sync::{Arc, Mutex};
+
 use glam::{DVec2, DVec3};
 
 use super::build::GRID_MAX_SIDE;
@@ -107,18 +109,41 @@ pub fn builtin_text(path: &str) -> Option<&'static str> {
         .map(|(_, text)| *text)
 }
 
+/// What identifies a mesh file's contents without reading it: its path, length
+/// and modification time.
+type FileStamp = (String, u64, Option<std::time::SystemTime>);
+
+/// The last mesh read from a file: a scene is resolved again on each `--set` and
+/// each rebuild, and a mesh of a million vertices takes seconds to read.
+static LAST_READ: Mutex<Option<(FileStamp, Arc<Mesh>)>> = Mutex::new(None);
+
 /// Reads and checks the mesh at `path`: the file, or where there is none, a
 /// built-in mesh of that path. The error is a sentence to follow "file PATH",
-/// starting with ": " or with ", line N: ".
-pub fn load(path: &str) -> Result<Mesh, String> {
+/// starting with ": " or with ", line N: ". The same file, unchanged (same length
+/// and modification time), is read once.
+pub fn load(path: &str) -> Result<Arc<Mesh>, String> {
     let file = std::path::Path::new(path);
-    if file.exists() {
+    if let Ok(meta) = std::fs::metadata(file) {
+        let stamp: FileStamp = (path.to_string(), meta.len(), meta.modified().ok());
+        let last = || {
+            LAST_READ
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+        };
+        // Without a modification time a file cannot be told unchanged.
+        if let Some((_, mesh)) =
+            (last().as_ref()).filter(|(seen, _)| *seen == stamp && seen.2.is_some())
+        {
+            return Ok(Arc::clone(mesh));
+        }
         let text = crate::limits::read_text_file(file, MAX_MESH_FILE_BYTES)
             .map_err(|why| format!(": cannot be read: {why}"))?;
-        return from_text(&text);
+        let mesh = Arc::new(from_text(&text)?);
+        *last() = Some((stamp, Arc::clone(&mesh)));
+        return Ok(mesh);
     }
     match builtin_text(path) {
-        Some(text) => from_text(text),
+        Some(text) => from_text(text).map(Arc::new),
         None => Err(": no such file (a relative path in a scene file starts from the scene file's folder; on the command line, from the working folder)".to_string()),
     }
 }
