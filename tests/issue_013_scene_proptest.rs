@@ -54,6 +54,8 @@ const KEYS: &[&str] = &[
     "max_speed",
     "force",
     "bars",
+    "mesh",
+    "pin_above",
     "name",
     "description",
     "nope",

@@ -624,7 +624,7 @@ fn contents(
                         edit(Edit::Width(w));
                     }
                 }
-                Layout::Spring => {}
+                Layout::Spring | Layout::Mesh => {}
             }
             let mut m = r.particle_mass;
             if slider(ui, &mut m, 0.000_001..=10.0, "particle mass (kg)", true, "Mass of each particle in kg") {

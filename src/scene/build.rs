@@ -2,9 +2,12 @@
 //! range (the error names the field and the range), then lay out particles, springs,
 //! bars, triangles and pins.
 
+use std::sync::Arc;
+
 use glam::{DMat3, DVec2, DVec3};
 
 use super::edit::EDIT_ORIGIN;
+use super::mesh::{self, Mesh};
 use super::values::{PinPreset, Pins};
 use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
 use crate::limits::number as shown;
@@ -56,8 +59,82 @@ pub struct Resolved {
     pub rotation: DVec3,
     /// Initial spring stretch in m.
     pub stretch: f64,
+    /// The mesh of a mesh layout, as read and checked from its file.
+    pub mesh: Option<Arc<Mesh>>,
     /// Simulation parameters.
     pub params: Params,
+}
+
+/// Why `rest_length` (and the panel's rest length) does not apply to a mesh.
+pub const NOT_ON_MESH_REST_LENGTH: &str =
+    "does not apply to a mesh layout: the mesh's edges give the rest lengths";
+
+/// The mesh of `spec`, read and checked, on a mesh layout; `None` on the others.
+/// A key that means nothing for the layout (a grid's `width` on a mesh, `mesh`
+/// on a grid) is refused with the reason.
+fn layout_mesh(spec: &SceneSpec, o: &str) -> Result<Option<Arc<Mesh>>, SceneError> {
+    if spec.layout != Layout::Mesh {
+        for (key, given) in [
+            ("mesh", spec.mesh.is_some()),
+            ("pin_above", spec.pin_above.is_some()),
+        ] {
+            if given {
+                return Err(invalid(
+                    o,
+                    key,
+                    format!(
+                        "does not apply to a {} layout: only a mesh layout (`layout = \"mesh\"`) has it",
+                        spec.layout.name()
+                    ),
+                ));
+            }
+        }
+        return Ok(None);
+    }
+    let vertices = "does not apply to a mesh layout: the mesh's vertices are its particles";
+    let not_here = [
+        ("width", spec.width.is_some(), vertices),
+        ("height", spec.height.is_some(), vertices),
+        ("depth", spec.depth.is_some(), vertices),
+        (
+            "rest_length",
+            spec.rest_length.is_some(),
+            NOT_ON_MESH_REST_LENGTH,
+        ),
+        (
+            "size",
+            spec.size.is_some(),
+            "does not apply to a mesh layout: the mesh's coordinates give its size",
+        ),
+        (
+            "orientation",
+            spec.orientation.is_some(),
+            "does not apply to a mesh layout: turn a mesh with `rotation`",
+        ),
+        (
+            "shear_scale",
+            spec.shear_scale.is_some(),
+            "does not apply to a mesh layout: a mesh has structural and bend springs, no shear springs",
+        ),
+        (
+            "stretch",
+            spec.stretch.is_some(),
+            "does not apply to a mesh layout: only the spring layout starts stretched",
+        ),
+    ];
+    if let Some((key, _, why)) = not_here.iter().find(|(_, given, _)| *given) {
+        return Err(invalid(o, key, why.to_string()));
+    }
+    let Some(path) = &spec.mesh else {
+        return Err(invalid(
+            o,
+            "mesh",
+            "is missing: a mesh layout needs the OBJ file of its cloth, `mesh = \"path/to/file.obj\"`".to_string(),
+        ));
+    };
+    let mesh = mesh::load(path)
+        .map_err(|why| invalid(o, "mesh", format!("file {}{why}", mesh::shown_path(path))))?;
+    Ok(Some(mesh))
 }
 
 fn invalid(origin: &str, field: &str, message: String) -> SceneError {
@@ -239,7 +316,7 @@ pub fn side_ranges(layout: Layout) -> [Option<CountRange>; 3] {
             side("depth", LATTICE_MAX_SIDE),
         ],
         Layout::Chain | Layout::Rope => [side("width", LINE_MAX), None, None],
-        Layout::Spring => [None, None, None],
+        Layout::Spring | Layout::Mesh => [None, None, None],
     }
 }
 
@@ -359,11 +436,15 @@ pub fn spring_constants(
 pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
     let o = origin;
     let layout = spec.layout;
-    let mut sides = match layout {
-        Layout::Grid => [32, 32, 1],
-        Layout::Lattice => [7, 4, 4],
-        Layout::Chain | Layout::Rope => [11, 1, 1],
-        Layout::Spring => [2, 1, 1],
+    let mesh = layout_mesh(spec, o)?;
+    let mut sides = match (layout, &mesh) {
+        (Layout::Grid, _) => [32, 32, 1],
+        (Layout::Lattice, _) => [7, 4, 4],
+        (Layout::Chain | Layout::Rope, _) => [11, 1, 1],
+        (Layout::Spring, _) => [2, 1, 1],
+        // At most MESH_MAX_VERTICES, a u32.
+        (Layout::Mesh, Some(m)) => [m.positions.len() as u32, 1, 1],
+        (Layout::Mesh, None) => [0, 1, 1],
     };
     let given = [spec.width, spec.height, spec.depth];
     for ((side, range), value) in sides.iter_mut().zip(side_ranges(layout)).zip(given) {
@@ -379,7 +460,15 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
             ranged(o, "size", v, 0.0, false, 1e4)? / (width.max(2) - 1) as f64
         }
         Some((_, v)) => REST_LENGTH.check(o, v)?,
-        None => 0.1,
+        // A mesh's: its mean edge length (shown, not used).
+        None => mesh.as_ref().map_or(0.1, |m| {
+            let total: f64 = m
+                .edges
+                .iter()
+                .map(|&[a, b]| m.positions[a as usize].distance(m.positions[b as usize]))
+                .sum();
+            total / m.edges.len().max(1) as f64
+        }),
     };
     let particle_mass = match one_of(
         o,
@@ -543,7 +632,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
     };
     let substeps = SUBSTEPS.check(o, spec.substeps.unwrap_or(16))?;
 
-    let pins = pin_indices(
+    let mut pins = pin_indices(
         o,
         spec.pins
             .as_ref()
@@ -552,6 +641,23 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         [width, height],
         particles,
     )?;
+    let origin_at = anchor(spec, o, [width, height], rest_length)?;
+    let rotation = vector(
+        o,
+        "rotation",
+        spec.rotation.map_or(DVec3::ZERO, |v| v.0),
+        1e6,
+    )?;
+    if let (Some(height), Some(m)) = (spec.pin_above, &mesh) {
+        let height = ranged(o, "pin_above", height, -1e6, false, 1e6)?;
+        let turn = rotation_matrix(rotation);
+        let above = (m.positions.iter().enumerate())
+            .filter(|(_, p)| (origin_at + turn * **p).y >= height)
+            .map(|(i, _)| i);
+        pins.extend(above);
+        pins.sort_unstable();
+        pins.dedup();
+    }
     Ok(Resolved {
         layout,
         orientation: spec.orientation.unwrap_or_default(),
@@ -567,14 +673,10 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         bars,
         pins,
         substeps,
-        origin: anchor(spec, o, [width, height], rest_length)?,
-        rotation: vector(
-            o,
-            "rotation",
-            spec.rotation.map_or(DVec3::ZERO, |v| v.0),
-            1e6,
-        )?,
+        origin: origin_at,
+        rotation,
         stretch: ranged(o, "stretch", spec.stretch.unwrap_or(1.0), -1e3, false, 1e3)?,
+        mesh,
         params,
     })
 }
@@ -609,12 +711,18 @@ fn anchor(
     )
 }
 
+/// The rotation of `degrees` about z, then x, then y.
+fn rotation_matrix(degrees: DVec3) -> DMat3 {
+    let rad = degrees * (std::f64::consts::PI / 180.0);
+    DMat3::from_rotation_y(rad.y) * DMat3::from_rotation_x(rad.x) * DMat3::from_rotation_z(rad.z)
+}
+
 /// The pin set a layout has when its scene names none: a grid's top corners, a
-/// lattice nothing, the first particle of a line.
+/// lattice or a mesh nothing, the first particle of a line.
 fn default_pins(layout: Layout) -> PinPreset {
     match layout {
         Layout::Grid => PinPreset::TopCorners,
-        Layout::Lattice => PinPreset::None,
+        Layout::Lattice | Layout::Mesh => PinPreset::None,
         _ => PinPreset::First,
     }
 }
@@ -680,7 +788,7 @@ impl Resolved {
     pub fn spring_scale(&self, kind: SpringKind) -> f64 {
         match (self.layout, kind) {
             (Layout::Grid, SpringKind::Shear) => self.shear_scale,
-            (Layout::Grid, SpringKind::Bend) => self.bend_scale,
+            (Layout::Grid | Layout::Mesh, SpringKind::Bend) => self.bend_scale,
             _ => 1.0,
         }
     }
@@ -801,11 +909,15 @@ impl Resolved {
             Layout::Chain | Layout::Rope => (0..w)
                 .map(|i| self.origin + DVec3::X * (i as f64 * l))
                 .collect(),
+            Layout::Mesh => {
+                let rotation = rotation_matrix(self.rotation);
+                (self.mesh.iter())
+                    .flat_map(|m| m.positions.iter())
+                    .map(|&p| self.origin + rotation * p)
+                    .collect()
+            }
             Layout::Lattice => {
-                let rad = self.rotation * (std::f64::consts::PI / 180.0);
-                let rotation = DMat3::from_rotation_y(rad.y)
-                    * DMat3::from_rotation_x(rad.x)
-                    * DMat3::from_rotation_z(rad.z);
+                let rotation = rotation_matrix(self.rotation);
                 let centre = DVec3::new((w - 1) as f64, (h - 1) as f64, (d - 1) as f64) * (0.5 * l);
                 let mut positions = Vec::with_capacity(w * h * d);
                 for z in 0..d {
@@ -895,6 +1007,35 @@ impl Resolved {
             }
             Layout::Spring => {
                 springs.push(spring(0, 1, l, SpringKind::Other));
+            }
+            Layout::Mesh => {
+                if let Some(m) = &self.mesh {
+                    // Rest lengths from the file's coordinates (the start positions
+                    // may have been moved out of the sphere).
+                    let rest = |[a, b]: [u32; 2]| {
+                        m.positions[a as usize].distance(m.positions[b as usize])
+                    };
+                    for &edge in &m.edges {
+                        springs.push(spring(
+                            edge[0] as usize,
+                            edge[1] as usize,
+                            rest(edge),
+                            SpringKind::Structural,
+                        ));
+                    }
+                    if self.bend_scale > 0.0 {
+                        for &pair in &m.bends {
+                            springs.push(spring(
+                                pair[0] as usize,
+                                pair[1] as usize,
+                                rest(pair),
+                                SpringKind::Bend,
+                            ));
+                        }
+                    }
+                    triangles.clone_from(&m.triangles);
+                    uvs.clone_from(&m.uvs);
+                }
             }
             Layout::Chain | Layout::Rope => {
                 for i in 0..self.width as usize {

@@ -6,6 +6,7 @@
 
 mod build;
 mod edit;
+pub mod mesh;
 mod values;
 
 use std::path::Path;
@@ -39,6 +40,10 @@ pub enum Layout {
     Lattice,
     /// A line of `width` masses joined by rigid bars (seed 001's rope).
     Rope,
+    /// A triangle mesh from an OBJ file (`mesh`): its vertices are the particles,
+    /// its edges structural springs, and the vertices opposite each interior edge
+    /// bend springs.
+    Mesh,
 }
 
 impl Layout {
@@ -50,6 +55,7 @@ impl Layout {
             Self::Chain => "chain",
             Self::Lattice => "lattice",
             Self::Rope => "rope",
+            Self::Mesh => "mesh",
         }
     }
 }
@@ -79,6 +85,10 @@ pub struct SceneSpec {
     pub description: Option<String>,
     /// Particle layout.
     pub layout: Layout,
+    /// The OBJ file of a mesh layout. Relative to the scene file's folder in a
+    /// scene file (to the working folder on the command line).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
     /// Grid orientation.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub orientation: Option<Orientation>,
@@ -121,7 +131,7 @@ pub struct SceneSpec {
     /// Shear springs' stiffness as a multiple of k (grid; default 1, 0 = none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shear_scale: Option<f64>,
-    /// Bend springs' stiffness as a multiple of k (grid; default 1, 0 = none).
+    /// Bend springs' stiffness as a multiple of k (grid, mesh; default 1, 0 = none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bend_scale: Option<f64>,
     /// A grid of rigid bars instead of springs (seed 001's cloth): each particle
@@ -155,6 +165,10 @@ pub struct SceneSpec {
     /// `none`, or a list of indices.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pins: Option<Pins>,
+    /// Pins, besides `pins`, every particle at or above this height (y, in m,
+    /// where the scene puts it) (mesh).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pin_above: Option<f64>,
     /// Integrator name.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub integrator: Option<String>,
@@ -168,10 +182,11 @@ pub struct SceneSpec {
     #[serde(skip_serializing_if = "Option::is_none", with = "values::seed")]
     pub seed: Option<u64>,
     /// Position of particle 0 in m (grid, chain, rope: the first particle; lattice:
-    /// the block's centre; spring: the fixed end).
+    /// the block's centre; spring: the fixed end; mesh: where the file's origin goes).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub origin: Option<Vector>,
-    /// Rotation in degrees, applied about z, then x, then y (lattice).
+    /// Rotation in degrees, applied about z, then x, then y (lattice: about its
+    /// centre; mesh: about the file's origin).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub rotation: Option<Vector>,
     /// Initial stretch of the spring beyond its rest length in m (spring).
@@ -403,6 +418,7 @@ const BUILTINS: &[BuiltinScene] = &[
     builtin!("flag"),
     builtin!("sheet"),
     builtin!("drape"),
+    builtin!("tablecloth"),
     builtin!("fold"),
     builtin!("tear"),
     builtin!("spring"),
@@ -430,12 +446,23 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Parses TOML text; `origin` says where it came from in errors.
+    /// Parses TOML text; `origin` says where it came from in errors. A relative
+    /// `mesh` path is taken from the working folder.
     pub fn parse(text: &str, origin: &str) -> Result<Self, SceneError> {
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| SceneError::Parse {
+        Self::parse_in(text, origin, None)
+    }
+
+    /// Parses TOML text from a file in the folder `base`: a relative `mesh` path
+    /// in it starts from `base` (and is kept joined to it, so that `--set` and a
+    /// saved copy in the working folder find the same file).
+    pub fn parse_in(text: &str, origin: &str, base: Option<&Path>) -> Result<Self, SceneError> {
+        let mut spec: SceneSpec = toml::from_str(text).map_err(|e| SceneError::Parse {
             origin: origin.to_string(),
             message: file_message(&e, text),
         })?;
+        if let (Some(base), Some(mesh)) = (base, &mut spec.mesh) {
+            *mesh = mesh::join_relative(base, mesh);
+        }
         let scene = Self {
             spec,
             origin: origin.to_string(),
@@ -447,7 +474,12 @@ impl Scene {
     /// A built-in scene by name, or a scene file by path.
     pub fn load(name_or_path: &str) -> Result<Self, SceneError> {
         if let Some(builtin) = BUILTINS.iter().find(|b| b.name == name_or_path) {
-            return Self::parse(builtin.toml, &format!("built-in scene `{}`", builtin.name));
+            // Its meshes are built in under the paths it names from assets/scenes/.
+            return Self::parse_in(
+                builtin.toml,
+                &format!("built-in scene `{}`", builtin.name),
+                Some(Path::new("assets/scenes")),
+            );
         }
         let path = Path::new(name_or_path);
         if !path.exists() {
@@ -466,7 +498,11 @@ impl Scene {
                 path: echo(name_or_path),
                 source: std::io::Error::other(why),
             })?;
-        Self::parse(&text, &format!("scene file {}", echo(name_or_path)))
+        Self::parse_in(
+            &text,
+            &format!("scene file {}", echo(name_or_path)),
+            path.parent(),
+        )
     }
 
     /// Sets one key from text, as `--set key=value` does: the value is read as TOML
@@ -548,6 +584,13 @@ impl Scene {
                 spec.damping = Some(DAMPING.check(o, b)?);
                 spec.damping_ratio = None;
                 spec.damping_per_mass = None;
+            }
+            Edit::RestLength(_) if layout == Layout::Mesh => {
+                return Err(SceneError::Invalid {
+                    origin: o.to_string(),
+                    field: edit.key().to_string(),
+                    message: build::NOT_ON_MESH_REST_LENGTH.to_string(),
+                });
             }
             Edit::RestLength(l) => {
                 spec.rest_length = Some(REST_LENGTH.check(o, l)?);
