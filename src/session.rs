@@ -55,6 +55,8 @@ const REBUILD_KEYS: &[&str] = &[
     "shear_scale",
     "bend_scale",
     "seed",
+    "mesh",
+    "pin_above",
 ];
 
 /// The wind the wind switch turns on when the scene had none to restore: seed
@@ -673,7 +675,8 @@ impl Session {
                 b.bend_scale,
                 b.params.seed,
             )
-            || self.scene.spec.origin != scene.spec.origin;
+            || self.scene.spec.origin != scene.spec.origin
+            || self.scene.spec.mesh != scene.spec.mesh;
         self.commit(scene, settings, rebuild);
         if !rebuild {
             self.sync_pins();

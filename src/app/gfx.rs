@@ -20,6 +20,9 @@ pub struct Gfx {
     pub renderer: Renderer,
     pub egui_renderer: egui_wgpu::Renderer,
     pub adapter_name: String,
+    /// Whether the adapter rasterises on the CPU (lavapipe, llvmpipe): its frames
+    /// cost the cores the physics runs on.
+    pub software: bool,
 }
 
 /// What came of trying to draw a frame.
@@ -90,7 +93,8 @@ impl Gfx {
         }
         // A software adapter (lavapipe) rasterises on the cores the physics
         // thread steps on: every frame without MSAA leaves it more of them.
-        let samples = if adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+        let software = adapter.get_info().device_type == wgpu::DeviceType::Cpu;
+        let samples = if software {
             1
         } else {
             render::pick_sample_count(&adapter, format)
@@ -114,6 +118,7 @@ impl Gfx {
             renderer,
             egui_renderer,
             adapter_name,
+            software,
         })
     }
 

@@ -37,6 +37,18 @@ use physics::SharedSession;
 /// Window title (the Xvfb test finds the window by it).
 pub const TITLE: &str = "cloth-sandbox";
 
+/// Most of the wall-clock time frames may take on a software adapter while the
+/// physics has work: the frames wait so that the cores they share keep the rest.
+/// A 256² cloth on lavapipe otherwise draws back to back and leaves the physics
+/// under half of what it runs headless.
+const SOFTWARE_FRAME_SHARE: f64 = 0.5;
+
+/// The physics' share of wall time (see [`Pace::busy`]) above which frames on a
+/// software adapter are spaced out.
+///
+/// [`Pace::busy`]: cloth_sandbox::session::Pace::busy
+const BUSY_PHYSICS: f64 = 0.25;
+
 /// Pick radius around the cursor, in logical pixels.
 const PICK_RADIUS: f32 = 12.0;
 
@@ -133,6 +145,10 @@ struct App {
     last_frame: Instant,
     /// Smoothed frame time (s).
     frame_time: f64,
+    /// Smoothed wall time (s) the window's thread spends on one frame.
+    draw_time: f64,
+    /// When the next frame may start (see [`SOFTWARE_FRAME_SHARE`]).
+    next_frame: Instant,
     hovered: Option<usize>,
     /// The last points (px) of the cut the mouse is drawing (Ctrl + left drag).
     cut_path: Vec<Vec2>,
@@ -157,6 +173,8 @@ impl App {
             frame_data: FrameData::default(),
             last_frame: Instant::now(),
             frame_time: 1.0 / 60.0,
+            draw_time: 0.0,
+            next_frame: Instant::now(),
             hovered: None,
             cut_path: Vec::new(),
             recording: None,
@@ -646,6 +664,7 @@ impl App {
         }
         self.frame_data
             .build(self.session.system(), &self.view, self.panel.strain_colors);
+        let physics_busy = self.session.pace().busy;
         self.session.release();
 
         let Some(gfx) = self.gfx.as_mut() else {
@@ -654,6 +673,15 @@ impl App {
         let highlight = self.mouse.dragged().or(self.hovered);
         let frame = self.frame_data.scene_frame(highlight);
         gfx.draw(&frame, &self.camera, &self.view, &self.egui_ctx, ui_output);
+
+        let took = now.elapsed().as_secs_f64();
+        self.draw_time = 0.8 * self.draw_time + 0.2 * took;
+        let wait = if gfx.software && physics_busy > BUSY_PHYSICS {
+            (self.draw_time / SOFTWARE_FRAME_SHARE - took).clamp(0.0, 0.25)
+        } else {
+            0.0
+        };
+        self.next_frame = Instant::now() + std::time::Duration::from_secs_f64(wait);
     }
 }
 
@@ -670,9 +698,15 @@ impl ApplicationHandler for App {
         self.session.release();
     }
 
-    fn about_to_wait(&mut self, _event_loop: &ActiveEventLoop) {
-        if let Some(gfx) = &self.gfx {
+    fn about_to_wait(&mut self, event_loop: &ActiveEventLoop) {
+        let Some(gfx) = &self.gfx else {
+            return;
+        };
+        if Instant::now() >= self.next_frame {
+            event_loop.set_control_flow(ControlFlow::Poll);
             gfx.window.request_redraw();
+        } else {
+            event_loop.set_control_flow(ControlFlow::WaitUntil(self.next_frame));
         }
     }
 }
