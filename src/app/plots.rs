@@ -108,13 +108,16 @@ impl History {
     }
 }
 
+/// One line of a plot: its name, colour and (time, value) points.
+type Series<'a> = (&'a str, Color32, Vec<(f64, f64)>);
+
 /// Height (points) of one plot.
 const PLOT_HEIGHT: f32 = 70.0;
 
 /// Draws `series` (name, colour, (time, value) points) in one frame sharing its
 /// axes, with the value range written at the left and a legend below; `line`
 /// draws a dashed level (e.g. the stability limit 1) when in range or near it.
-fn plot(ui: &mut Ui, series: &[(&str, Color32, Vec<(f64, f64)>)], line: Option<f64>) {
+fn plot(ui: &mut Ui, series: &[Series<'_>], line: Option<f64>) {
     let finite = |v: &f64| v.is_finite();
     let points = series.iter().flat_map(|(_, _, p)| p.iter());
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
