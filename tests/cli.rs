@@ -354,3 +354,29 @@ fn safe_stepping_follows_the_apps_rule_in_a_gale() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(!stderr(&o).contains("stretch limit"), "{}", stderr(&o));
 }
+
+/// Mesa's Vulkan driver complains twice when `XDG_RUNTIME_DIR` is missing (as in
+/// containers and CI); the binary gives it a private one, so nothing is printed
+/// about it, and the directory is gone at exit.
+#[test]
+fn a_missing_xdg_runtime_dir_is_not_reported() {
+    let out = std::env::temp_dir().join(format!("cloth-xdg-{}.png", std::process::id()));
+    let child = Command::new(env!("CARGO_BIN_EXE_cloth"))
+        .args(["screenshot", "--scene", "chain", "--out"])
+        .arg(&out)
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let runtime_dir = std::env::temp_dir().join(format!("cloth-sandbox-runtime-{}", child.id()));
+    let o = child.wait_with_output().unwrap();
+    let _ = std::fs::remove_file(&out);
+    assert!(!stderr(&o).contains("XDG_RUNTIME_DIR"), "{}", stderr(&o));
+    assert!(
+        !runtime_dir.exists(),
+        "{} left behind",
+        runtime_dir.display()
+    );
+}

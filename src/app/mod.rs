@@ -101,7 +101,17 @@ pub fn run(session: Session) -> anyhow::Result<()> {
 fn new_event_loop() -> anyhow::Result<EventLoop<()>> {
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
-    let result = std::panic::catch_unwind(EventLoop::new);
+    let result = std::panic::catch_unwind(|| {
+        let mut builder = EventLoop::builder();
+        // Without a Wayland display, X11 straight away: trying Wayland first makes
+        // libwayland print "XDG_RUNTIME_DIR is invalid" on every launch.
+        #[cfg(all(unix, not(target_os = "macos")))]
+        if std::env::var_os("WAYLAND_DISPLAY").is_none() && std::env::var_os("DISPLAY").is_some() {
+            use winit::platform::x11::EventLoopBuilderExtX11 as _;
+            builder.with_x11();
+        }
+        builder.build()
+    });
     std::panic::set_hook(hook);
     match result {
         Ok(Ok(event_loop)) => Ok(event_loop),
