@@ -283,6 +283,16 @@ pub fn bounds(points: &[Vec3]) -> Option<(Vec3, Vec3)> {
         })
 }
 
+/// Whether any of the finite `points` projects inside the viewport, in front of
+/// the camera (the app frames the scene again when none has for a while).
+pub fn any_in_view(camera: &OrbitCamera, viewport: Vec2, points: &[Vec3]) -> bool {
+    let view_proj = camera.view_proj(viewport);
+    points.iter().filter(|p| p.is_finite()).any(|p| {
+        let clip = view_proj * p.extend(1.0);
+        clip.w > camera.near() && clip.x.abs() <= clip.w && clip.y.abs() <= clip.w
+    })
+}
+
 /// The particle under the cursor: among the particles whose projection lies within
 /// `radius_px` pixels of `screen`, the one closest to the cursor on screen; when
 /// two are equally close (within half a pixel) the one nearer the camera wins.

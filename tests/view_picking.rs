@@ -1,7 +1,7 @@
 //! Camera and picking maths, headless: rays from known screen points hit the
 //! expected particles, projections invert, and the camera controls behave.
 
-use cloth_sandbox::view::{FlyKeys, OrbitCamera, bounds, pick_particle};
+use cloth_sandbox::view::{FlyKeys, OrbitCamera, any_in_view, bounds, pick_particle};
 use glam::{Vec2, Vec3};
 
 const VIEWPORT: Vec2 = Vec2::new(800.0, 600.0);
@@ -229,4 +229,31 @@ fn bounds_skip_non_finite_points() {
     let (lo, hi) = bounds(&[Vec3::ONE, Vec3::splat(f32::NAN), -Vec3::ONE]).unwrap();
     assert_eq!((lo, hi), (-Vec3::ONE, Vec3::ONE));
     assert!(bounds(&[]).is_none());
+}
+
+#[test]
+fn a_scene_is_in_view_while_one_point_projects_inside() {
+    let camera = front_camera();
+    // Half the vertical field of view is 30°: at 10 m the view reaches
+    // 10 tan 30° = 5.77 m up and down.
+    let half_height = 10.0 * 30f32.to_radians().tan();
+    assert!(any_in_view(&camera, VIEWPORT, &grid()));
+    let below = |y: f32| vec![Vec3::new(0.0, y, 0.0), Vec3::new(1.0, y, 0.0)];
+    assert!(any_in_view(&camera, VIEWPORT, &below(-0.95 * half_height)));
+    assert!(!any_in_view(&camera, VIEWPORT, &below(-1.05 * half_height)));
+    // Behind the camera, or not finite: never in view.
+    assert!(!any_in_view(
+        &camera,
+        VIEWPORT,
+        &[Vec3::new(0.0, 0.0, 20.0)]
+    ));
+    assert!(!any_in_view(
+        &camera,
+        VIEWPORT,
+        &[Vec3::NAN, Vec3::new(0.0, 50.0, 0.0)]
+    ));
+    // One point inside is enough.
+    let mut fallen = below(-100.0);
+    fallen.push(Vec3::ZERO);
+    assert!(any_in_view(&camera, VIEWPORT, &fallen));
 }

@@ -25,7 +25,7 @@ use winit::keyboard::{KeyCode, ModifiersState, PhysicalKey};
 use winit::window::{Window, WindowId};
 
 use cloth_sandbox::session::{Edit, Session};
-use cloth_sandbox::view::{FlyKeys, OrbitCamera, pick_particle, springs_crossed};
+use cloth_sandbox::view::{FlyKeys, OrbitCamera, any_in_view, pick_particle, springs_crossed};
 
 use crate::render::ViewOptions;
 use frame::FrameData;
@@ -48,6 +48,9 @@ const SOFTWARE_FRAME_SHARE: f64 = 0.5;
 ///
 /// [`Pace::busy`]: cloth_sandbox::session::Pace::busy
 const BUSY_PHYSICS: f64 = 0.25;
+
+/// Seconds with no particle in view before the camera frames the scene again.
+const OUT_OF_VIEW_S: f64 = 1.0;
 
 /// Pick radius around the cursor, in logical pixels.
 const PICK_RADIUS: f32 = 12.0;
@@ -159,6 +162,8 @@ struct App {
     draw_time: f64,
     /// When the next frame may start (see [`SOFTWARE_FRAME_SHARE`]).
     next_frame: Instant,
+    /// Since when no particle has been in view, if none is.
+    out_of_view_since: Option<Instant>,
     hovered: Option<usize>,
     /// The last points (px) of the cut the mouse is drawing (Ctrl + left drag).
     cut_path: Vec<Vec2>,
@@ -185,6 +190,7 @@ impl App {
             frame_time: 1.0 / 60.0,
             draw_time: 0.0,
             next_frame: Instant::now(),
+            out_of_view_since: None,
             hovered: None,
             cut_path: Vec::new(),
             recording: None,
@@ -209,6 +215,24 @@ impl App {
         self.camera = OrbitCamera::default();
         let (lo, hi) = frame::scene_bounds(&self.session);
         self.camera.frame(lo, hi);
+    }
+
+    /// Frames the scene again when no particle has been in view for
+    /// [`OUT_OF_VIEW_S`] (a soft cloth stretched past the view, one blown away, one
+    /// unpinned that fell), unless the user is moving the camera or a particle.
+    fn follow_the_scene(&mut self, now: Instant) {
+        let in_view = any_in_view(&self.camera, self.viewport(), &self.frame_data.positions);
+        if in_view || self.mouse.gesture != input::Gesture::Idle {
+            self.out_of_view_since = None;
+            return;
+        }
+        let since = *self.out_of_view_since.get_or_insert(now);
+        if now.duration_since(since).as_secs_f64() >= OUT_OF_VIEW_S {
+            log::info!("the scene left the view: framing it again");
+            self.frame_camera();
+            self.panel.wrote = Some("The scene left the view: framed again (F frames it).".into());
+            self.out_of_view_since = None;
+        }
     }
 
     /// Origin and size (px) of the scene's part of the window.
@@ -674,6 +698,7 @@ impl App {
         }
         self.frame_data
             .build(self.session.system(), &self.view, self.panel.strain_colors);
+        self.follow_the_scene(now);
         let physics_busy = self.session.pace().busy;
         self.session.release();
 
