@@ -122,6 +122,9 @@ pub struct Session {
     defaults: Scene,
     /// Real-time factor and physics cost, measured over the last half second.
     pace: PaceMeter,
+    /// Triangles that draw the system as a solid where it has no surface of its
+    /// own ([`Resolved::display_surface`]).
+    display_surface: Vec<[u32; 3]>,
     /// Setups before each change, oldest first, for undo.
     undo: Vec<Scene>,
     /// Setups undone, most recent last, for redo.
@@ -243,6 +246,7 @@ impl Session {
             step_choice: None,
             stored_wind: None,
             pace: PaceMeter::default(),
+            display_surface: Vec::new(),
         };
         session.built();
         Ok(session)
@@ -263,6 +267,7 @@ impl Session {
             .collect();
         self.rest_length = self.settings.rest_length;
         self.substeps = self.settings.substeps;
+        self.display_surface = self.settings.display_surface();
         self.clock.reset();
         self.divergence = None;
         self.last_good = self.system.state().clone();
@@ -360,6 +365,15 @@ impl Session {
     /// `params.dt`; [`Self::system`] has the parameters that run.
     pub fn settings(&self) -> &Resolved {
         &self.settings
+    }
+
+    /// The triangles to draw: the system's surface, or for a layout without one
+    /// (the jelly cube) the faces that show it as a solid.
+    pub fn surface(&self) -> &[[u32; 3]] {
+        match self.system.triangles() {
+            [] => &self.display_surface,
+            own => own,
+        }
     }
 
     /// The running system.

@@ -181,3 +181,43 @@ fn a_grabbed_particle_stays_held_while_parameters_change() {
     system.run(10).unwrap();
     assert_ne!(system.positions()[36], target, "released, it falls again");
 }
+
+/// The jelly cube draws as a solid: its display surface is the lattice's six
+/// faces, a closed surface wound one way (every edge is crossed once in each
+/// direction), and it is for drawing only: the system itself has no triangles,
+/// so no aerodynamic drag.
+#[test]
+fn the_lattice_draws_as_a_closed_box_of_faces() {
+    use std::collections::HashMap;
+    let mut scene = Scene::load("jelly").unwrap();
+    scene.set_all(["width=5", "height=4", "depth=3"]).unwrap();
+    let settings = scene.resolve().unwrap();
+    let surface = settings.display_surface();
+    let (w, h, d) = (5, 4, 3);
+    let quads = (w - 1) * (h - 1) + (w - 1) * (d - 1) + (h - 1) * (d - 1);
+    assert_eq!(surface.len(), 2 * 2 * quads);
+    let mut directed: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &surface {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *directed.entry((a, b)).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &directed {
+        assert_eq!(n, 1, "edge {a}->{b} crossed {n} times the same way");
+        assert_eq!(
+            directed.get(&(b, a)),
+            Some(&1),
+            "edge {a}-{b} is on one face only"
+        );
+    }
+    assert!(settings.build().triangles().is_empty());
+    // A cloth has a surface of its own and no display surface.
+    assert!(
+        Scene::load("cloth")
+            .unwrap()
+            .resolve()
+            .unwrap()
+            .display_surface()
+            .is_empty()
+    );
+}

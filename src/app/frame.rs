@@ -53,13 +53,20 @@ impl FrameData {
             .extend(system.positions().iter().map(|p| p.as_vec3()));
     }
 
-    /// Copies everything the renderer needs from `system`, so that the frame can
-    /// be drawn while the physics thread steps on.
-    pub fn build(&mut self, system: &System, view: &ViewOptions, by_strain: bool) {
+    /// Copies everything the renderer needs from `system`, with `surface` as its
+    /// triangles ([`Session::surface`]), so that the frame can be drawn while the
+    /// physics thread steps on.
+    pub fn build(
+        &mut self,
+        system: &System,
+        surface: &[[u32; 3]],
+        view: &ViewOptions,
+        by_strain: bool,
+    ) {
         self.refresh_positions(system);
-        if self.triangles != system.triangles() {
+        if self.triangles != surface {
             self.triangles.clear();
-            self.triangles.extend_from_slice(system.triangles());
+            self.triangles.extend_from_slice(surface);
         }
         // The solids, under the contact surfaces the cloth rests on.
         let params = system.params();

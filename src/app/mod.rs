@@ -204,7 +204,9 @@ impl App {
     /// After a scene (re)load: frame it and pick sensible display defaults.
     fn scene_loaded(&mut self) {
         self.frame_camera();
-        let has_surface = !self.session.system().triangles().is_empty();
+        // A cloth shows its surface; a lattice its faces; a chain or rope its
+        // springs and particles.
+        let has_surface = !self.session.surface().is_empty();
         self.view.mesh = has_surface;
         self.view.particles = !has_surface;
         self.view.springs = !has_surface;
@@ -529,6 +531,7 @@ impl App {
             camera: self.camera,
             options: self.view,
             by_strain: self.panel.strain_colors,
+            surface: self.session.surface().to_vec(),
         };
         let system = self.session.system().clone();
         let scene = self.session.name();
@@ -588,8 +591,12 @@ impl App {
             width,
             height,
         )?;
-        self.frame_data
-            .build(self.session.system(), &self.view, self.panel.strain_colors);
+        self.frame_data.build(
+            self.session.system(),
+            self.session.surface(),
+            &self.view,
+            self.panel.strain_colors,
+        );
         let frame = self.frame_data.scene_frame(None);
         let pixels = offscreen.render(&frame, &self.camera, &self.view)?;
         // The name is taken first (never replacing a file), then the picture is
@@ -696,8 +703,12 @@ impl App {
         if !self.egui_ctx.egui_is_using_pointer() {
             self.session.end_edit_group();
         }
-        self.frame_data
-            .build(self.session.system(), &self.view, self.panel.strain_colors);
+        self.frame_data.build(
+            self.session.system(),
+            self.session.surface(),
+            &self.view,
+            self.panel.strain_colors,
+        );
         self.follow_the_scene(now);
         let physics_busy = self.session.pace().busy;
         self.session.release();

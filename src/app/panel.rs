@@ -329,7 +329,9 @@ fn status_lines(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mu
             "{:.2} s simulated per s (asked {:.2})",
             pace.real_time_factor, pace.target
         );
-        if pace.behind {
+        // A backlog dropped once (a long pause of the window's thread) is not
+        // "slower": only a factor short of the one asked for is.
+        if pace.behind && pace.real_time_factor < 0.97 * pace.target {
             ui.colored_label(
                 Color32::from_rgb(255, 200, 60),
                 format!("Slower than asked: {factor}"),

@@ -303,6 +303,8 @@ pub struct View {
     pub options: ViewOptions,
     /// Springs coloured by strain rather than kind.
     pub by_strain: bool,
+    /// The triangles to draw ([`cloth_sandbox::session::Session::surface`]).
+    pub surface: Vec<[u32; 3]>,
 }
 
 /// The simulation step, counted from the start, that frame `i` shows at `fps`:
@@ -353,7 +355,7 @@ pub fn render_frames(
             }
             .into());
         }
-        data.build(system, &view.options, view.by_strain);
+        data.build(system, &view.surface, &view.options, view.by_strain);
         let frame = data.scene_frame(None);
         let pixels = offscreen.render(&frame, &view.camera, &view.options)?;
         each(i, pixels)?;
@@ -542,7 +544,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     let mut sink = Sink::open(&output, args)?;
     let mut offscreen = Offscreen::new(width, height)?;
 
-    let surfaceless = session.system().triangles().is_empty();
+    let surfaceless = session.surface().is_empty();
     let options = ViewOptions {
         springs: surfaceless,
         particles: surfaceless,
@@ -553,6 +555,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
         camera,
         options,
         by_strain: false,
+        surface: session.surface().to_vec(),
     };
     let outcome = render_frames(
         session.system_mut(),

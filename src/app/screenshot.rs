@@ -109,7 +109,7 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
         }
     }
     // Scenes without a surface (spring, chain, rope) draw as springs and particles.
-    let surfaceless = session.system().triangles().is_empty();
+    let surfaceless = session.surface().is_empty();
     let options = ViewOptions {
         mesh: !args.no_mesh,
         wireframe: args.wireframe,
@@ -120,7 +120,7 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     };
     let camera = frame::framed_camera(&session, args.yaw, args.pitch);
     let mut data = FrameData::default();
-    data.build(session.system(), &options, args.strain);
+    data.build(session.system(), session.surface(), &options, args.strain);
     let frame = data.scene_frame(None);
     let mut off = Offscreen::new(width, height)?;
     let pixels = off.render(&frame, &camera, &options)?;

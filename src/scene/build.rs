@@ -933,6 +933,44 @@ impl Resolved {
         }
     }
 
+    /// Triangles to draw a layout that has no cloth surface as a solid: the six
+    /// faces of a lattice (the jelly cube). Drawing only: they take no part in
+    /// the physics (no aerodynamic drag). Empty for every other layout.
+    pub fn display_surface(&self) -> Vec<[u32; 3]> {
+        if self.layout != Layout::Lattice {
+            return Vec::new();
+        }
+        let (w, h, d) = (self.width, self.height, self.depth);
+        let index = |x: u32, y: u32, z: u32| (z * h + y) * w + x;
+        let mut triangles = Vec::new();
+        // A face of the box: the grid of points `at(u, v)` for u < nu, v < nv,
+        // wound so that every face shows its front outside the box (the
+        // renderer's front is clockwise seen from outside: `flip` when u x v
+        // points out).
+        let mut face = |nu: u32, nv: u32, flip: bool, at: &dyn Fn(u32, u32) -> u32| {
+            for v in 0..nv.saturating_sub(1) {
+                for u in 0..nu.saturating_sub(1) {
+                    let (a, b, c, e) = (at(u, v), at(u + 1, v), at(u, v + 1), at(u + 1, v + 1));
+                    if flip {
+                        triangles.extend([[a, e, b], [a, c, e]]);
+                    } else {
+                        triangles.extend([[a, b, e], [a, e, c]]);
+                    }
+                }
+            }
+        };
+        let (xl, yl, zl) = (w - 1, h - 1, d - 1);
+        // x × y = z, z × x = y, y × z = x: the faces at the far end of each
+        // axis flip the winding, those at 0 keep it.
+        face(w, h, false, &|x, y| index(x, y, 0));
+        face(w, h, true, &|x, y| index(x, y, zl));
+        face(d, w, false, &|z, x| index(x, 0, z));
+        face(d, w, true, &|z, x| index(x, yl, z));
+        face(h, d, false, &|y, z| index(0, y, z));
+        face(h, d, true, &|y, z| index(xl, y, z));
+        triangles
+    }
+
     /// Lays out the system.
     pub fn build(&self) -> System {
         let n = self.particle_count();
