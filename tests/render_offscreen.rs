@@ -172,6 +172,21 @@ fn wireframe_darkens_the_cloth_with_edges() {
     assert!(a < 0.01 && b > 0.1, "dark pixels: plain {a}, wireframe {b}");
 }
 
+/// Without the surface, the edges are drawn light on the dark background (they
+/// were once navy on navy).
+#[test]
+fn a_wireframe_alone_stands_out_from_the_background() {
+    let Some(img) = shot(
+        "cloth-wire-alone",
+        &["--scene", "cloth", "--no-mesh", "--wireframe"],
+    ) else {
+        return;
+    };
+    let light = |p: [u8; 3]| p.iter().all(|&c| c > 110);
+    let lit = fraction(&img.region(0.35, 0.35, 0.65, 0.65), light);
+    assert!(lit > 0.1, "light edge pixels in the cloth's middle: {lit}");
+}
+
 #[test]
 fn after_steps_the_cloth_has_moved() {
     let Some(start) = shot("cloth-0", &["--scene", "cloth"]) else {

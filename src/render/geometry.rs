@@ -47,6 +47,10 @@ const GROUND_COLOR: [f32; 4] = [0.50, 0.54, 0.50, 0.35];
 const SPHERE_COLOR: [f32; 4] = [0.80, 0.38, 0.32, 0.0];
 /// Wireframe colour.
 pub const WIRE_COLOR: [f32; 4] = [0.08, 0.09, 0.12, 1.0];
+
+/// Colour of the triangle edges drawn alone, without the surface: light on the
+/// dark background (linear RGBA).
+pub const WIRE_ALONE_COLOR: [f32; 4] = [0.55, 0.62, 0.75, 1.0];
 /// Free particle colour.
 pub const PARTICLE_COLOR: [f32; 4] = [0.95, 0.95, 0.98, 1.0];
 /// Pinned particle colour.

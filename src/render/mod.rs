@@ -702,13 +702,12 @@ impl Renderer {
             );
         }
         if options.wireframe {
-            geometry::push_lines(
-                &positions,
-                &valid,
-                &self.edges,
-                |_| geometry::WIRE_COLOR,
-                &mut lines,
-            );
+            // Dark over the lit surface, light on the background without it.
+            let color = match options.mesh {
+                true => geometry::WIRE_COLOR,
+                false => geometry::WIRE_ALONE_COLOR,
+            };
+            geometry::push_lines(&positions, &valid, &self.edges, |_| color, &mut lines);
         }
         self.lines.write(device, queue, &lines);
         self.scratch_lines = lines;
