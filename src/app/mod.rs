@@ -37,17 +37,18 @@ use physics::SharedSession;
 /// Window title (the Xvfb test finds the window by it).
 pub const TITLE: &str = "cloth-sandbox";
 
-/// Most of the wall-clock time frames may take on a software adapter while the
-/// physics has work: the frames wait so that the cores they share keep the rest.
+/// Most of the wall-clock time frames may take on a software adapter once the
+/// physics falls short of the speed asked for: the frames wait so that the cores
+/// they share keep the rest.
 /// A 256² cloth on lavapipe otherwise draws back to back and leaves the physics
 /// under half of what it runs headless.
 const SOFTWARE_FRAME_SHARE: f64 = 0.5;
 
-/// The physics' share of wall time (see [`Pace::busy`]) above which frames on a
-/// software adapter are spaced out.
+/// The physics' share of wall time (see [`Pace::busy`]) below which frames on a
+/// software adapter stop being spaced out: the physics keeps up with room to spare.
 ///
 /// [`Pace::busy`]: cloth_sandbox::session::Pace::busy
-const BUSY_PHYSICS: f64 = 0.25;
+const RELAXED_PHYSICS: f64 = 0.5;
 
 /// Seconds with no particle in view before the camera frames the scene again.
 const OUT_OF_VIEW_S: f64 = 1.0;
@@ -162,6 +163,9 @@ struct App {
     draw_time: f64,
     /// When the next frame may start (see [`SOFTWARE_FRAME_SHARE`]).
     next_frame: Instant,
+    /// Whether frames are spaced out for the physics' sake: from when it falls
+    /// short of the speed asked for until it is busy less than [`RELAXED_PHYSICS`].
+    spacing_frames: bool,
     /// Since when no particle has been in view, if none is.
     out_of_view_since: Option<Instant>,
     hovered: Option<usize>,
@@ -190,6 +194,7 @@ impl App {
             frame_time: 1.0 / 60.0,
             draw_time: 0.0,
             next_frame: Instant::now(),
+            spacing_frames: false,
             out_of_view_since: None,
             hovered: None,
             cut_path: Vec::new(),
@@ -710,7 +715,12 @@ impl App {
             self.panel.strain_colors,
         );
         self.follow_the_scene(now);
-        let physics_busy = self.session.pace().busy;
+        let pace = self.session.pace();
+        if pace.behind && pace.real_time_factor < 0.97 * pace.target {
+            self.spacing_frames = true;
+        } else if pace.busy < RELAXED_PHYSICS {
+            self.spacing_frames = false;
+        }
         self.session.release();
 
         let Some(gfx) = self.gfx.as_mut() else {
@@ -722,7 +732,7 @@ impl App {
 
         let took = now.elapsed().as_secs_f64();
         self.draw_time = 0.8 * self.draw_time + 0.2 * took;
-        let wait = if gfx.software && physics_busy > BUSY_PHYSICS {
+        let wait = if gfx.software && self.spacing_frames {
             (self.draw_time / SOFTWARE_FRAME_SHARE - took).clamp(0.0, 0.25)
         } else {
             0.0
