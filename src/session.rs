@@ -571,6 +571,24 @@ impl Session {
         Ok(())
     }
 
+    /// The panel's dt edit: the steps per frame change with it so that the speed
+    /// (simulated time per frame) stays, and a larger dt means coarser steps, not a
+    /// faster run. One undo step, grouped with the rest of a slider drag.
+    pub fn apply_dt_keeping_speed(&mut self, dt: f64) -> Result<(), SceneError> {
+        let before = self.scene.clone();
+        let frame_time = self.settings.params.dt * f64::from(self.settings.substeps);
+        self.apply_unrecorded(Edit::Dt(dt))?;
+        let range = crate::scene::build::SUBSTEPS;
+        let steps = (frame_time / dt)
+            .round()
+            .clamp(f64::from(range.lo), f64::from(range.hi)) as u32;
+        if steps != self.settings.substeps {
+            self.apply_unrecorded(Edit::Substeps(steps))?;
+        }
+        self.remember(before, Some(Edit::Dt(dt).key()));
+        Ok(())
+    }
+
     /// [`Self::apply`] without an undo entry.
     fn apply_unrecorded(&mut self, edit: Edit) -> Result<(), SceneError> {
         let mut scene = self.scene.clone();

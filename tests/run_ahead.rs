@@ -138,3 +138,31 @@ fn a_blow_up_is_caught_by_a_run_ahead_at_its_step() {
     let caught_ahead = caught_ahead.expect("the run ahead never diverged");
     assert_eq!(caught.to_string(), caught_ahead.to_string());
 }
+
+/// The energy a full check computed is reused until the state or a coefficient
+/// changes: doubling every spring's stiffness doubles the elastic energy read
+/// right after, at the same step.
+#[test]
+fn the_energy_read_after_a_stiffness_edit_is_the_edited_ones() {
+    let mut system = build("cloth", &["width=12", "height=12"]);
+    system.set_fast_path(true);
+    system.run(500).unwrap();
+    let before = system.energy();
+    assert!(before.elastic > 0.0);
+    let kinds: Vec<_> = system
+        .springs()
+        .iter()
+        .map(|s| (s.kind, s.stiffness))
+        .collect();
+    for (kind, k) in kinds {
+        system.set_spring_stiffness(kind, 2.0 * k);
+    }
+    let after = system.energy();
+    assert!(
+        (after.elastic - 2.0 * before.elastic).abs() <= 1e-9 * before.elastic,
+        "elastic {} J, then {} J at twice the stiffness",
+        before.elastic,
+        after.elastic
+    );
+    assert_eq!(after.kinetic, before.kinetic);
+}

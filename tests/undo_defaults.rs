@@ -150,3 +150,32 @@ fn defaults_keep_the_command_lines_overrides() {
     s.restore_defaults().expect("restores");
     assert_eq!(s.settings().stiffness, 50.0);
 }
+
+/// The panel's dt slider keeps the speed: every dt it passes through comes with
+/// the steps per frame that keep the simulated time per frame (to the nearest
+/// step), and the whole drag is one undo step that brings both back.
+#[test]
+fn a_dt_drag_keeps_the_speed_and_is_one_undo_step() {
+    let mut s = cloth();
+    let (dt0, steps0) = (s.settings().params.dt, s.settings().substeps);
+    let frame_time = dt0 * f64::from(steps0);
+    for dt in [dt0 * 0.9, dt0 * 0.5, dt0 * 0.25, dt0 * 0.3] {
+        s.apply_dt_keeping_speed(dt).unwrap();
+        let r = s.settings();
+        assert_eq!(r.params.dt, dt);
+        let kept = r.params.dt * f64::from(r.substeps);
+        assert!(
+            (kept - frame_time).abs() <= 0.5 * dt,
+            "dt {dt}: {} steps give {kept} s per frame, not {frame_time}",
+            r.substeps
+        );
+    }
+    assert_ne!(s.settings().substeps, steps0);
+    s.end_edit_group();
+    assert!(s.undo().unwrap());
+    assert_eq!(
+        (s.settings().params.dt, s.settings().substeps),
+        (dt0, steps0)
+    );
+    assert!(!s.can_undo(), "the drag left more than one undo step");
+}

@@ -129,16 +129,21 @@ fn new_event_loop() -> anyhow::Result<EventLoop<()>> {
             anyhow::bail!("cannot connect to the window system: {text}")
         }
         Err(panic) => {
-            let text = panic
-                .downcast_ref::<String>()
-                .map(String::as_str)
-                .or_else(|| panic.downcast_ref::<&str>().copied())
-                .unwrap_or("unknown failure");
+            let text = panic_text(panic.as_ref());
             anyhow::bail!(
                 "cannot start the window system: {text} (on Debian/Ubuntu: apt-get install libxkbcommon-x11-0 libx11-xcb1 libxcursor1 libxi6)"
             )
         }
     }
+}
+
+/// What a caught panic said (its `String` or `&str` payload).
+fn panic_text(panic: &(dyn std::any::Any + Send)) -> &str {
+    panic
+        .downcast_ref::<String>()
+        .map(String::as_str)
+        .or_else(|| panic.downcast_ref::<&str>().copied())
+        .unwrap_or("unknown failure")
 }
 
 /// The running app: window, GPU, panel and session.
@@ -408,6 +413,10 @@ impl App {
                     log::warn!("{e}");
                     self.panel.error = Some(e.to_string());
                 }
+            },
+            Action::DtKeepingSpeed(dt) => match self.session.apply_dt_keeping_speed(dt) {
+                Ok(()) => self.panel.error = None,
+                Err(e) => self.panel.error = Some(e.to_string()),
             },
             Action::Pins(pins) => match self.session.set_pins(pins) {
                 Ok(()) => self.panel.error = None,

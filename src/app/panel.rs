@@ -26,6 +26,8 @@ pub enum Action {
     Reset,
     /// Change a setting (a slider or dropdown).
     Edit(Edit),
+    /// Change dt, keeping the speed (the dt slider).
+    DtKeepingSpeed(f64),
     /// Pause or resume (Space).
     TogglePause,
     /// Run one step.
@@ -517,7 +519,7 @@ fn contents(
     }
     ui.label(format!(
         "speed {:.2}x real time ({} x {:.3e} s per 1/60 s)",
-        f64::from(r.substeps) * p.dt * 60.0,
+        session.speed(),
         r.substeps,
         p.dt
     ))
@@ -570,7 +572,13 @@ fn contents(
     let has_springs = !system.springs().is_empty();
     let has_surface = !system.triangles().is_empty();
     let mut wind_switch = None;
-    let mut edit = |e: Edit| actions.push(Action::Edit(e));
+    // The panel's dt keeps the speed (see `Session::apply_dt_keeping_speed`).
+    let mut edit = |e: Edit| {
+        actions.push(match e {
+            Edit::Dt(dt) => Action::DtKeepingSpeed(dt),
+            e => Action::Edit(e),
+        })
+    };
     ui.separator();
     egui::CollapsingHeader::new("Parameters")
         .default_open(true)
@@ -687,10 +695,6 @@ fn contents(
             let mut dt = p.dt;
             if slider(ui, &mut dt, 0.000_01..=0.05, "dt (s)", true, "Time step in s, 1e-5 to 0.05. The speed stays: the steps per frame change with it, so a larger dt means coarser steps, not a faster run. Safe stepping may run smaller steps over the same simulated time") {
                 edit(Edit::Dt(dt));
-                let steps = (f64::from(r.substeps) * p.dt / dt).round().clamp(1.0, 2000.0) as u32;
-                if steps != r.substeps {
-                    edit(Edit::Substeps(steps));
-                }
             }
             if !system.bars().is_empty() {
                 let mut it = p.bar_iterations;

@@ -196,11 +196,7 @@ fn step_while_released(shared: &Shared) {
             Ok(report) if report.steps == 0 => std::thread::sleep(IDLE_SLEEP),
             Ok(_) => {}
             Err(panic) => {
-                let text = panic
-                    .downcast_ref::<String>()
-                    .map(String::as_str)
-                    .or_else(|| panic.downcast_ref::<&str>().copied())
-                    .unwrap_or("unknown failure");
+                let text = super::panic_text(panic.as_ref());
                 log::error!("the physics thread stopped: {text}");
                 *shared
                     .failure

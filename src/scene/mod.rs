@@ -4,7 +4,7 @@
 //!
 //! Scene files and the command line's `--set key=value` share the same keys.
 
-mod build;
+pub(crate) mod build;
 mod edit;
 pub mod mesh;
 mod values;

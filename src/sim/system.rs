@@ -489,6 +489,7 @@ impl System {
         self.catch_up();
         self.budget = None;
         self.stability = OnceLock::new();
+        self.checked_energy = None;
     }
 
     /// The energy budget, set from the state now if an edit cleared it.
