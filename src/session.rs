@@ -132,6 +132,9 @@ pub struct Session {
     /// The key of the edit the last undo entry was made for while the same
     /// gesture goes on (a slider being dragged), so that it makes one entry.
     edit_group: Option<&'static str>,
+    /// The simulated time per frame a dt drag keeps (see
+    /// [`Session::apply_dt_keeping_speed`]).
+    dt_drag_frame_time: Option<f64>,
 }
 
 /// What safe stepping chose for the running system.
@@ -230,6 +233,7 @@ impl Session {
             undo: Vec::new(),
             redo: Vec::new(),
             edit_group: None,
+            dt_drag_frame_time: None,
             scene,
             name: name.to_string(),
             system: settings.build(),
@@ -573,10 +577,16 @@ impl Session {
 
     /// The panel's dt edit: the steps per frame change with it so that the speed
     /// (simulated time per frame) stays, and a larger dt means coarser steps, not a
-    /// faster run. One undo step, grouped with the rest of a slider drag.
+    /// faster run. One undo step, grouped with the rest of a slider drag; the
+    /// speed kept is the one at the drag's start, so that rounding to whole steps
+    /// does not drift along the drag.
     pub fn apply_dt_keeping_speed(&mut self, dt: f64) -> Result<(), SceneError> {
         let before = self.scene.clone();
-        let frame_time = self.settings.params.dt * f64::from(self.settings.substeps);
+        let key = Edit::Dt(dt).key();
+        let frame_time = match self.dt_drag_frame_time {
+            Some(t) if self.edit_group == Some(key) => t,
+            _ => self.settings.params.dt * f64::from(self.settings.substeps),
+        };
         self.apply_unrecorded(Edit::Dt(dt))?;
         let range = crate::scene::build::SUBSTEPS;
         let steps = (frame_time / dt)
@@ -585,7 +595,8 @@ impl Session {
         if steps != self.settings.substeps {
             self.apply_unrecorded(Edit::Substeps(steps))?;
         }
-        self.remember(before, Some(Edit::Dt(dt).key()));
+        self.remember(before, Some(key));
+        self.dt_drag_frame_time = Some(frame_time);
         Ok(())
     }
 

@@ -159,7 +159,14 @@ fn a_dt_drag_keeps_the_speed_and_is_one_undo_step() {
     let mut s = cloth();
     let (dt0, steps0) = (s.settings().params.dt, s.settings().substeps);
     let frame_time = dt0 * f64::from(steps0);
-    for dt in [dt0 * 0.9, dt0 * 0.5, dt0 * 0.25, dt0 * 0.3] {
+    // Down, then up in small steps to 12 times dt (rounding to whole steps at
+    // each one must not drift the speed), then back.
+    let up = (0..=40).map(|i| dt0 * 0.25 * 48f64.powf(f64::from(i) / 40.0));
+    for dt in [dt0 * 0.9, dt0 * 0.5]
+        .into_iter()
+        .chain(up)
+        .chain([dt0 * 0.3])
+    {
         s.apply_dt_keeping_speed(dt).unwrap();
         let r = s.settings();
         assert_eq!(r.params.dt, dt);
