@@ -667,6 +667,8 @@ struct Kernel<E: Real> {
     torn_log: Vec<(usize, usize)>,
     /// The tear scan's verdict per stencil direction and row (scratch).
     tear_rows: Vec<bool>,
+    /// The contact scan's verdict per row (scratch).
+    contact_rows: Vec<bool>,
 }
 
 /// Which kind of spring each stencil direction holds, as an index into
@@ -879,6 +881,7 @@ impl<E: Real> Kernel<E> {
             torn: None,
             torn_log: Vec::new(),
             tear_rows: Vec::new(),
+            contact_rows: Vec::new(),
             grid,
             spec,
         }
@@ -1088,7 +1091,7 @@ impl<E: Real> Kernel<E> {
         // Without friction, stretch limit or XPBD the step itself projected the
         // particles out of the sphere.
         if contact.is_active() && self.params.sphere.is_none() {
-            self.resolve_contact(&contact);
+            self.resolve_contact(&contact, parallel);
         }
         if let Some(max_speed) = self.spec.max_speed {
             self.limit_speed(max_speed);
@@ -1214,43 +1217,56 @@ impl<E: Real> Kernel<E> {
     }
 
     /// The colliders' contact of every free particle that touches one, as the f64
-    /// engine resolves it ([`constraints::Contact::resolve`]).
-    fn resolve_contact(&mut self, contact: &constraints::Contact) {
+    /// engine resolves it ([`constraints::Contact::resolve`]). A scan of the rows
+    /// (vectorised, on the pool's threads) finds those with a particle that may
+    /// touch ([`Reach::may_touch`]); only their particles are resolved, in particle
+    /// order. A particle out of reach would leave `resolve` unchanged, so skipping
+    /// it changes nothing.
+    fn resolve_contact(&mut self, contact: &constraints::Contact, parallel: bool) {
         let verlet = self.params.verlet;
-        // Cheap float checks first: below the ground or inside the sphere's box.
-        let ground = contact.ground.map_or(E::LOWEST, |g| E::of(g.height));
-        let sphere = contact.sphere.map(|s| {
-            let slack = 1e-4 * s.radius + 1e-6;
-            (
-                s.center.to_array().map(|c| E::of(c)),
-                E::of(s.radius + slack),
-            )
-        });
-        for p in 0..self.grid.w * self.grid.h {
-            let i = self.grid.index(p);
-            let w = self.inv_mass.as_slice()[i];
-            let [x, y, z] = self.cur.x.each_ref().map(|a| a.as_slice()[i]);
-            let near_sphere = sphere.is_some_and(|([cx, cy, cz], r)| {
-                let d = [x - cx, y - cy, z - cz];
-                d.iter().all(|&d| d < r && E::ZERO - d < r)
-            });
-            if w <= E::ZERO || !(y < ground || near_sphere) {
-                continue;
+        let reach = Reach::of(contact);
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let mut rows = std::mem::take(&mut self.contact_rows);
+        rows.clear();
+        rows.resize(h, false);
+        {
+            let (cur, inv_mass, simd) = (&self.cur, self.inv_mass.as_slice(), self.simd);
+            let scan = |r: usize, flag: &mut bool| {
+                *flag = row_may_touch_dispatch(simd, cur, inv_mass, (r * st, w), &reach);
+            };
+            if parallel && w * h >= PARALLEL_MIN_PARTICLES {
+                use rayon::prelude::*;
+                rows.par_iter_mut()
+                    .enumerate()
+                    .for_each(|(r, f)| scan(r, f));
+            } else {
+                rows.iter_mut().enumerate().for_each(|(r, f)| scan(r, f));
             }
-            let x = self.position_at(i);
-            let v = DVec3::from_array(std::array::from_fn(|a| self.cur.v[a].as_slice()[i].f64()));
-            let (to, v_new) = contact.resolve(x, v, w.f64());
-            if to != x {
-                self.set_position_at(i, to);
-            }
-            let dv = v_new - v;
-            for a in 0..3 {
-                self.cur.v[a].as_mut_slice()[i] += E::of(dv[a]);
-                if verlet {
-                    self.cur.u[a].as_mut_slice()[i] += E::of(dv[a]);
+        }
+        for r in (0..h).filter(|&r| rows[r]) {
+            for i in r * st..r * st + w {
+                let w = self.inv_mass.as_slice()[i];
+                let [x, y, z] = self.cur.x.each_ref().map(|a| a.as_slice()[i]);
+                if !reach.may_touch([x, y, z], w) {
+                    continue;
+                }
+                let x = self.position_at(i);
+                let v =
+                    DVec3::from_array(std::array::from_fn(|a| self.cur.v[a].as_slice()[i].f64()));
+                let (to, v_new) = contact.resolve(x, v, w.f64());
+                if to != x {
+                    self.set_position_at(i, to);
+                }
+                let dv = v_new - v;
+                for a in 0..3 {
+                    self.cur.v[a].as_mut_slice()[i] += E::of(dv[a]);
+                    if verlet {
+                        self.cur.u[a].as_mut_slice()[i] += E::of(dv[a]);
+                    }
                 }
             }
         }
+        self.contact_rows = rows;
     }
 
     /// The stencil in the order the springs sort (the f64 engine's order): (row,
@@ -2132,8 +2148,8 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, Ctx, Out, Portable, Real, Simd, State, StretchLine, row_may_tear, row_variant,
-        stretch_limit_line,
+        Band, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine, row_may_tear,
+        row_may_touch, row_variant, stretch_limit_line,
     };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -2175,13 +2191,27 @@ mod x86 {
         row_may_tear(state, ends, alive, scan2)
     }
 
+    /// The contact scan's `row_may_touch`, compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn row_may_touch_avx2<E: Real>(
+        state: &State<E>,
+        inv_mass: &[E],
+        row: (usize, usize),
+        reach: &Reach<E>,
+    ) -> bool {
+        row_may_touch(state, inv_mass, row, reach)
+    }
+
     /// The stretch limit's `stretch_limit_line`, compiled for AVX2 and FMA.
     ///
     /// # Safety
     /// As for `row_avx2`.
     #[target_feature(enable = "avx2,fma")]
     #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx2<E: Real>(
+    pub(super) unsafe fn stretch_limit_line_avx2<E: Real, const LO: bool>(
         out: &mut Out<E>,
         base: usize,
         inv_mass: &[E],
@@ -2189,7 +2219,24 @@ mod x86 {
         fix: &mut [Vec<E>; 3],
         line: &StretchLine<E>,
     ) {
-        stretch_limit_line(out, base, inv_mass, alive, fix, line);
+        stretch_limit_line::<E, LO>(out, base, inv_mass, alive, fix, line);
+    }
+
+    /// The stretch limit's `stretch_limit_line`, compiled for AVX-512.
+    ///
+    /// # Safety
+    /// As for `row_avx512`.
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn stretch_limit_line_avx512<E: Real, const LO: bool>(
+        out: &mut Out<E>,
+        base: usize,
+        inv_mass: &[E],
+        alive: Option<&[E]>,
+        fix: &mut [Vec<E>; 3],
+        line: &StretchLine<E>,
+    ) {
+        stretch_limit_line::<E, LO>(out, base, inv_mass, alive, fix, line);
     }
 
     /// One row in float64 with the portable lanes, compiled for the same features
@@ -2427,13 +2474,24 @@ fn stretch_limit_line_dispatch<E: Real>(
     fix: &mut [Vec<E>; 3],
     line: &StretchLine<E>,
 ) {
+    // Positions with low parts (`compensated`) or without.
+    macro_rules! each_precision {
+        ($($f:ident)::+) => {
+            if line.compensated {
+                $($f)::+::<E, true>(out, base, inv_mass, alive, fix, line)
+            } else {
+                $($f)::+::<E, false>(out, base, inv_mass, alive, fix, line)
+            }
+        };
+    }
     match simd {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
-            x86::stretch_limit_line_avx2(out, base, inv_mass, alive, fix, line)
-        },
-        _ => stretch_limit_line(out, base, inv_mass, alive, fix, line),
+        // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+        SimdLevel::Avx512 => unsafe { each_precision!(x86::stretch_limit_line_avx512) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
+        SimdLevel::Avx2 => unsafe { each_precision!(x86::stretch_limit_line_avx2) },
+        _ => each_precision!(stretch_limit_line),
     }
 }
 
@@ -2448,7 +2506,7 @@ fn stretch_limit_line_dispatch<E: Real>(
 /// whole portable blocks: lanes past `len` reach ghost columns inside the row's
 /// padding and are given no correction.
 #[inline(always)]
-fn stretch_limit_line<E: Real>(
+fn stretch_limit_line<E: Real, const LO: bool>(
     out: &mut Out<E>,
     base: usize,
     inv_mass: &[E],
@@ -2462,7 +2520,6 @@ fn stretch_limit_line<E: Real>(
         colour,
         longest,
         inv_dt,
-        compensated,
         ..
     } = line;
     let (a, b) = (line.a - base, line.b - base);
@@ -2486,9 +2543,14 @@ fn stretch_limit_line<E: Real>(
         let longest2 = longest * longest;
         let mut any = false;
         for j in 0..lanes {
-            let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
-            let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
-            let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
+            let (mut dx, mut dy, mut dz) = (xa[j] - xb[j], ya[j] - yb[j], za[j] - zb[j]);
+            if LO {
+                (dx, dy, dz) = (
+                    dx + (la[j] - lb[j]),
+                    dy + (ma[j] - mb[j]),
+                    dz + (na[j] - nb[j]),
+                );
+            }
             let l2 = dx * dx + dy * dy + dz * dz;
             let w = wa[j] + wb[j];
             let in_class = every_column || ((c0 + j) >> shift) & 1 == own_colour;
@@ -2525,7 +2587,7 @@ fn stretch_limit_line<E: Real>(
             let blocks = blocks.zip(v.chunks_exact_mut(PL)).zip(w.chunks_exact(PL));
             for ((((x, xl), v), w), f) in blocks.zip(f.chunks_exact(PL)) {
                 let t: [E; PL] = std::array::from_fn(|l| sign * w[l] * f[l]);
-                if compensated {
+                if LO {
                     let old = (x[..].try_into().unwrap(), xl[..].try_into().unwrap());
                     let (hi, lo) = add_double(pl, old, t);
                     x.copy_from_slice(&hi);
@@ -2592,6 +2654,89 @@ fn row_may_tear<E: Real>(
         }
     }
     over != 0
+}
+
+/// Where a particle may touch a collider, in the kernel's precision: below the
+/// ground's height, or within the sphere's radius plus a margin (`1e-4` of it plus
+/// 1 µm, far above the rounding of a position's high part) of its centre.
+#[derive(Clone, Copy, Debug)]
+struct Reach<E> {
+    ground: E,
+    /// The sphere's centre and squared reach (a negative reach: no sphere).
+    center: [E; 3],
+    reach2: E,
+}
+
+impl<E: Real> Reach<E> {
+    fn of(contact: &constraints::Contact) -> Self {
+        let ground = contact.ground.map_or(E::LOWEST, |g| E::of(g.height));
+        match contact.sphere {
+            Some(s) => {
+                let reach = s.radius * (1.0 + 1e-4) + 1e-6;
+                Self {
+                    ground,
+                    center: s.center.to_array().map(E::of),
+                    reach2: E::of(reach * reach),
+                }
+            }
+            None => Self {
+                ground,
+                center: [E::ZERO; 3],
+                reach2: E::ZERO - E::ONE,
+            },
+        }
+    }
+
+    /// Whether a particle at `[x, y, z]` (high parts) with inverse mass `w` is free
+    /// and may touch a collider.
+    #[inline(always)]
+    fn may_touch(&self, [x, y, z]: [E; 3], w: E) -> bool {
+        let [cx, cy, cz] = self.center;
+        let (dx, dy, dz) = (x - cx, y - cy, z - cz);
+        let near = dx * dx + dy * dy + dz * dz < self.reach2;
+        w > E::ZERO && (y < self.ground || near)
+    }
+}
+
+/// Whether any particle from array index `start` on, `len` of them, may touch a
+/// collider ([`Reach::may_touch`]). A plain loop over slices for the compiler to
+/// vectorise; the verdict is an integer OR.
+#[inline(always)]
+fn row_may_touch<E: Real>(
+    state: &State<E>,
+    inv_mass: &[E],
+    (start, len): (usize, usize),
+    reach: &Reach<E>,
+) -> bool {
+    let [x, y, z] = state
+        .x
+        .each_ref()
+        .map(|a| &a.as_slice()[start..start + len]);
+    let w = &inv_mass[start..start + len];
+    let (y, z, w) = (&y[..x.len()], &z[..x.len()], &w[..x.len()]);
+    let mut any = 0u8;
+    for j in 0..x.len() {
+        any |= u8::from(reach.may_touch([x[j], y[j], z[j]], w[j]));
+    }
+    any != 0
+}
+
+/// [`row_may_touch`] with the best code this CPU has.
+fn row_may_touch_dispatch<E: Real>(
+    simd: SimdLevel,
+    state: &State<E>,
+    inv_mass: &[E],
+    row: (usize, usize),
+    reach: &Reach<E>,
+) -> bool {
+    match simd {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
+        SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
+            x86::row_may_touch_avx2(state, inv_mass, row, reach)
+        },
+        _ => row_may_touch(state, inv_mass, row, reach),
+    }
 }
 
 /// One row of positions as f64 (high plus low part), from array index `start`
