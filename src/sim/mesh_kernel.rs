@@ -5,8 +5,10 @@
 //! the last position update `u = (x - x_prev) / h`. A step is two passes:
 //! 1. each spring's force on its `a` end, `f_a = -(k (l - L) + b (v_a - v_b)·u) u`
 //!    with `u = (x_a - x_b)/l` ([`spring_force`]), into a per-spring array: the
-//!    springs' ends are gathered in batches of [`BATCH`] to the stack and evaluated
-//!    in a loop the compiler vectorizes (built for AVX2 when the CPU has it);
+//!    springs are evaluated in batches of up to [`BATCH`], their ends read as
+//!    slices where they come in runs with consecutive ends (a lattice's do, in
+//!    [`SpringArrays`]' order), else gathered to the stack, in a loop the compiler
+//!    vectorizes (built for AVX2 when the CPU has it);
 //! 2. per particle, the sum over its springs from a compressed adjacency (CSR) in
 //!    the model's canonical spring order, `+f` at an `a` end and `-f` at a `b` end,
 //!    then air damping `-c v`, ground penalty `k_c d - c_g v_y` (at depth `d > 0`),
@@ -46,6 +48,9 @@ const MIN_LEAF: usize = 512;
 
 /// Springs gathered to the stack and evaluated together.
 const BATCH: usize = 32;
+
+/// The shortest run of springs with consecutive ends read as slices.
+const RUN_MIN: usize = 4;
 
 /// Marks a link at a spring's `b` end (the force there is minus the spring's).
 const B_END: u32 = 1 << 31;
@@ -167,20 +172,59 @@ pub struct MeshKernel {
     avx2: bool,
 }
 
-/// Springs as structure of arrays.
+/// Springs as structure of arrays, in the order the spring pass evaluates them:
+/// by the offset `b - a` between their ends, then by `a`. A lattice's springs of one
+/// direction then come in runs with consecutive ends (`a, a + 1, ...` and `b, b +
+/// 1, ...`), whose positions are read as contiguous slices instead of one by one.
+/// (The order of evaluation changes no result: each force is stored apart and the
+/// particles sum them in the model's order.)
 #[derive(Clone, Debug, Default)]
 struct SpringArrays {
+    /// The model's index of each spring, in evaluation order.
+    order: Vec<u32>,
     /// Ends `[a, b]`.
     ends: Vec<[u32; 2]>,
+    /// How many springs from this one on continue its run (at least 1, at most
+    /// [`BATCH`]).
+    run: Vec<u8>,
     /// `[rest length (m), stiffness (N/m), damping (N·s/m)]`.
     coefficients: [Vec<f64>; 3],
 }
 
 impl SpringArrays {
+    fn new(springs: &[Spring]) -> Self {
+        let m = springs.len();
+        let mut order: Vec<u32> = (0..m as u32).collect();
+        order.sort_by_key(|&i| {
+            let s = &springs[i as usize];
+            (i64::from(s.b) - i64::from(s.a), s.a)
+        });
+        let ends: Vec<[u32; 2]> = order
+            .iter()
+            .map(|&i| [springs[i as usize].a, springs[i as usize].b])
+            .collect();
+        let mut run = vec![1u8; m];
+        for e in (0..m.saturating_sub(1)).rev() {
+            let ([a, b], [na, nb]) = (ends[e], ends[e + 1]);
+            if na == a + 1 && nb == b + 1 && usize::from(run[e + 1]) < BATCH {
+                run[e] = run[e + 1] + 1;
+            }
+        }
+        let mut arrays = Self {
+            order,
+            ends,
+            run,
+            coefficients: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
+        };
+        arrays.set_coefficients(springs);
+        arrays
+    }
+
     fn set_coefficients(&mut self, springs: &[Spring]) {
         let [rest, k, b] = &mut self.coefficients;
-        for (i, s) in springs.iter().enumerate() {
-            (rest[i], k[i], b[i]) = (s.rest, s.stiffness, s.damping);
+        for (e, &i) in self.order.iter().enumerate() {
+            let s = &springs[i as usize];
+            (rest[e], k[e], b[e]) = (s.rest, s.stiffness, s.damping);
         }
     }
 }
@@ -229,7 +273,8 @@ fn spring_pass(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
 
 /// [`spring_pass`] compiled for AVX2: four springs per instruction (IEEE square
 /// roots and divisions and no fused multiply-add, so the same results as the
-/// baseline build).
+/// baseline build). (An AVX-512 build measured no faster on the 32^3 jelly: the
+/// pass streams 56 bytes a spring.)
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn spring_pass_avx2(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
@@ -239,26 +284,51 @@ unsafe fn spring_pass_avx2(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) 
 #[inline(always)]
 fn spring_pass_body(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
     let (x, v) = (ctx.x, ctx.v);
-    let [rest, k, b] = ctx.springs.coefficients.each_ref().map(Vec::as_slice);
+    let springs = ctx.springs;
+    let [rest, k, b] = springs.coefficients.each_ref().map(Vec::as_slice);
     let mut d = [[0.0; BATCH]; 3];
     let mut dv = [[0.0; BATCH]; 3];
     let [fx, fy, fz] = out;
     let len = fx.len();
     let mut lo = 0;
     while lo < len {
-        let n = (len - lo).min(BATCH);
         let first = start + lo;
-        for (e, &[a, b]) in ctx.springs.ends[first..first + n].iter().enumerate() {
-            let (a, b) = (a as usize, b as usize);
+        let run = usize::from(springs.run[first]).min(len - lo);
+        // A run of at least a vector's width: its ends are contiguous slices.
+        let n = if run >= RUN_MIN {
+            let [a, b] = springs.ends[first].map(|e| e as usize);
             for k in 0..3 {
-                d[k][e] = x[k][a] - x[k][b];
-                dv[k][e] = v[k][a] - v[k][b];
+                let (xa, xb) = (&x[k][a..a + run], &x[k][b..b + run]);
+                let (va, vb) = (&v[k][a..a + run], &v[k][b..b + run]);
+                let (d, dv) = (&mut d[k][..run], &mut dv[k][..run]);
+                for e in 0..run {
+                    d[e] = xa[e] - xb[e];
+                    dv[e] = va[e] - vb[e];
+                }
             }
-        }
+            run
+        } else {
+            // Gathered one by one, up to the next run.
+            let mut n = 0;
+            while n < BATCH && lo + n < len && (n == 0 || springs.run[first + n] < RUN_MIN as u8) {
+                let [a, b] = springs.ends[first + n].map(|e| e as usize);
+                for k in 0..3 {
+                    d[k][n] = x[k][a] - x[k][b];
+                    dv[k][n] = v[k][a] - v[k][b];
+                }
+                n += 1;
+            }
+            n
+        };
         let (rest, k, b) = (
             &rest[first..first + n],
             &k[first..first + n],
             &b[first..first + n],
+        );
+        let (fx, fy, fz) = (
+            &mut fx[lo..lo + n],
+            &mut fy[lo..lo + n],
+            &mut fz[lo..lo + n],
         );
         for e in 0..n {
             let f = spring_force(
@@ -268,7 +338,7 @@ fn spring_pass_body(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
                 k[e],
                 b[e],
             );
-            (fx[lo + e], fy[lo + e], fz[lo + e]) = (f.x, f.y, f.z);
+            (fx[e], fy[e], fz[e]) = (f.x, f.y, f.z);
         }
         lo += n;
     }
@@ -445,21 +515,23 @@ impl MeshKernel {
         for i in 0..n {
             offsets[i + 1] += offsets[i];
         }
-        // Filled in spring order per particle: the f64 engine's gather order.
+        let springs = SpringArrays::new(&model.springs);
+        // Where each of the model's springs is evaluated.
+        let mut slot_of = vec![0u32; m];
+        for (e, &i) in springs.order.iter().enumerate() {
+            slot_of[i as usize] = e as u32;
+        }
+        // Filled in the model's spring order per particle: the f64 engine's gather
+        // order.
         let mut cursor = offsets.clone();
         let mut links = vec![0u32; 2 * m];
         for (index, s) in model.springs.iter().enumerate() {
             for (end, flag) in [(s.a, 0), (s.b, B_END)] {
                 let slot = &mut cursor[end as usize];
-                links[*slot as usize] = index as u32 | flag;
+                links[*slot as usize] = slot_of[index] | flag;
                 *slot += 1;
             }
         }
-        let mut springs = SpringArrays {
-            ends: model.springs.iter().map(|s| [s.a, s.b]).collect(),
-            coefficients: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
-        };
-        springs.set_coefficients(&model.springs);
         let zeros = |len| [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
         let verlet = params.integrator == Integrator::Verlet;
         let mut kernel = Self {
