@@ -6,7 +6,8 @@
 //! - [`forces`], [`integrators`], [`implicit`], [`constraints`]: the physics of a step
 //!   (the f64 general engine, the reference);
 //! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook
-//!   into [`System::run`];
+//!   into [`System::run`]; `duo`: its two threads handing over each step by
+//!   spinning;
 //! - [`self_collision`]: particles of a cloth kept a thickness apart, with friction;
 //! - [`tearing`]: springs that tear past a strain or are cut, and leave the model;
 //! - [`divergence`], [`energy_budget`], [`stability`], [`safe`]: when a run has
@@ -20,6 +21,7 @@
 pub mod clock;
 pub mod constraints;
 pub mod divergence;
+pub(crate) mod duo;
 pub mod energy_budget;
 pub mod fast_path;
 pub mod forces;
