@@ -91,9 +91,9 @@ const TINY: f32 = 1e-30;
 /// several threads are allowed (threading costs more than it saves there).
 pub const PARALLEL_MIN_PARTICLES: usize = 48 * 48;
 
-/// Grids with at least this many particles hand their second band over by
-/// spinning ([`Duo`]) rather than with `rayon::join`, when nothing after the step
-/// is threaded. Measured on two AVX-512 cores (best of 3 runs of 960 steps, old and
+/// Grids with at least this many particles hand their second band (and the
+/// stretch limit its second half) over by spinning ([`Duo`]) rather than with
+/// `rayon::join`, when no pass after the step uses rayon's parallel iterators. Measured on two AVX-512 cores (best of 3 runs of 960 steps, old and
 /// new binaries interleaved): 1.12x to 1.24x at 256 x 256, 0.9x to 1.1x at 128 x 128
 /// and 0.85x at 96 x 96; in runs of 10,000 steps 1.5x at 128 x 128. At the start of
 /// a run the system may put both threads on one core for a few milliseconds, and
@@ -1018,19 +1018,20 @@ impl<E: Real> Kernel<E> {
         }
         let pool = self.pool.take();
         let parallel = pool.is_some();
-        // Two bands and no parallel pass after the step: the second band is handed
-        // over by spinning (`Duo`), and the passes after the step run here.
+        // Two bands and no pass after the step that splits its work with rayon: the
+        // second band (and the stretch limit's second half) is handed over by
+        // spinning (`Duo`).
         let spin = parallel
             && self.par_bands.len() == 2
             && self.len() >= SPIN_MIN_PARTICLES
-            && !self.has_parallel_constraints();
+            && !self.has_pooled_constraints();
         let mut run = |duo: Option<&Duo>| {
             for i in 0..n {
                 if let Some((t0, wind)) = wind {
                     self.set_wind(wind.at(t0 + i as f64 * dt));
                 }
                 self.one_step(parallel, duo);
-                self.constrain(dt, parallel && duo.is_none());
+                self.constrain(dt, parallel, duo);
             }
         };
         match &pool {
@@ -1053,11 +1054,11 @@ impl<E: Real> Kernel<E> {
         self.pool = pool;
     }
 
-    /// Whether a pass after the step splits its work between threads (XPBD's
-    /// springs, the stretch limit, self-collision, tearing).
-    fn has_parallel_constraints(&self) -> bool {
+    /// Whether a pass after the step splits its work with rayon's parallel
+    /// iterators (XPBD's springs, self-collision, tearing), which need the pool's
+    /// other thread free.
+    fn has_pooled_constraints(&self) -> bool {
         self.spec.integrator == Integrator::Xpbd
-            || self.spec.stretch_limit.is_some()
             || self.spec.self_collision.is_some()
             || self.spec.tear_strain.is_some()
     }
@@ -1111,14 +1112,20 @@ impl<E: Real> Kernel<E> {
     /// The constraints the fused row pass leaves to after the step: XPBD's springs,
     /// Provot's stretch limit, then the colliders' contact with friction, as in the
     /// f64 engine. A move `δ` of a particle also adds `δ / h` to its velocity.
-    fn constrain(&mut self, dt: f64, parallel: bool) {
+    /// With `duo`, the pool's other thread is serving it: the stretch limit hands
+    /// it its second half, and the passes that would split their work with rayon
+    /// run on this thread ([`Kernel::has_pooled_constraints`] keeps them out of
+    /// that mode).
+    fn constrain(&mut self, dt: f64, parallel: bool, duo: Option<&Duo>) {
+        let parallel_pooled = parallel && duo.is_none();
         let xpbd = self.spec.integrator == Integrator::Xpbd;
         if xpbd {
-            self.xpbd_pass(dt, parallel);
+            self.xpbd_pass(dt, parallel_pooled);
         }
         if let Some(tau) = self.spec.stretch_limit {
-            self.stretch_limit_pass(tau, dt, parallel);
+            self.stretch_limit_pass(tau, dt, parallel, duo);
         }
+        let parallel = parallel_pooled;
         if let Some(thickness) = self.spec.self_collision {
             self.self_collision_pass(thickness, dt, parallel);
         }
@@ -1507,7 +1514,7 @@ impl<E: Real> Kernel<E> {
     /// does. No two springs of a class share a particle, so a class's springs from
     /// one row are corrected together ([`stretch_limit_line`]), and its rows split
     /// between two threads (`parallel`) with the same result as on one.
-    fn stretch_limit_pass(&mut self, tau: f64, dt: f64, parallel: bool) {
+    fn stretch_limit_pass(&mut self, tau: f64, dt: f64, parallel: bool, duo: Option<&Duo>) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
         let inv_dt = E::of(1.0 / dt);
@@ -1559,10 +1566,14 @@ impl<E: Real> Kernel<E> {
                 };
                 if parallel {
                     let (mut lo, mut hi) = out.split_at(split * st);
-                    rayon::join(
-                        || run(&mut lo, 0, fix_lo, rows(0..split)),
-                        || run(&mut hi, split * st, fix_hi, rows(split..h)),
-                    );
+                    let mut second = || run(&mut hi, split * st, fix_hi, rows(split..h));
+                    let first = || run(&mut lo, 0, fix_lo, rows(0..split));
+                    match duo {
+                        Some(duo) => duo.fork(&mut second, first),
+                        None => {
+                            rayon::join(first, second);
+                        }
+                    }
                 } else {
                     run(&mut { out }, 0, fix_lo, rows(0..h));
                 }
