@@ -1,12 +1,15 @@
 #!/usr/bin/env bash
 # Cost per particle-step of each kind of scene on the fast engine against the plain
-# `bench` cloth, in one run: `cloth run --json` (960 steps after 16 warm-up steps,
-# best of RUNS runs), at each size. Usage: bash benches/engine_scenes.sh [SIZES] [RUNS]
-# e.g. bash benches/engine_scenes.sh "128 256" 3
+# `bench` cloth, in one run: `cloth run --json` (STEPS steps after 16 warm-up steps,
+# best of RUNS runs), at each size. Usage: bash benches/engine_scenes.sh [SIZES] [RUNS] [STEPS]
+# e.g. bash benches/engine_scenes.sh "128 256" 3 3840. Runs of 960 steps at 128 x 128
+# last about 40 ms, and on a 2-core VM how soon the system spreads the two threads
+# decides much of such a run; longer runs give steadier ratios.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SIZES=${1:-"128 256"}
 RUNS=${2:-3}
+STEPS=${3:-960}
 cargo build --release --quiet
 CLOTH=target/release/cloth
 
@@ -23,7 +26,7 @@ CASES=(
 )
 
 simd=$(grep -qw avx512f /proc/cpuinfo && echo AVX-512 || (grep -qw avx2 /proc/cpuinfo && echo AVX2 || echo baseline))
-echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of 960 steps"
+echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of $STEPS steps"
 for n in $SIZES; do
   echo
   echo "N = $n"
@@ -40,8 +43,8 @@ for n in $SIZES; do
     engine=""
     for _ in $(seq "$RUNS"); do
       # shellcheck disable=SC2086
-      out=$(eval "$CLOTH run --set width=$n --set height=$n $args --steps 960 --warmup 16 --json" 2>/dev/null | tail -1) || true
-      read -r rate engine < <(python3 -c "import json,sys; d=json.loads(sys.argv[1]); print(d['particle_steps_per_second'], d['engine'] + ('' if d['steps'] == 960 else '(diverged)'))" "$out")
+      out=$(eval "$CLOTH run --set width=$n --set height=$n $args --steps $STEPS --warmup 16 --json" 2>/dev/null | tail -1) || true
+      read -r rate engine < <(python3 -c "import json,sys; d=json.loads(sys.argv[1]); print(d['particle_steps_per_second'], d['engine'] + ('' if d['steps'] == $STEPS else '(diverged)'))" "$out")
       best=$(python3 -c "print(max($best, $rate))")
     done
     [ -z "$base" ] && base=$best

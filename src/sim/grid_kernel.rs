@@ -1138,7 +1138,7 @@ impl<E: Real> Kernel<E> {
         // Without friction, stretch limit or XPBD the step itself projected the
         // particles out of the sphere.
         if contact.is_active() && self.params.sphere.is_none() {
-            self.resolve_contact(&contact, parallel);
+            self.resolve_contact(&contact, parallel, duo);
         }
         if let Some(max_speed) = self.spec.max_speed {
             self.limit_speed(max_speed);
@@ -1269,49 +1269,69 @@ impl<E: Real> Kernel<E> {
     /// touch ([`Reach::may_touch`]); only their particles are resolved, in particle
     /// order. A particle out of reach would leave `resolve` unchanged, so skipping
     /// it changes nothing.
-    fn resolve_contact(&mut self, contact: &constraints::Contact, parallel: bool) {
+    fn resolve_contact(
+        &mut self,
+        contact: &constraints::Contact,
+        parallel: bool,
+        duo: Option<&Duo>,
+    ) {
         let verlet = self.params.verlet;
         let reach = Reach::of(contact);
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let mut rows = std::mem::take(&mut self.contact_rows);
         rows.clear();
         rows.resize(h, false);
+        // With `duo` the rows are scanned and resolved in two halves, the second
+        // on the serving thread; with `parallel` (the pool free) by rayon.
+        let large = w * h >= PARALLEL_MIN_PARTICLES;
+        let split = h / 2;
         {
             let (cur, inv_mass, simd) = (&self.cur, self.inv_mass.as_slice(), self.simd);
-            let scan = |r: usize, flag: &mut bool| {
-                *flag = row_may_touch_dispatch(simd, cur, inv_mass, (r * st, w), &reach);
+            let scan = |first: usize, flags: &mut [bool]| {
+                for (k, flag) in flags.iter_mut().enumerate() {
+                    let r = first + k;
+                    *flag = row_may_touch_dispatch(simd, cur, inv_mass, (r * st, w), &reach);
+                }
             };
-            if parallel && w * h >= PARALLEL_MIN_PARTICLES {
-                use rayon::prelude::*;
-                rows.par_iter_mut()
-                    .enumerate()
-                    .for_each(|(r, f)| scan(r, f));
-            } else {
-                rows.iter_mut().enumerate().for_each(|(r, f)| scan(r, f));
+            match duo {
+                Some(duo) if large => {
+                    let (top, bottom) = rows.split_at_mut(split);
+                    duo.fork(&mut || scan(split, bottom), || scan(0, top));
+                }
+                _ if parallel && large => {
+                    use rayon::prelude::*;
+                    rows.par_chunks_mut(8)
+                        .enumerate()
+                        .for_each(|(k, flags)| scan(8 * k, flags));
+                }
+                _ => scan(0, &mut rows),
             }
         }
-        for r in (0..h).filter(|&r| rows[r]) {
-            for i in r * st..r * st + w {
-                let w = self.inv_mass.as_slice()[i];
-                let [x, y, z] = self.cur.x.each_ref().map(|a| a.as_slice()[i]);
-                if !reach.may_touch([x, y, z], w) {
-                    continue;
-                }
-                let x = self.position_at(i);
-                let v =
-                    DVec3::from_array(std::array::from_fn(|a| self.cur.v[a].as_slice()[i].f64()));
-                let (to, v_new) = contact.resolve(x, v, w.f64());
-                if to != x {
-                    self.set_position_at(i, to);
-                }
-                let dv = v_new - v;
-                for a in 0..3 {
-                    self.cur.v[a].as_mut_slice()[i] += E::of(dv[a]);
-                    if verlet {
-                        self.cur.u[a].as_mut_slice()[i] += E::of(dv[a]);
-                    }
+        // The flagged rows' particles, in two halves of the rows on two threads
+        // when allowed (each particle's resolution is its own: the same results).
+        let ctx = ContactRows {
+            flags: &rows,
+            width: w,
+            stride: st,
+            inv_mass: self.inv_mass.as_slice(),
+            reach,
+            contact,
+            compensated: self.params.compensated,
+            verlet,
+        };
+        let out = self.cur.rows();
+        if (parallel || duo.is_some()) && large {
+            let (mut first, mut second) = out.split_at(split * st);
+            let mut second_half = || ctx.resolve(&mut second, split, split..h);
+            let first_half = || ctx.resolve(&mut first, 0, 0..split);
+            match duo {
+                Some(duo) => duo.fork(&mut second_half, first_half),
+                None => {
+                    rayon::join(first_half, second_half);
                 }
             }
+        } else {
+            ctx.resolve(&mut { out }, 0, 0..h);
         }
         self.contact_rows = rows;
     }
@@ -2719,6 +2739,60 @@ fn row_may_tear<E: Real>(
         }
     }
     over != 0
+}
+
+/// What resolving the contacts of flagged rows reads ([`Kernel::resolve_contact`]).
+struct ContactRows<'a, E> {
+    /// Per row, whether a particle of it may touch.
+    flags: &'a [bool],
+    width: usize,
+    stride: usize,
+    inv_mass: &'a [E],
+    reach: Reach<E>,
+    contact: &'a constraints::Contact,
+    compensated: bool,
+    verlet: bool,
+}
+
+impl<E: Real> ContactRows<'_, E> {
+    /// Resolves the particles of the flagged rows among `rows`, whose arrays `out`
+    /// holds from row `first` on.
+    fn resolve(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {
+        let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
+        let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
+        let lows = [xl, yl, zl];
+        for r in rows.filter(|&r| self.flags[r]) {
+            let start = r * self.stride;
+            for i in start..start + self.width {
+                let j = i - first * self.stride;
+                let w = self.inv_mass[i];
+                if !self.reach.may_touch([0, 1, 2].map(|a| pos[a][j]), w) {
+                    continue;
+                }
+                let x = DVec3::from_array([0, 1, 2].map(|a| pos[a][j].f64() + lows[a][j].f64()));
+                let v = DVec3::from_array([0, 1, 2].map(|a| vel[a][j].f64()));
+                let (to, v_new) = self.contact.resolve(x, v, w.f64());
+                if to != x {
+                    for a in 0..3 {
+                        let hi = E::of(to[a]);
+                        pos[a][j] = hi;
+                        lows[a][j] = if self.compensated {
+                            E::of(to[a] - hi.f64())
+                        } else {
+                            E::ZERO
+                        };
+                    }
+                }
+                let dv = v_new - v;
+                for a in 0..3 {
+                    vel[a][j] += E::of(dv[a]);
+                    if self.verlet {
+                        upd[a][j] += E::of(dv[a]);
+                    }
+                }
+            }
+        }
+    }
 }
 
 /// Where a particle may touch a collider, in the kernel's precision: below the
