@@ -1656,13 +1656,9 @@ impl<E: Real> Kernel<E> {
     /// Sets the position of array index `i` from f64, split into high and low parts.
     fn set_position_at(&mut self, i: usize, q: DVec3) {
         for a in 0..3 {
-            let hi = E::of(q[a]);
+            let (hi, lo) = position_parts(q[a], self.params.compensated);
             self.cur.x[a].as_mut_slice()[i] = hi;
-            self.cur.xl[a].as_mut_slice()[i] = if self.params.compensated {
-                E::of(q[a] - hi.f64())
-            } else {
-                E::ZERO
-            };
+            self.cur.xl[a].as_mut_slice()[i] = lo;
         }
     }
 
@@ -2774,13 +2770,7 @@ impl<E: Real> ContactRows<'_, E> {
                 let (to, v_new) = self.contact.resolve(x, v, w.f64());
                 if to != x {
                     for a in 0..3 {
-                        let hi = E::of(to[a]);
-                        pos[a][j] = hi;
-                        lows[a][j] = if self.compensated {
-                            E::of(to[a] - hi.f64())
-                        } else {
-                            E::ZERO
-                        };
+                        (pos[a][j], lows[a][j]) = position_parts(to[a], self.compensated);
                     }
                 }
                 let dv = v_new - v;
@@ -2876,6 +2866,18 @@ fn row_may_touch_dispatch<E: Real>(
         },
         _ => row_may_touch(state, inv_mass, row, reach),
     }
+}
+
+/// A coordinate (m) as the kernel stores it: its high part, and the rest as a low
+/// part when the positions are double-float (`compensated`), else zero.
+fn position_parts<E: Real>(q: f64, compensated: bool) -> (E, E) {
+    let hi = E::of(q);
+    let lo = if compensated {
+        E::of(q - hi.f64())
+    } else {
+        E::ZERO
+    };
+    (hi, lo)
 }
 
 /// One row of positions as f64 (high plus low part), from array index `start`
