@@ -1,7 +1,8 @@
 //! The mesh engine against the f64 general engine (the exact reference), on the
 //! scenes that are not grids: each run is built twice from the same scene, one
-//! allowed the fast path (and taking the mesh engine), one exact, and both stepped
-//! the same number of steps.
+//! allowed the fast path (and taking the mesh engine; the jelly is kept off the
+//! lattice kernel, `tests/lattice_kernel.rs`), one exact, and both stepped the
+//! same number of steps.
 //!
 //! Tolerance: both engines compute in f64. The mesh engine evaluates each spring
 //! from both of its ends (the two evaluations are exact negations of each other)
@@ -44,6 +45,8 @@ use common::{build, max_distance};
 fn mesh_and_exact(name: &str, overrides: &[&str], steps: u64) -> (f64, f64) {
     let mut fast = build(name, overrides);
     fast.set_fast_path(true);
+    // Lattices (the jelly) take the lattice kernel unless kept off it.
+    fast.refuse_lattice_kernel(true);
     assert_eq!(
         fast.engine(),
         Engine::Mesh,
@@ -237,6 +240,7 @@ fn a_divergence_on_the_mesh_engine_is_caught_where_the_f64_engine_catches_it() {
     let overrides = ["integrator=\"explicit-euler\"", "dt=0.002"];
     let mut fast = build("jelly", &overrides);
     fast.set_fast_path(true);
+    fast.refuse_lattice_kernel(true);
     assert_eq!(fast.engine(), Engine::Mesh);
     let mut exact = build("jelly", &overrides);
     let fast_err = fast.run(20_000).unwrap_err();

@@ -11,9 +11,9 @@ use super::mesh::{self, Mesh};
 use super::values::{PinPreset, Pins};
 use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
 use crate::limits::number as shown;
-use crate::sim::GridShape;
 use crate::sim::constraints::out_of_sphere;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
+use crate::sim::{GridShape, LatticeShape};
 
 /// Largest grid side (particles), so a typo cannot ask for billions of particles.
 pub const GRID_MAX_SIDE: u32 = 1024;
@@ -1148,12 +1148,18 @@ impl Resolved {
             width: self.width as usize,
             height: self.height as usize,
         });
+        let lattice = (self.layout == Layout::Lattice).then_some(LatticeShape {
+            width: self.width as usize,
+            height: self.height as usize,
+            depth: self.depth as usize,
+        });
         let topology = Topology {
             springs,
             bars,
             triangles,
             uvs,
             grid,
+            lattice,
         };
         System::new(masses, positions, &self.pins, topology, self.params)
     }

@@ -24,6 +24,7 @@
 use glam::DVec3;
 
 use super::energy_budget::ENERGY_CHECK_STEPS;
+use super::grid_kernel::lattice::{LatticeKernel, LatticeSpec};
 use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
 use super::mesh_kernel::{MeshKernel, MeshParams};
 use super::springs::STENCIL_DIRECTIONS;
@@ -42,6 +43,9 @@ pub enum Engine {
     /// The f64 mesh engine ([`super::mesh_kernel`]): any topology, results equal to
     /// the general path's to f64 round-off.
     Mesh,
+    /// The lattice stencil kernel ([`grid_kernel::lattice`]), float32 on float32 or
+    /// double-float positions.
+    Lattice(Precision),
 }
 
 impl Engine {
@@ -53,12 +57,16 @@ impl Engine {
             Self::Grid(Precision::Mixed) => "grid-mixed",
             Self::Grid(Precision::Double) => "grid-f64",
             Self::Mesh => "mesh-f64",
+            Self::Lattice(Precision::Single) => "lattice-f32",
+            Self::Lattice(Precision::Mixed) => "lattice-mixed",
+            // Never built: such a lattice runs on the mesh engine.
+            Self::Lattice(Precision::Double) => "lattice-f64",
         }
     }
 
-    /// Whether this is one of the fast engines (grid or mesh).
+    /// Whether this is one of the fast engines (grid, lattice or mesh).
     pub fn is_fast(self) -> bool {
-        matches!(self, Self::Grid(_) | Self::Mesh)
+        matches!(self, Self::Grid(_) | Self::Lattice(_) | Self::Mesh)
     }
 
     /// Whether this is the fast grid kernel (in either precision).
@@ -84,11 +92,15 @@ pub struct GridShape {
 pub(super) struct Engines {
     /// Whether [`System::run`] may hand runs to them ([`System::set_fast_path`]).
     allowed: bool,
+    /// Whether lattices are kept off the lattice kernel, for the mesh engine
+    /// ([`System::refuse_lattice_kernel`]).
+    lattice_refused: bool,
     grid: Option<FastPath>,
+    lattice: Option<LatticePath>,
     mesh: Option<MeshPath>,
     /// The springs and masses as the grid kernel sees them, summarised on each edit.
-    pub(super) grid_springs: Option<GridSprings>,
-    /// How many times a grid kernel was built for this system.
+    pub(super) stencil_springs: Option<StencilSprings>,
+    /// How many times a grid or lattice kernel was built for this system.
     builds: u64,
     /// Bumped each time springs break ([`super::tearing`]): a grid kernel that saw
     /// an older count takes the springs left from the model.
@@ -104,6 +116,7 @@ pub(super) struct Engines {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Ahead {
     Grid,
+    Lattice,
     Mesh,
 }
 
@@ -111,9 +124,11 @@ impl Clone for Engines {
     fn clone(&self) -> Self {
         Self {
             allowed: self.allowed,
+            lattice_refused: self.lattice_refused,
             grid: None,
+            lattice: None,
             mesh: None,
-            grid_springs: self.grid_springs,
+            stencil_springs: self.stencil_springs,
             builds: self.builds,
             springs_version: self.springs_version,
             // A clone has no engine: its f64 state must already be the latest
@@ -135,6 +150,9 @@ impl Engines {
         if let Some(grid) = &mut self.grid {
             grid.in_sync = false;
         }
+        if let Some(lattice) = &mut self.lattice {
+            lattice.in_sync = false;
+        }
         if let Some(mesh) = &mut self.mesh {
             mesh.in_sync = false;
         }
@@ -142,17 +160,27 @@ impl Engines {
 
     /// Applies `edit` to the coefficients of one whole spring kind in the grid
     /// summary (the grid stays a grid, no rescan); rescans `model` if there was none.
-    pub(super) fn edit_grid_springs(
+    pub(super) fn edit_stencil_springs(
         &mut self,
         model: &super::Model,
         kind: SpringKind,
         edit: impl Fn(&mut SpringCoefficients),
     ) {
-        self.grid_springs = match self.grid_springs {
+        self.stencil_springs = match self.stencil_springs {
             Some(grid) => Some(grid.with_kind(kind, edit)),
-            None => GridSprings::of(model),
+            None => StencilSprings::of(model),
         };
     }
+}
+
+/// The lattice kernel, and whether it holds the f64 state.
+#[derive(Debug)]
+struct LatticePath {
+    kernel: LatticeKernel,
+    /// Whether the kernel holds the same state as the f64 arrays.
+    in_sync: bool,
+    /// Positions of the particles held in place, exactly as the f64 state had them.
+    held: Vec<(usize, DVec3)>,
 }
 
 /// The mesh engine and whether it holds the f64 state.
@@ -177,22 +205,38 @@ struct FastPath {
     springs_seen: Option<u64>,
 }
 
-/// A grid cloth's springs and masses as the kernel needs them: one mass, and per
-/// kind (structural, shear, bend) one stiffness and damping with rest lengths `h`,
-/// `h√2`, `2h`; every spring is a stencil spring of its kind, though not every
-/// stencil spring need be there (springs tear: the kernel takes which are left
-/// from the model, [`stencil_bits`]). A kind with none, e.g. `shear_scale = 0`,
-/// gets `k = b = 0`. Computed when springs or masses change, not on every run.
+/// A grid cloth's or a lattice's springs and masses as its stencil kernel needs
+/// them: one mass, and per kind one stiffness and damping. A grid's kinds are
+/// structural, shear and bend, with rest lengths `h`, `h√2`, `2h`; every spring is
+/// a stencil spring of its kind, though not every stencil spring need be there
+/// (springs tear: the kernel takes which are left from the model,
+/// [`springs_left`]). A lattice's kinds are its axis springs (structural), face
+/// diagonals (shear) and body diagonals (other), with rest lengths `h`, `h√2`,
+/// `h√3`, and every spring of the kinds present must be there. A kind with none,
+/// e.g. `shear_scale = 0`, gets `k = b = 0`. Computed when springs or masses
+/// change, not on every run.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) struct GridSprings {
+pub(super) struct StencilSprings {
     coefficients: [SpringCoefficients; 3],
     /// Which kinds exist.
     present: [bool; 3],
     spacing: f64,
     mass: f64,
+    /// Whether this is a lattice's (else a grid's).
+    lattice: bool,
 }
 
-impl GridSprings {
+impl StencilSprings {
+    /// The summary's slot of springs of `kind`, if the stencil has such springs.
+    fn slot(kind: SpringKind, lattice: bool) -> Option<usize> {
+        match (kind, lattice) {
+            (SpringKind::Structural, _) => Some(0),
+            (SpringKind::Shear, _) => Some(1),
+            (SpringKind::Bend, false) | (SpringKind::Other, true) => Some(2),
+            (SpringKind::Bend, true) | (SpringKind::Other, false) => None,
+        }
+    }
+
     /// The summary after every spring of `kind` had its coefficients changed by
     /// `edit` (a kind with no springs keeps `k = b = 0`).
     pub(super) fn with_kind(
@@ -200,48 +244,53 @@ impl GridSprings {
         kind: SpringKind,
         edit: impl Fn(&mut SpringCoefficients),
     ) -> Self {
-        let slot = match kind {
-            SpringKind::Structural => 0,
-            SpringKind::Shear => 1,
-            SpringKind::Bend => 2,
-            SpringKind::Other => return self,
-        };
-        if self.present[slot] {
+        if let Some(slot) = Self::slot(kind, self.lattice)
+            && self.present[slot]
+        {
             edit(&mut self.coefficients[slot]);
         }
         self
     }
 
-    /// The summary of `model`, or `None` when the kernel cannot model it.
+    /// The summary of `model`, or `None` when no stencil kernel can model it.
     pub(super) fn of(model: &super::Model) -> Option<Self> {
-        let shape = model.grid?;
         let mass = *model.mass.first()?;
         if model.mass.iter().any(|&m| m != mass) {
             return None;
         }
+        let (lattice, rest_ratio) = match (model.grid, model.lattice) {
+            (Some(_), _) => (false, [1.0, std::f64::consts::SQRT_2, 2.0]),
+            (None, Some(_)) => (true, [1.0, std::f64::consts::SQRT_2, 3f64.sqrt()]),
+            (None, None) => return None,
+        };
         let mut kinds: [Option<(f64, f64, f64)>; 3] = [None; 3];
+        let mut counts = [0; 3];
         for s in &model.springs {
-            let slot = match s.kind {
-                SpringKind::Structural => 0,
-                SpringKind::Shear => 1,
-                SpringKind::Bend => 2,
-                SpringKind::Other => return None,
-            };
-            // The scene says this is a grid: check that the spring is a stencil
-            // spring of its kind (canonical springs being unique, the springs are
-            // then a subset of the stencil, and the kernel masks the others).
+            let slot = Self::slot(s.kind, lattice)?;
+            // The scene says this is a grid or a lattice: check that the spring is
+            // a stencil spring of its kind (canonical springs being unique, the
+            // springs are then a subset of the stencil, and the grid kernel masks
+            // the others).
             let (a, b) = (s.a as usize, s.b as usize);
-            let (ra, ca) = (a / shape.width, a % shape.width);
-            let (rb, cb) = (b / shape.width, b % shape.width);
-            let offset = (rb as isize - ra as isize, cb as isize - ca as isize);
-            let in_stencil = match slot {
-                0 => offset == (0, 1) || offset == (1, 0),
-                1 => offset == (1, 1) || offset == (1, -1),
-                _ => offset == (0, 2) || offset == (2, 0),
+            let in_stencil = match (model.grid, model.lattice) {
+                (Some(shape), _) => {
+                    let (ra, ca) = (a / shape.width, a % shape.width);
+                    let (rb, cb) = (b / shape.width, b % shape.width);
+                    let offset = (rb as isize - ra as isize, cb as isize - ca as isize);
+                    let in_stencil = match slot {
+                        0 => offset == (0, 1) || offset == (1, 0),
+                        1 => offset == (1, 1) || offset == (1, -1),
+                        _ => offset == (0, 2) || offset == (2, 0),
+                    };
+                    in_stencil && b < shape.width * shape.height
+                }
+                (None, Some(shape)) => shape.kind_of(a, b) == Some(slot),
+                (None, None) => false,
             };
-            if !in_stencil || b >= shape.width * shape.height {
+            if !in_stencil {
                 return None;
             }
+            counts[slot] += 1;
             let coefficients = (s.stiffness, s.damping, s.rest);
             match kinds[slot] {
                 None => kinds[slot] = Some(coefficients),
@@ -249,13 +298,19 @@ impl GridSprings {
                 Some(_) => return None,
             }
         }
+        if let Some(shape) = model.lattice.filter(|_| lattice) {
+            // The lattice kernel evaluates every spring of a kind present.
+            let full = shape.spring_counts();
+            if (0..3).any(|k| kinds[k].is_some() && counts[k] != full[k]) {
+                return None;
+            }
+        }
         let h = kinds[0]?.2;
-        let rest_ratio = [1.0, std::f64::consts::SQRT_2, 2.0];
         let mut coefficients = [SpringCoefficients::default(); 3];
         for slot in 0..3 {
             if let Some((k, b, rest)) = kinds[slot] {
-                let grid_rest = (rest - rest_ratio[slot] * h).abs() <= 1e-12 * h.max(1e-300);
-                if !grid_rest {
+                let stencil_rest = (rest - rest_ratio[slot] * h).abs() <= 1e-12 * h.max(1e-300);
+                if !stencil_rest {
                     return None;
                 }
                 coefficients[slot] = SpringCoefficients { k, b };
@@ -266,11 +321,12 @@ impl GridSprings {
             present: kinds.map(|k| k.is_some()),
             spacing: h,
             mass,
+            lattice,
         })
     }
 }
 
-/// Which stencil springs and triangles `model` (a grid that [`GridSprings::of`]
+/// Which stencil springs and triangles `model` (a grid that [`StencilSprings::of`]
 /// accepted) has left, as [`GridCloth::set_springs_left`] takes them; `None` when
 /// it has every stencil spring of the kinds `present` and every triangle.
 fn springs_left(model: &super::Model, present: [bool; 3]) -> Option<Vec<u8>> {
@@ -310,11 +366,20 @@ impl System {
         self.engines.allowed = allowed;
         if !allowed {
             self.engines.grid = None;
+            self.engines.lattice = None;
             self.engines.mesh = None;
         }
     }
 
-    /// How many times a grid kernel was built for this system: once, unless its
+    /// Keeps a lattice off the lattice kernel (when `refused`), so that the mesh
+    /// engine steps it: to compare the two, in tests and benchmarks.
+    pub fn refuse_lattice_kernel(&mut self, refused: bool) {
+        self.catch_up();
+        self.engines.lattice_refused = refused;
+        self.engines.lattice = None;
+    }
+
+    /// How many times a grid or lattice kernel was built for this system: once, unless its
     /// shape, integrator or precision changed (live edits of coefficients update the
     /// kernel in place).
     pub fn kernel_builds(&self) -> u64 {
@@ -337,6 +402,8 @@ impl System {
         }
         if let Some(spec) = self.grid_spec() {
             Engine::Grid(spec.precision)
+        } else if let Some(spec) = self.lattice_spec() {
+            Engine::Lattice(spec.precision)
         } else if MeshParams::of(&self.model).is_some() {
             Engine::Mesh
         } else {
@@ -344,9 +411,137 @@ impl System {
         }
     }
 
+    /// Runs `n` steps on the lattice kernel if allowed and it models the system;
+    /// `None` when another engine must run them. Call after [`Self::run_on_grid`]
+    /// declined.
+    pub(super) fn run_on_lattice(
+        &mut self,
+        n: u64,
+        settle: bool,
+    ) -> Option<Result<(), Divergence>> {
+        if !self.engines.allowed {
+            return None;
+        }
+        let spec = self.lattice_spec()?;
+        let reused = self.engines.lattice.take().and_then(|mut lattice| {
+            if *lattice.kernel.spec() != spec {
+                // A live edit of a coefficient: updated in place (pins are set
+                // again below); a new shape, integrator or precision needs a new
+                // kernel.
+                if !lattice.kernel.respec(spec.clone()) {
+                    return None;
+                }
+                lattice.in_sync = false;
+            }
+            Some(lattice)
+        });
+        let mut lattice = match reused {
+            Some(lattice) => lattice,
+            None => {
+                self.engines.builds += 1;
+                let mut kernel = LatticeKernel::new(spec);
+                kernel.set_threads(engine_threads());
+                LatticePath {
+                    kernel,
+                    in_sync: false,
+                    held: Vec::new(),
+                }
+            }
+        };
+        if !lattice.in_sync {
+            lattice.load(self);
+            lattice.held.clear();
+            for (i, &w) in self.model.inv_mass.iter().enumerate() {
+                lattice.kernel.set_pinned(i, w == 0.0);
+                if w == 0.0 {
+                    lattice.held.push((i, self.state.positions[i]));
+                }
+            }
+            lattice.in_sync = true;
+        }
+        let result = self.run_in_chunks(n, &mut lattice, settle);
+        self.engines.lattice = Some(lattice);
+        Some(result)
+    }
+
+    /// The lattice kernel's description of this system, if it models it: a
+    /// lattice whose springs are checked to be its stencil's, one mass, gravity and
+    /// the applied force, air damping, a penalty ground and a sphere without
+    /// friction, symplectic Euler, explicit Euler or Verlet, and a precision short
+    /// of float64.
+    ///
+    /// Every parameter is named here (no `..`): a new one fails to compile until
+    /// it is either passed to the kernel or made a reason to refuse it.
+    pub(super) fn lattice_spec(&self) -> Option<LatticeSpec> {
+        let model = &self.model;
+        if self.engines.lattice_refused {
+            return None;
+        }
+        let (shape, springs) = (model.lattice?, self.engines.stencil_springs?);
+        let super::Params {
+            gravity,
+            force,
+            wind: _,             // only the aerodynamic drag uses it (refused below)
+            gust: _,             // likewise
+            air_density: _,      // likewise
+            drag_coefficient: _, // likewise
+            air_damping,
+            ground,
+            sphere,
+            integrator,
+            dt: _,             // given to each run
+            bar_iterations: _, // bars are refused below
+            stretch_limit,
+            tear_strain,
+            max_speed,
+            friction,
+            thickness: _, // already in `ground` and `sphere`
+            self_collision,
+            seed: _, // only the gusts use it
+        } = model.params;
+        let super::ForceTerms {
+            gravity: gravity_on,
+            springs: _, // the kernel always evaluates the stencil
+            aero,
+            air_damping: air_damping_on,
+            ground: _, // `ground` itself says
+            applied,
+        } = model.terms;
+        let frictional = friction > 0.0 || ground.is_some_and(|g| g.friction > 0.0);
+        let constrained = stretch_limit.is_some() || !model.bars.is_empty() || frictional;
+        let others = aero || self_collision || tear_strain.is_some() || max_speed.is_some();
+        if !springs.lattice || constrained || others || !LatticeSpec::supports(integrator) {
+            return None;
+        }
+        let mut spec = LatticeSpec {
+            shape,
+            spacing: springs.spacing,
+            particle_mass: springs.mass,
+            kinds: springs.coefficients,
+            // The applied force on every particle of the one mass is an
+            // acceleration like gravity.
+            gravity: (if gravity_on { gravity } else { DVec3::ZERO }
+                + if applied {
+                    force / springs.mass
+                } else {
+                    DVec3::ZERO
+                })
+            .to_array(),
+            air_damping: if air_damping_on { air_damping } else { 0.0 },
+            ground,
+            sphere,
+            integrator,
+            precision: Precision::Single,
+        };
+        // As for the grid: twice the start's farthest point from the origin.
+        let reach = 2.0 * (self.runaway.center.length() + self.runaway.extent);
+        spec.precision = Precision::cheapest(|r| spec.float32_noise(r), reach);
+        (spec.precision != Precision::Double).then_some(spec)
+    }
+
     /// Runs `n` steps on the mesh engine if allowed and it models the system
     /// exactly; `None` when the general path must run them. Call after
-    /// [`Self::run_on_grid`] declined.
+    /// [`Self::run_on_grid`] and [`Self::run_on_lattice`] declined.
     pub(super) fn run_on_mesh(&mut self, n: u64, settle: bool) -> Option<Result<(), Divergence>> {
         if !self.engines.allowed {
             return None;
@@ -387,7 +582,7 @@ impl System {
     /// it is either passed to the kernel or made a reason to refuse it.
     fn grid_spec(&self) -> Option<GridSpec> {
         let model = &self.model;
-        let (shape, springs) = (model.grid?, self.engines.grid_springs?);
+        let (shape, springs) = (model.grid?, self.engines.stencil_springs?);
         let super::Params {
             gravity,
             force,
@@ -592,6 +787,12 @@ impl System {
                     self.engines.grid = Some(fast);
                 }
             }
+            Ahead::Lattice => {
+                if let Some(mut lattice) = self.engines.lattice.take() {
+                    lattice.copy_back(self);
+                    self.engines.lattice = Some(lattice);
+                }
+            }
             Ahead::Mesh => {
                 if let Some(mut mesh) = self.engines.mesh.take() {
                     mesh.copy_back(self);
@@ -710,6 +911,31 @@ impl FastEngine for FastPath {
             // The kernel broke them itself: its masks are the model's.
             self.springs_seen = Some(system.engines.springs_version);
         }
+        self.kernel.positions_into(&mut system.state.positions);
+        self.kernel.velocities_into(&mut system.state.velocities);
+        for &(i, position) in &self.held {
+            system.state.positions[i] = position;
+        }
+        system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
+    }
+    fn load(&mut self, system: &System) {
+        let state = &system.state;
+        self.kernel.set_state(&state.positions, &state.velocities);
+        if let Some(u) = system.verlet_update_velocities() {
+            self.kernel.set_update_velocities(&u);
+        }
+    }
+}
+
+impl FastEngine for LatticePath {
+    const KIND: Ahead = Ahead::Lattice;
+    fn advance(&mut self, system: &System, steps: usize) {
+        self.kernel.steps(system.model.params.dt, steps);
+    }
+    fn extremes(&self, center: DVec3) -> (f64, f64) {
+        self.kernel.extremes(center)
+    }
+    fn copy_back(&mut self, system: &mut System) {
         self.kernel.positions_into(&mut system.state.positions);
         self.kernel.velocities_into(&mut system.state.velocities);
         for &(i, position) in &self.held {

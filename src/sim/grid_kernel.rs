@@ -80,6 +80,8 @@ use super::duo::Duo;
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 
+pub mod lattice;
+
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
 const EPS2: f32 = 1e-24;
@@ -202,11 +204,18 @@ impl Precision {
     pub fn needed(spec: &GridSpec, reach: f64) -> Self {
         // XPBD's springs are not forces: a position's round-off moves a particle by
         // about that much, not k times it, so float32 positions do at any k.
-        if spec.integrator == Integrator::Xpbd
-            || Self::float32_noise(spec, Some(reach)) <= Self::NOISE_LIMIT
-        {
+        if spec.integrator == Integrator::Xpbd {
+            return Self::Single;
+        }
+        Self::cheapest(|r| Self::float32_noise(spec, r), reach)
+    }
+
+    /// The cheapest level whose float32 noise (`noise(Some(reach))` with float32
+    /// positions, `noise(None)` with double-float ones) stays under the limit.
+    pub fn cheapest(noise: impl Fn(Option<f64>) -> f64, reach: f64) -> Self {
+        if noise(Some(reach)) <= Self::NOISE_LIMIT {
             Self::Single
-        } else if Self::float32_noise(spec, None) <= Self::NOISE_LIMIT {
+        } else if noise(None) <= Self::NOISE_LIMIT {
             Self::Mixed
         } else {
             Self::Double
@@ -219,14 +228,25 @@ impl Precision {
     /// for double-float positions (`None`).
     pub fn float32_noise(spec: &GridSpec, reach: Option<f64>) -> f64 {
         let h = spec.spacing.abs();
-        let ulp = f32::EPSILON as f64;
         let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
         let kinds = [spec.structural, spec.shear, spec.bend];
-        let noise: f64 = (kinds.iter().zip(rests))
-            .map(|(kind, rest)| 4.0 * kind.k.abs() * ulp * reach.unwrap_or(rest).abs())
+        let springs = (kinds.iter().zip(rests)).map(|(kind, rest)| (kind.k, 4.0, rest));
+        Self::spring_noise(springs, spec.particle_mass, reach)
+    }
+
+    /// `sum count k 2^-23 r / m` over a particle's springs, given as `(k, count,
+    /// rest length)` of each kind, with `r` as in [`Precision::float32_noise`].
+    pub fn spring_noise(
+        springs: impl Iterator<Item = (f64, f64, f64)>,
+        mass: f64,
+        reach: Option<f64>,
+    ) -> f64 {
+        let ulp = f32::EPSILON as f64;
+        let noise: f64 = springs
+            .map(|(k, count, rest)| count * k.abs() * ulp * reach.unwrap_or(rest).abs())
             .sum();
-        if spec.particle_mass > 0.0 {
-            noise / spec.particle_mass
+        if mass > 0.0 {
+            noise / mass
         } else {
             f64::INFINITY
         }
@@ -2229,7 +2249,7 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine, row_may_tear,
+        Band, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine, lattice, row_may_tear,
         row_may_touch, row_variant, stretch_limit_line,
     };
 
@@ -2256,6 +2276,34 @@ mod x86 {
         own: bool,
     ) {
         row_variant(Avx512(()), ctx, band, row, out, lo, own);
+    }
+
+    /// One band of a lattice with AVX-512 (see `lattice::band_steps`).
+    ///
+    /// # Safety
+    /// As for `row_avx512`.
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn lattice_band_avx512(
+        ctx: &lattice::Ctx,
+        band: &mut lattice::Band,
+        out: Out<f32>,
+    ) {
+        lattice::band_modes(Avx512(()), ctx, band, out);
+    }
+
+    /// One band of a lattice with AVX2 (see `lattice::band_steps`).
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn lattice_band_avx2(
+        ctx: &lattice::Ctx,
+        band: &mut lattice::Band,
+        out: Out<f32>,
+    ) {
+        lattice::band_modes(Avx2(()), ctx, band, out);
     }
 
     /// The tear scan's `row_may_tear`, compiled for AVX2 and FMA.
@@ -3054,35 +3102,22 @@ fn triangle<S: Simd>(
 /// Splatted constants and raw pointers of one row, shared by its blocks.
 struct RowKernel<S: Simd> {
     s: S,
+    /// What integrating a particle needs.
+    step: StepLanes<S>,
     kinds: [[S::V; 3]; 3],
     neg_wind: [S::V; 3],
-    gravity: [S::V; 3],
     third: S::V,
     neg_drag: S::V,
-    dt: S::V,
-    zero: S::V,
     down: S::V,
     down2: S::V,
-    /// `-c` (air damping), ground height, `k_c`, damping, `explicit`, `h/2` (Verlet).
-    neg_air: S::V,
-    ground: [S::V; 3],
-    explicit: S::V,
-    verlet_half_dt: S::V,
-    inv_dt: S::V,
-    one: S::V,
-    /// Sphere centre, radius and squared radius (when the step projects onto it).
-    sphere: Option<SphereLanes<S::V>>,
-    verlet: bool,
     x: [*const S::E; 3],
     xl: [*const S::E; 3],
     v: [*const S::E; 3],
-    u: [*const S::E; 3],
     inv_mass: *const S::E,
     col_mask: *const S::E,
     /// [`Ctx::torn`]'s masks.
     torn: Option<[*const S::E; 8]>,
     acc: *mut S::E,
-    out: [*mut S::E; 12],
     /// Array offsets of the rows `row`, `row + 1`, `row + 2`.
     b: [usize; 3],
     /// Accumulator offsets of the rows `row`, `row + 1`, `row + 2`.
@@ -3090,6 +3125,56 @@ struct RowKernel<S: Simd> {
     nv: usize,
     stride: usize,
     lo: usize,
+}
+
+/// Splatted constants and raw pointers for [`integrate`] and
+/// [`project_out_of_sphere`]: the step of a particle under its force, shared by the
+/// grid's rows and the lattice's blocks ([`lattice`]).
+struct StepLanes<S: Simd> {
+    s: S,
+    gravity: [S::V; 3],
+    dt: S::V,
+    zero: S::V,
+    one: S::V,
+    /// `-c` (air damping), ground height, `k_c`, damping, `explicit`, `h/2` (Verlet).
+    neg_air: S::V,
+    ground: [S::V; 3],
+    explicit: S::V,
+    verlet_half_dt: S::V,
+    inv_dt: S::V,
+    /// Sphere centre, radius and squared radius (when the step projects onto it).
+    sphere: Option<SphereLanes<S::V>>,
+    verlet: bool,
+    /// Verlet's update velocities (the velocities for the other methods).
+    u: [*const S::E; 3],
+    /// [`Out`]'s twelve arrays.
+    out: [*mut S::E; 12],
+}
+
+impl<S: Simd> StepLanes<S> {
+    /// The lanes of `p`, reading Verlet's `u` from `u` (else from `v`) and writing
+    /// to `out`.
+    fn new(s: S, p: &Params<S::E>, u: [&[S::E]; 3], v: [&[S::E]; 3], out: &mut Out<S::E>) -> Self {
+        StepLanes {
+            s,
+            gravity: p.gravity.map(|w| s.splat(w)),
+            dt: s.splat(p.dt),
+            zero: s.splat(S::E::ZERO),
+            one: s.splat(S::E::ONE),
+            neg_air: s.splat(p.neg_air),
+            ground: p.ground.map(|g| s.splat(g)),
+            explicit: s.splat(p.explicit),
+            verlet_half_dt: s.splat(p.verlet_half_dt),
+            inv_dt: s.splat(S::E::ONE / p.dt),
+            sphere: p
+                .sphere
+                .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
+            verlet: p.verlet,
+            // Without Verlet's own array the update velocity is the velocity.
+            u: if p.verlet { u } else { v }.map(<[S::E]>::as_ptr),
+            out: out.0.each_mut().map(|o| o.as_mut_ptr()),
+        }
+    }
 }
 
 /// A sphere collider's centre, radius and squared radius, splatted.
@@ -3147,35 +3232,20 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const
     let kind = |i: usize| [s.splat(-p.ks[i]), s.splat(p.kls[i]), s.splat(-p.bs[i])];
     let k = RowKernel {
         s,
+        step: StepLanes::new(s, p, ctx.u, ctx.v, out),
         kinds: [kind(0), kind(1), kind(2)],
         neg_wind: p.wind.map(|w| s.splat(-w)),
-        gravity: p.gravity.map(|w| s.splat(w)),
         third: s.splat(S::E::of(1.0 / 3.0)),
         neg_drag: s.splat(-p.drag),
-        dt: s.splat(p.dt),
-        neg_air: s.splat(p.neg_air),
-        ground: p.ground.map(|g| s.splat(g)),
-        explicit: s.splat(p.explicit),
-        verlet_half_dt: s.splat(p.verlet_half_dt),
-        inv_dt: s.splat(S::E::ONE / p.dt),
-        one: s.splat(S::E::ONE),
-        sphere: p
-            .sphere
-            .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
-        verlet,
-        zero: s.splat(S::E::ZERO),
         down: s.splat(if row + 1 < g.h { S::E::ONE } else { S::E::ZERO }),
         down2: s.splat(if row + 2 < g.h { S::E::ONE } else { S::E::ZERO }),
         x: ctx.x.map(<[S::E]>::as_ptr),
         xl: ctx.xl.map(<[S::E]>::as_ptr),
         v: ctx.v.map(<[S::E]>::as_ptr),
-        // Without Verlet's own array the update velocity is the velocity.
-        u: if verlet { ctx.u } else { ctx.v }.map(<[S::E]>::as_ptr),
         inv_mass: ctx.inv_mass.as_ptr(),
         col_mask: ctx.col_mask.as_ptr(),
         torn: ctx.torn.map(|t| t.map(<[S::E]>::as_ptr)),
         acc: acc.as_mut_ptr(),
-        out: out.0.each_mut().map(|o| o.as_mut_ptr()),
         b,
         a: [slot(row), slot(row + 1), slot(row + 2)],
         nv,
@@ -3189,7 +3259,7 @@ fn row_step<S: Simd, const DRAG: bool, const OWN: bool, const PLAIN: bool, const
     } else {
         0
     };
-    let mut carry = [[k.zero; 3]; 3];
+    let mut carry = [[k.step.zero; 3]; 3];
     let mut c = 0;
     while c < c_mask {
         // SAFETY: c < nv, a multiple of LANES; bounds asserted above.
@@ -3222,7 +3292,7 @@ unsafe fn block<
     carry: &mut [[S::V; 3]; 3],
 ) {
     let s = k.s;
-    let zero = k.zero;
+    let zero = k.step.zero;
     // SAFETY: offsets are inside the arrays (caller's contract).
     let ld = |ptr: [*const S::E; 3], i: usize| unsafe {
         [
@@ -3324,23 +3394,23 @@ unsafe fn block<
             // SAFETY: as above; outputs hold `lo + nv` floats.
             unsafe {
                 let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
-                integrate::<S, PLAIN, LO>(k, c, i, w, p00, force);
+                integrate::<S, PLAIN, LO>(&k.step, k.b[0] + c, k.lo + c, i, w, p00, force);
             }
         }
         carry[0][i] = l;
         carry[1][i] = q;
         carry[2][i] = m;
     }
-    if OWN && !PLAIN && k.sphere.is_some() {
+    if OWN && !PLAIN && k.step.sphere.is_some() {
         // SAFETY: as above.
-        unsafe { project_out_of_sphere::<S, LO>(k, c, w) };
+        unsafe { project_out_of_sphere::<S, LO>(&k.step, k.lo + c, w) };
     }
 }
 
-/// Integrates component `i` of the particles `(row, c .. c + LANES)` (inverse
+/// Integrates component `i` of the `LANES` particles at array index `at` (inverse
 /// masses `w`) under `force` (springs and drag): adds air damping and, for `y`, the
 /// ground penalty, then steps them (symplectic Euler, explicit Euler or position
-/// Verlet) and writes the new state to the outputs.
+/// Verlet) and writes the new state to the outputs at index `o`.
 ///
 /// # Safety
 /// As for [`block`], with `OWN`.
@@ -3348,8 +3418,9 @@ unsafe fn block<
 /// `PLAIN`: symplectic Euler with no air damping or ground (see `Params::is_plain`).
 #[inline(always)]
 unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
-    k: &RowKernel<S>,
-    c: usize,
+    k: &StepLanes<S>,
+    at: usize,
+    o: usize,
     i: usize,
     w: S::V,
     (x, xl, v): Particle<S::V>,
@@ -3361,7 +3432,6 @@ unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
         let vn = s.keep_if_positive(w, s.mul_add(k.dt, a, v[i]));
         // SAFETY: outputs hold `lo + nv` floats.
         unsafe {
-            let o = k.lo + c;
             if LO {
                 let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, vn));
                 s.store(k.out[i].add(o), xn);
@@ -3373,7 +3443,6 @@ unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
         }
         return;
     }
-    let at = k.b[0] + c;
     // SAFETY: inside the arrays (caller's contract).
     let u = if k.verlet {
         unsafe { s.load(k.u[i].add(at)) }
@@ -3400,7 +3469,6 @@ unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
     let vn = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un));
     // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
     unsafe {
-        let o = k.lo + c;
         s.store(k.out[i].add(o), xn);
         if LO {
             s.store(k.out[3 + i].add(o), xnl);
@@ -3412,19 +3480,18 @@ unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
     }
 }
 
-/// Projects the just integrated particles `(row, c .. c + LANES)` that are inside
+/// Projects the just integrated particles at output index `o` that are inside
 /// the sphere (and free) onto its surface, `center + radius d / |d|`; the move `δ`
 /// also changes their velocities by `δ / h`.
 ///
 /// # Safety
 /// As for [`integrate`], after it ran for all three components.
 #[inline(always)]
-unsafe fn project_out_of_sphere<S: Simd, const LO: bool>(k: &RowKernel<S>, c: usize, w: S::V) {
+unsafe fn project_out_of_sphere<S: Simd, const LO: bool>(k: &StepLanes<S>, o: usize, w: S::V) {
     let s = k.s;
     let Some((center, radius, radius2)) = k.sphere else {
         return;
     };
-    let o = k.lo + c;
     // SAFETY: the outputs just written (caller's contract).
     let out = |j: usize| unsafe { s.load(k.out[j].add(o)) };
     let xn: [S::V; 3] = std::array::from_fn(out);

@@ -47,6 +47,7 @@ pub use energy_budget::EnergyBudget;
 pub use fast_path::{Engine, GridShape};
 pub use forces::ForceTerms;
 pub use grab::Grab;
+pub use grid_kernel::lattice::LatticeShape;
 pub use integrators::Integrator;
 pub use model::{Ground, Model, Params, Sphere, Topology};
 pub use safe::{SafeStep, safe_step, safe_substeps};

@@ -3,7 +3,9 @@
 
 use glam::{DVec2, DVec3};
 
-use super::{Adjacency, Bar, Energy, ForceTerms, GridShape, Integrator, Spring, Wind};
+use super::{
+    Adjacency, Bar, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
+};
 
 /// A horizontal ground plane `y = height` with penalty contact (seed 002's jelly cube).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -121,6 +123,9 @@ pub struct Topology {
     /// The grid's shape when the particles form a regular grid cloth
     /// (`p = row * width + column`), which the grid fast path needs.
     pub grid: Option<GridShape>,
+    /// The lattice's shape when the particles form a lattice block
+    /// (`p = (z height + y) width + x`), which the lattice fast path needs.
+    pub lattice: Option<LatticeShape>,
 }
 
 /// Topology and parameters: what stays fixed while the state advances.
@@ -149,6 +154,8 @@ pub struct Model {
     pub uvs: Vec<DVec2>,
     /// Grid shape, for grid cloths.
     pub grid: Option<GridShape>,
+    /// Lattice shape, for lattice blocks.
+    pub lattice: Option<LatticeShape>,
     /// Parameters.
     pub params: Params,
     /// Force terms that run.

@@ -74,6 +74,7 @@ impl System {
             triangles,
             uvs,
             grid,
+            lattice,
         } = topology;
         let n = positions.len();
         assert_eq!(masses.len(), n, "one mass per particle");
@@ -99,6 +100,7 @@ impl System {
             triangles,
             uvs,
             grid,
+            lattice,
             params,
             terms: ForceTerms::default(),
             wind,
@@ -122,7 +124,7 @@ impl System {
             checked_energy: None,
             stability: OnceLock::new(),
         };
-        system.engines.grid_springs = fast_path::GridSprings::of(&system.model);
+        system.engines.stencil_springs = fast_path::StencilSprings::of(&system.model);
         system.prepare_integrator();
         system
     }
@@ -282,7 +284,7 @@ impl System {
         }
         // A whole kind changes together: the grid stays a grid, no rescan.
         self.engines
-            .edit_grid_springs(&self.model, kind, |c| c.k = stiffness);
+            .edit_stencil_springs(&self.model, kind, |c| c.k = stiffness);
     }
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
@@ -292,7 +294,7 @@ impl System {
             s.damping = damping;
         }
         self.engines
-            .edit_grid_springs(&self.model, kind, |c| c.b = damping);
+            .edit_stencil_springs(&self.model, kind, |c| c.b = damping);
     }
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
@@ -307,7 +309,7 @@ impl System {
         for b in &mut self.model.bars {
             b.length *= factor;
         }
-        self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.engines.stencil_springs = fast_path::StencilSprings::of(&self.model);
     }
 
     /// Scales the whole system by `factor`: rest lengths, bar lengths and positions
@@ -347,7 +349,7 @@ impl System {
         }
         self.model.mass.fill(mass);
         self.model.refresh_inv_mass(self.grab.map(|g| g.particle));
-        self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.engines.stencil_springs = fast_path::StencilSprings::of(&self.model);
     }
 
     /// Energy now (as the last full check found it, when that was at this step).
@@ -421,6 +423,9 @@ impl System {
     fn run_settling(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
         self.budget();
         if let Some(result) = self.run_on_grid(n, settle) {
+            return result;
+        }
+        if let Some(result) = self.run_on_lattice(n, settle) {
             return result;
         }
         if let Some(result) = self.run_on_mesh(n, settle) {

@@ -96,7 +96,7 @@ impl System {
         if self.model.params.integrator == super::Integrator::ImplicitEuler {
             self.work.implicit.resize(n, m);
         }
-        self.engines.grid_springs = fast_path::GridSprings::of(&self.model);
+        self.engines.stencil_springs = fast_path::StencilSprings::of(&self.model);
         self.engines.springs_changed();
         pairs.len()
     }

@@ -1,0 +1,854 @@
+//! The fast engine for lattices: seed 002's jelly cube at any size, a `width x
+//! height x depth` block of particles with a spring to every neighbour within one
+//! cell (26 neighbours: axis springs of rest `h`, face diagonals of rest `h√2`,
+//! body diagonals of rest `h√3`, one stiffness and damping per kind), under
+//! gravity (and the applied force, as an acceleration), air damping and a penalty
+//! ground, stepped by symplectic Euler, explicit Euler or position Verlet, then
+//! projected out of a frictionless sphere. These are the grid kernel's forces,
+//! integrators and projection, written once in [`super`] and shared: a spring is
+//! [`spring`], a particle's step [`integrate`], the sphere
+//! [`project_out_of_sphere`]. What the lattice does not model (friction, the
+//! stretch limit, bars, drag, tearing) runs on the mesh engine instead
+//! (`super::super::fast_path` decides, spring by spring).
+//!
+//! # Layout
+//! Structure of arrays in float32 with the grid kernel's precision levels
+//! ([`Precision::Single`] or [`Precision::Mixed`]; a lattice that needs
+//! [`Precision::Double`] runs on the f64 mesh engine). Particle `(x, y, z)` is at
+//! array index `x + y W + z W H` with `W = width + 1` and `H = height + 1`: one
+//! ghost column after each row and one ghost row after each slab, and ghost slabs
+//! after the last. Every one of the 13 forward neighbours `(x + dx, y + dy, z + dz)`
+//! (`dz = 1`, or `dz = 0, dy = 1`, or `dz = dy = 0, dx = 1`) is then at a fixed
+//! positive offset, and one that lies outside the lattice is a ghost: a spring's
+//! force is multiplied by `real[a] real[b]`, 1 for particles and 0 for ghosts.
+//! Ghosts have inverse mass 0 and stay at the origin.
+//!
+//! # The step
+//! One pass over blocks of `LANES` consecutive indices: each block evaluates the 13
+//! springs that start on its particles, once each, and adds their forces on the
+//! particles it holds in registers; the forces on the other ends go to an
+//! accumulator array. The offsets come in a run `+1` (along x) and four runs of
+//! three consecutive offsets `o - 1, o, o + 1` (`dx = -1, 0, 1`); within a run the
+//! three forces are moved by zero, one and two lanes ([`Simd::shift1`], carried
+//! from block to block) and stored with one read-modify-write, and the `+1` run's
+//! forces reach their other ends by a shift alone. Springs reach only forward, so
+//! once a block has stored its runs the forces on its own particles are complete,
+//! and it integrates them at once, writing the new state to a second set of arrays
+//! (ping-pong).
+//!
+//! Threads take bands of blocks. A band first recomputes, without integrating,
+//! the blocks within one slab and a row before it (whose springs reach into it),
+//! into its own accumulator, so no thread writes what another reads and the
+//! result is bit-identical for any number of threads.
+
+use glam::DVec3;
+
+use super::{
+    BLOCK, Buf, Out, Params, Particle, Portable, Precision, Simd, SimdLevel, SpringCoefficients,
+    State, StepLanes, integrate, position_parts, project_out_of_sphere, spring,
+};
+use crate::sim::{Ground, Integrator, Sphere};
+
+/// Lattices with fewer particles than this run on the calling thread.
+pub const PARALLEL_MIN_PARTICLES: usize = 4096;
+
+/// A lattice's extents: particle `(x, y, z)` is `(z height + y) width + x` in the
+/// model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LatticeShape {
+    /// Particles along x.
+    pub width: usize,
+    /// Particles along y.
+    pub height: usize,
+    /// Particles along z.
+    pub depth: usize,
+}
+
+impl LatticeShape {
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.width * self.height * self.depth
+    }
+
+    /// True if it has no particles.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Springs of each kind (axis, face diagonal, body diagonal) that a full
+    /// lattice of this shape has.
+    pub fn spring_counts(&self) -> [usize; 3] {
+        let mut counts = [0; 3];
+        for (dx, dy, dz) in FORWARD {
+            let along = |n: usize, d: isize| n.saturating_sub(d.unsigned_abs());
+            let steps = dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs();
+            counts[steps - 1] +=
+                along(self.width, dx) * along(self.height, dy) * along(self.depth, dz);
+        }
+        counts
+    }
+
+    /// The kind (0 axis, 1 face diagonal, 2 body diagonal) of a spring from
+    /// particle `a` to particle `b`, or `None` when `b` is not a forward neighbour
+    /// of `a` within one cell.
+    pub fn kind_of(&self, a: usize, b: usize) -> Option<usize> {
+        let n = self.len();
+        if a >= n || b >= n {
+            return None;
+        }
+        let at = |p: usize| {
+            let (w, h) = (self.width, self.height);
+            [
+                (p % w) as isize,
+                ((p / w) % h) as isize,
+                (p / (w * h)) as isize,
+            ]
+        };
+        let ([xa, ya, za], [xb, yb, zb]) = (at(a), at(b));
+        let offset = (xb - xa, yb - ya, zb - za);
+        FORWARD.iter().position(|&o| o == offset).map(|d| {
+            let (dx, dy, dz) = FORWARD[d];
+            dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1
+        })
+    }
+}
+
+/// The 13 forward neighbours `(dx, dy, dz)` of a lattice particle.
+const FORWARD: [(isize, isize, isize); 13] = [
+    (1, 0, 0),
+    (-1, 1, 0),
+    (0, 1, 0),
+    (1, 1, 0),
+    (-1, -1, 1),
+    (0, -1, 1),
+    (1, -1, 1),
+    (-1, 0, 1),
+    (0, 0, 1),
+    (1, 0, 1),
+    (-1, 1, 1),
+    (0, 1, 1),
+    (1, 1, 1),
+];
+
+/// Everything that defines a lattice for [`LatticeKernel::new`] (the positions and
+/// velocities come from [`LatticeKernel::set_state`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LatticeSpec {
+    /// The extents.
+    pub shape: LatticeShape,
+    /// Rest length `h` of the axis springs in m.
+    pub spacing: f64,
+    /// Mass of every particle in kg.
+    pub particle_mass: f64,
+    /// Axis springs (rest `h`), face diagonals (`h√2`), body diagonals (`h√3`).
+    pub kinds: [SpringCoefficients; 3],
+    /// Acceleration of every free particle in m/s²: gravity plus the applied force
+    /// over the mass.
+    pub gravity: [f64; 3],
+    /// Viscous air damping `c` in N·s/m (0: off).
+    pub air_damping: f64,
+    /// Penalty ground (its friction must be 0).
+    pub ground: Option<Ground>,
+    /// Frictionless sphere collider.
+    pub sphere: Option<Sphere>,
+    /// Symplectic Euler, explicit Euler or position Verlet.
+    pub integrator: Integrator,
+    /// [`Precision::Single`] or [`Precision::Mixed`].
+    pub precision: Precision,
+}
+
+impl LatticeSpec {
+    /// The float32 acceleration noise of this lattice (see
+    /// [`Precision::float32_noise`]): a particle has up to 6 axis springs, 12 face
+    /// diagonals and 8 body diagonals.
+    pub fn float32_noise(&self, reach: Option<f64>) -> f64 {
+        let h = self.spacing.abs();
+        let springs = [(6.0, h), (12.0, h * 2f64.sqrt()), (8.0, h * 3f64.sqrt())];
+        let springs =
+            (self.kinds.iter().zip(springs)).map(|(kind, (count, rest))| (kind.k, count, rest));
+        Precision::spring_noise(springs, self.particle_mass, reach)
+    }
+
+    /// Whether the kernel models an integrator.
+    pub fn supports(integrator: Integrator) -> bool {
+        matches!(
+            integrator,
+            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet
+        )
+    }
+}
+
+/// Where a lattice's particles lie in the padded arrays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Geometry {
+    shape: LatticeShape,
+    /// Floats per row (`width + 1`) and per slab (`(height + 1) row`).
+    row: usize,
+    slab: usize,
+    /// Indices the blocks cover: the slabs, rounded up to [`BLOCK`].
+    blocks: usize,
+    /// Floats per array: `blocks`, then ghosts for the farthest neighbour.
+    len: usize,
+}
+
+impl Geometry {
+    fn new(shape: LatticeShape) -> Self {
+        let row = shape.width + 1;
+        let slab = row * (shape.height + 1);
+        let blocks = (slab * shape.depth).next_multiple_of(BLOCK);
+        Geometry {
+            shape,
+            row,
+            slab,
+            blocks,
+            len: blocks + Self::reach(slab, row).next_multiple_of(BLOCK) + BLOCK,
+        }
+    }
+
+    /// The largest offset of a forward neighbour, plus the two lanes a run of
+    /// three is shifted by.
+    fn reach(slab: usize, row: usize) -> usize {
+        slab + row + 1 + 2
+    }
+
+    /// The first offsets `o - 1` of the four runs of three (`dx = -1, 0, 1`):
+    /// `(dy, dz) = (1, 0), (-1, 1), (0, 1), (1, 1)`.
+    fn runs(&self) -> [usize; 4] {
+        let (row, slab) = (self.row, self.slab);
+        [row - 1, slab - row - 1, slab - 1, slab + row - 1]
+    }
+
+    /// Array index of model particle `p`.
+    fn index(&self, p: usize) -> usize {
+        let (w, h) = (self.shape.width, self.shape.height);
+        p % w + ((p / w) % h) * self.row + (p / (w * h)) * self.slab
+    }
+}
+
+/// A band of blocks one thread steps, with its own accumulator.
+#[derive(Clone, Debug)]
+pub(super) struct Band {
+    /// The band's first index and one past its last (multiples of [`BLOCK`]).
+    start: usize,
+    end: usize,
+    /// Where the band starts recomputing springs (see the module doc), the index
+    /// of `acc`'s first entry.
+    from: usize,
+    /// Forces on the particles `from ..` (x, y, z) from the springs of earlier
+    /// blocks.
+    acc: [Vec<f32>; 3],
+}
+
+impl Band {
+    fn new(start: usize, end: usize, geometry: &Geometry) -> Self {
+        let reach = Geometry::reach(geometry.slab, geometry.row).next_multiple_of(BLOCK);
+        // One block more than the springs reach, for the lanes the runs carry.
+        let from = start.saturating_sub(reach + BLOCK);
+        let len = end - from + reach + BLOCK;
+        Band {
+            start,
+            end,
+            from,
+            acc: std::array::from_fn(|_| vec![0.0; len]),
+        }
+    }
+}
+
+/// `n` bands of whole slabs (as nearly equal as the blocks allow).
+fn make_bands(geometry: &Geometry, n: usize) -> Vec<Band> {
+    let depth = geometry.shape.depth;
+    let n = n.clamp(1, depth.max(1));
+    let cut = |i: usize| {
+        if i == n {
+            geometry.blocks
+        } else {
+            (i * depth / n * geometry.slab) / BLOCK * BLOCK
+        }
+    };
+    (0..n)
+        .map(|i| Band::new(cut(i), cut(i + 1), geometry))
+        .collect()
+}
+
+/// What a band reads.
+pub(super) struct Ctx<'a> {
+    p: Params<f32>,
+    geometry: Geometry,
+    x: [&'a [f32]; 3],
+    xl: [&'a [f32]; 3],
+    v: [&'a [f32]; 3],
+    u: [&'a [f32]; 3],
+    real: &'a [f32],
+    inv_mass: &'a [f32],
+    simd: SimdLevel,
+}
+
+/// The fast engine for a lattice (see the module doc).
+pub struct LatticeKernel {
+    spec: LatticeSpec,
+    geometry: Geometry,
+    params: Params<f32>,
+    cur: State<f32>,
+    next: State<f32>,
+    /// 1 for particles, 0 for ghosts.
+    real: Buf<f32>,
+    inv_mass: Buf<f32>,
+    bands: Vec<Band>,
+    pool: Option<rayon::ThreadPool>,
+    simd: SimdLevel,
+}
+
+impl std::fmt::Debug for LatticeKernel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LatticeKernel")
+            .field("spec", &self.spec)
+            .field("bands", &self.bands.len())
+            .field("simd", &self.simd)
+            .finish()
+    }
+}
+
+impl LatticeKernel {
+    /// A lattice at the origin, at rest, every particle free; on one thread.
+    ///
+    /// # Panics
+    /// If the spec asks for [`Precision::Double`] or an integrator the kernel does
+    /// not model ([`LatticeSpec::supports`]).
+    pub fn new(spec: LatticeSpec) -> Self {
+        assert!(
+            spec.precision != Precision::Double,
+            "the lattice kernel is float32"
+        );
+        assert!(
+            LatticeSpec::supports(spec.integrator),
+            "integrator not modelled"
+        );
+        let geometry = Geometry::new(spec.shape);
+        let len = geometry.len;
+        let verlet = spec.integrator == Integrator::Verlet;
+        let cur = State {
+            x: std::array::from_fn(|_| Buf::zeros(len)),
+            xl: std::array::from_fn(|_| Buf::zeros(len)),
+            v: std::array::from_fn(|_| Buf::zeros(len)),
+            u: std::array::from_fn(|_| Buf::zeros(if verlet { len } else { 0 })),
+        };
+        let mut real = Buf::zeros(len);
+        for p in 0..spec.shape.len() {
+            real.as_mut_slice()[geometry.index(p)] = 1.0;
+        }
+        let mut kernel = LatticeKernel {
+            params: Self::params(&spec),
+            geometry,
+            next: cur.clone(),
+            cur,
+            real,
+            inv_mass: Buf::zeros(len),
+            bands: make_bands(&geometry, 1),
+            pool: None,
+            simd: SimdLevel::detect(),
+            spec,
+        };
+        kernel.reset_masses();
+        kernel
+    }
+
+    /// The per-step constants of `spec` (the step `dt` is set by each run). The
+    /// kinds are indexed 0 axis, 1 face diagonal, 2 body diagonal.
+    fn params(spec: &LatticeSpec) -> Params<f32> {
+        let h = spec.spacing;
+        let rests = [h, h * 2f64.sqrt(), h * 3f64.sqrt()];
+        Params {
+            ks: spec.kinds.map(|kind| kind.k as f32),
+            kls: std::array::from_fn(|i| (spec.kinds[i].k * rests[i]) as f32),
+            bs: spec.kinds.map(|kind| kind.b as f32),
+            gravity: spec.gravity.map(|g| g as f32),
+            wind: [0.0; 3],
+            drag: 0.0,
+            dt: 0.0,
+            neg_air: -spec.air_damping as f32,
+            ground: spec.ground.map_or([f32::MIN, 0.0, 0.0], |g| {
+                [g.height, g.stiffness, g.damping].map(|c| c as f32)
+            }),
+            explicit: if spec.integrator == Integrator::ExplicitEuler {
+                1.0
+            } else {
+                0.0
+            },
+            verlet_half_dt: 0.0,
+            verlet: spec.integrator == Integrator::Verlet,
+            compensated: spec.precision == Precision::Mixed,
+            sphere: spec.sphere.map(|s| {
+                let r = s.radius as f32;
+                (s.center.to_array().map(|c| c as f32), r, r * r)
+            }),
+        }
+    }
+
+    /// Every particle free, with the spec's mass.
+    fn reset_masses(&mut self) {
+        let inv_m = if self.spec.particle_mass > 0.0 {
+            (1.0 / self.spec.particle_mass) as f32
+        } else {
+            0.0
+        };
+        for p in 0..self.len() {
+            self.inv_mass.as_mut_slice()[self.geometry.index(p)] = inv_m;
+        }
+    }
+
+    /// Changes coefficients in place (stiffness, damping, mass, rest length,
+    /// gravity, air damping, colliders). Returns `false`, changing nothing, when
+    /// `spec` has another shape, integrator or precision: then build a new kernel.
+    /// Every particle is freed (pin them again).
+    pub fn respec(&mut self, spec: LatticeSpec) -> bool {
+        let same = spec.shape == self.spec.shape
+            && spec.integrator == self.spec.integrator
+            && spec.precision == self.spec.precision;
+        if !same {
+            return false;
+        }
+        let dt = (self.params.dt, self.params.verlet_half_dt);
+        self.params = Self::params(&spec);
+        (self.params.dt, self.params.verlet_half_dt) = dt;
+        self.spec = spec;
+        self.reset_masses();
+        true
+    }
+
+    /// The spec the kernel models now.
+    pub fn spec(&self) -> &LatticeSpec {
+        &self.spec
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.spec.shape.len()
+    }
+
+    /// True if the lattice has no particles.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Use `n` threads (at least 1) for lattices of [`PARALLEL_MIN_PARTICLES`] or
+    /// more particles and at least `n` slabs; others run on the calling thread.
+    /// Builds a rayon pool (this allocates; the steps do not).
+    pub fn set_threads(&mut self, n: usize) {
+        let n = n.max(1);
+        let parallel = n > 1 && self.len() >= PARALLEL_MIN_PARTICLES && self.spec.shape.depth >= n;
+        self.pool = parallel
+            .then(|| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .thread_name(|i| format!("cloth-lattice-{i}"))
+                    .build()
+                    .ok()
+            })
+            .flatten();
+        let bands = if self.pool.is_some() { n } else { 1 };
+        self.bands = make_bands(&self.geometry, bands);
+    }
+
+    /// True if steps run on several threads.
+    pub fn is_parallel(&self) -> bool {
+        self.pool.is_some()
+    }
+
+    /// Force a SIMD level (for tests and benches). A level this CPU lacks is
+    /// ignored.
+    pub fn set_simd_level(&mut self, level: SimdLevel) {
+        let best = SimdLevel::detect();
+        let ok = match level {
+            SimdLevel::Baseline => true,
+            SimdLevel::Avx2 => best != SimdLevel::Baseline,
+            SimdLevel::Avx512 => best == SimdLevel::Avx512,
+        };
+        if ok {
+            self.simd = level;
+        }
+    }
+
+    /// Pins (inverse mass 0) or frees model particle `p`.
+    pub fn set_pinned(&mut self, p: usize, pinned: bool) {
+        if p < self.len() {
+            let inv_m = if pinned || self.spec.particle_mass <= 0.0 {
+                0.0
+            } else {
+                (1.0 / self.spec.particle_mass) as f32
+            };
+            self.inv_mass.as_mut_slice()[self.geometry.index(p)] = inv_m;
+        }
+    }
+
+    /// Sets positions (m) and velocities (m/s) of the model's particles.
+    pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
+        let compensated = self.params.compensated;
+        for (p, (q, v)) in positions
+            .iter()
+            .zip(velocities)
+            .enumerate()
+            .take(self.len())
+        {
+            let i = self.geometry.index(p);
+            for a in 0..3 {
+                let (hi, lo) = position_parts::<f32>(q[a], compensated);
+                self.cur.x[a].as_mut_slice()[i] = hi;
+                self.cur.xl[a].as_mut_slice()[i] = lo;
+                self.cur.v[a].as_mut_slice()[i] = v[a] as f32;
+            }
+        }
+    }
+
+    /// Sets Verlet's velocities of the last position update (ignored for the
+    /// other integrators).
+    pub fn set_update_velocities(&mut self, u: &[DVec3]) {
+        if !self.params.verlet {
+            return;
+        }
+        for (p, u) in u.iter().enumerate().take(self.len()) {
+            let i = self.geometry.index(p);
+            for a in 0..3 {
+                self.cur.u[a].as_mut_slice()[i] = u[a] as f32;
+            }
+        }
+    }
+
+    /// Positions in m (high plus low part), in model order.
+    pub fn positions_into(&self, out: &mut [DVec3]) {
+        for (p, o) in out.iter_mut().enumerate().take(self.len()) {
+            let i = self.geometry.index(p);
+            *o = DVec3::from_array(std::array::from_fn(|a| {
+                self.cur.x[a].as_slice()[i] as f64 + self.cur.xl[a].as_slice()[i] as f64
+            }));
+        }
+    }
+
+    /// Velocities in m/s, in model order.
+    pub fn velocities_into(&self, out: &mut [DVec3]) {
+        self.read_into(&self.cur.v, out);
+    }
+
+    /// Verlet's velocities of the last position update (the velocities for the
+    /// other integrators).
+    pub fn update_velocities_into(&self, out: &mut [DVec3]) {
+        let u = if self.params.verlet {
+            &self.cur.u
+        } else {
+            &self.cur.v
+        };
+        self.read_into(u, out);
+    }
+
+    fn read_into(&self, arrays: &[Buf<f32>; 3], out: &mut [DVec3]) {
+        for (p, o) in out.iter_mut().enumerate().take(self.len()) {
+            let i = self.geometry.index(p);
+            *o = DVec3::from_array(std::array::from_fn(|a| arrays[a].as_slice()[i] as f64));
+        }
+    }
+
+    /// The largest squared speed and squared distance from `center` of any
+    /// particle (infinite if any is NaN).
+    pub fn extremes(&self, center: DVec3) -> (f64, f64) {
+        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
+        let [vx, vy, vz] = self.cur.v.each_ref().map(Buf::as_slice);
+        let [cx, cy, cz] = center.to_array().map(|c| c as f32);
+        let (mut speed2, mut dist2) = (0f32, 0f32);
+        for i in 0..self.geometry.blocks {
+            let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+            let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if v2.is_nan() || d2.is_nan() {
+                return (f64::INFINITY, f64::INFINITY);
+            }
+            speed2 = speed2.max(v2);
+            dist2 = dist2.max(d2);
+        }
+        (speed2 as f64, dist2 as f64)
+    }
+
+    /// Advances `n` steps of `dt` seconds (inside the thread pool once).
+    pub fn steps(&mut self, dt: f64, n: usize) {
+        self.params.dt = dt as f32;
+        if self.params.verlet {
+            self.params.verlet_half_dt = (0.5 * dt) as f32;
+        }
+        let pool = self.pool.take();
+        match &pool {
+            Some(pool) => pool.install(|| (0..n).for_each(|_| self.one_step(true))),
+            None => (0..n).for_each(|_| self.one_step(false)),
+        }
+        self.pool = pool;
+    }
+
+    fn one_step(&mut self, parallel: bool) {
+        let ctx = Ctx {
+            p: self.params,
+            geometry: self.geometry,
+            x: self.cur.x.each_ref().map(Buf::as_slice),
+            xl: self.cur.xl.each_ref().map(Buf::as_slice),
+            v: self.cur.v.each_ref().map(Buf::as_slice),
+            u: self.cur.u.each_ref().map(Buf::as_slice),
+            real: self.real.as_slice(),
+            inv_mass: self.inv_mass.as_slice(),
+            simd: self.simd,
+        };
+        run_bands(&ctx, &mut self.bands, self.next.rows(), parallel);
+        std::mem::swap(&mut self.cur, &mut self.next);
+    }
+}
+
+/// Runs the bands, splitting the outputs (which start at the first band's start)
+/// among them; in parallel with `rayon::join` when `parallel`.
+fn run_bands(ctx: &Ctx, bands: &mut [Band], out: Out<f32>, parallel: bool) {
+    if let [band] = bands {
+        band_dispatch(ctx, band, out);
+        return;
+    }
+    let mid = bands.len() / 2;
+    let (first, second) = bands.split_at_mut(mid);
+    let (out_first, out_second) = out.split_at(second[0].start - first[0].start);
+    if parallel {
+        rayon::join(
+            || run_bands(ctx, first, out_first, true),
+            || run_bands(ctx, second, out_second, true),
+        );
+    } else {
+        run_bands(ctx, first, out_first, false);
+        run_bands(ctx, second, out_second, false);
+    }
+}
+
+/// One band with the best code this CPU has.
+fn band_dispatch(ctx: &Ctx, band: &mut Band, out: Out<f32>) {
+    match ctx.simd {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+        SimdLevel::Avx512 => unsafe { super::x86::lattice_band_avx512(ctx, band, out) },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
+        SimdLevel::Avx2 => unsafe { super::x86::lattice_band_avx2(ctx, band, out) },
+        _ => band_modes(Portable::<f32>::default(), ctx, band, out),
+    }
+}
+
+/// [`band_steps`] for the spec's integrator terms and precision.
+#[inline(always)]
+pub(super) fn band_modes<S: Simd<E = f32>>(s: S, ctx: &Ctx, band: &mut Band, out: Out<f32>) {
+    match (ctx.p.is_plain(), ctx.p.compensated) {
+        (true, true) => band_steps::<S, true, true>(s, ctx, band, out),
+        (true, false) => band_steps::<S, true, false>(s, ctx, band, out),
+        (false, true) => band_steps::<S, false, true>(s, ctx, band, out),
+        (false, false) => band_steps::<S, false, false>(s, ctx, band, out),
+    }
+}
+
+/// Splatted constants and raw pointers of one band.
+struct Lanes<S: Simd> {
+    s: S,
+    step: StepLanes<S>,
+    /// `[-k, k L, -b]` of the axis springs, face and body diagonals.
+    kinds: [[S::V; 3]; 3],
+    x: [*const S::E; 3],
+    xl: [*const S::E; 3],
+    v: [*const S::E; 3],
+    real: *const S::E,
+    inv_mass: *const S::E,
+    /// The band's accumulator, whose entry 0 is index `from`.
+    acc: [*mut S::E; 3],
+    from: usize,
+    /// The band's first index (entry 0 of the outputs).
+    start: usize,
+    runs: [usize; 4],
+}
+
+impl<S: Simd<E = f32>> Lanes<S> {
+    /// Positions (high and low parts, or zeros without `LO`) and velocities of the
+    /// particles at `i .. i + LANES`.
+    ///
+    /// # Safety
+    /// `i + LANES` must be within the arrays.
+    #[inline(always)]
+    unsafe fn particle<const LO: bool>(&self, i: usize) -> Lanes3<S::V> {
+        let s = self.s;
+        // SAFETY: caller's contract.
+        let ld = |p: [*const f32; 3]| unsafe {
+            [
+                s.load(p[0].add(i)),
+                s.load(p[1].add(i)),
+                s.load(p[2].add(i)),
+            ]
+        };
+        let low = if LO { ld(self.xl) } else { [self.step.zero; 3] };
+        (ld(self.x), low, ld(self.v))
+    }
+
+    /// Forces of the springs of `kind` from the particles `a` (whose `real` is
+    /// `real_a`) to those at `b .. b + LANES`, zero where either end is a ghost.
+    ///
+    /// # Safety
+    /// As for [`Lanes::particle`] at `b`.
+    #[inline(always)]
+    unsafe fn spring_to<const LO: bool>(
+        &self,
+        a: Particle<S::V>,
+        real_a: S::V,
+        b: usize,
+        kind: usize,
+    ) -> [S::V; 3] {
+        let s = self.s;
+        // SAFETY: caller's contract.
+        let ((bx, bxl, bv), real_b) = unsafe { (self.particle::<LO>(b), s.load(self.real.add(b))) };
+        let mask = s.mul(real_a, real_b);
+        spring::<S, LO>(s, a, (&bx, &bxl, &bv), self.kinds[kind], Some(mask))
+    }
+}
+
+/// A block's positions, their low parts and velocities.
+type Lanes3<V> = ([V; 3], [V; 3], [V; 3]);
+
+/// Forces of the previous block carried to the next: the `+1` run's, and the
+/// second and third springs of each run of three.
+struct Carry<V> {
+    along: [V; 3],
+    runs: [[[V; 3]; 2]; 4],
+}
+
+/// The band's blocks: those before `start` only for their springs, then its own.
+#[inline(always)]
+fn band_steps<S: Simd<E = f32>, const PLAIN: bool, const LO: bool>(
+    s: S,
+    ctx: &Ctx,
+    band: &mut Band,
+    mut out: Out<f32>,
+) {
+    let g = &ctx.geometry;
+    let reach = Geometry::reach(g.slab, g.row);
+    // Everything `block` reads or writes lies inside these bounds.
+    assert!(S::LANES <= BLOCK && band.start.is_multiple_of(S::LANES));
+    assert!(band.end <= g.blocks && band.end.is_multiple_of(S::LANES));
+    assert!(band.from.is_multiple_of(S::LANES) && band.from <= band.start);
+    for a in ctx
+        .x
+        .iter()
+        .chain(&ctx.xl)
+        .chain(&ctx.v)
+        .chain([&ctx.real, &ctx.inv_mass])
+    {
+        assert!(a.len() >= g.blocks + reach + S::LANES);
+    }
+    for a in &band.acc {
+        assert!(a.len() >= band.end - band.from + reach + S::LANES);
+    }
+    let verlet = ctx.p.verlet;
+    if verlet {
+        assert!(ctx.u.iter().all(|u| u.len() >= g.blocks));
+    }
+    for o in &out.0[..if verlet { 12 } else { 9 }] {
+        assert!(o.len() >= band.end - band.start);
+    }
+    for a in &mut band.acc {
+        a.fill(0.0);
+    }
+    let p = &ctx.p;
+    let kind = |i: usize| [s.splat(-p.ks[i]), s.splat(p.kls[i]), s.splat(-p.bs[i])];
+    let k = Lanes {
+        s,
+        step: StepLanes::new(s, p, ctx.u, ctx.v, &mut out),
+        kinds: [kind(0), kind(1), kind(2)],
+        x: ctx.x.map(<[f32]>::as_ptr),
+        xl: ctx.xl.map(<[f32]>::as_ptr),
+        v: ctx.v.map(<[f32]>::as_ptr),
+        real: ctx.real.as_ptr(),
+        inv_mass: ctx.inv_mass.as_ptr(),
+        acc: band.acc.each_mut().map(|a| a.as_mut_ptr()),
+        from: band.from,
+        start: band.start,
+        runs: g.runs(),
+    };
+    let zero = [k.step.zero; 3];
+    let mut carry = Carry {
+        along: zero,
+        runs: [[zero; 2]; 4],
+    };
+    let mut at = band.from;
+    while at < band.start {
+        // SAFETY: `at` is a multiple of LANES below `blocks`; bounds asserted above.
+        unsafe { block::<S, false, PLAIN, LO>(&k, at, &mut carry) };
+        at += S::LANES;
+    }
+    while at < band.end {
+        // SAFETY: as above.
+        unsafe { block::<S, true, PLAIN, LO>(&k, at, &mut carry) };
+        at += S::LANES;
+    }
+}
+
+/// The particles at indices `at .. at + LANES`: their 13 forward springs, and with
+/// `OWN` their step (see the module doc).
+///
+/// # Safety
+/// `from <= at < blocks`, a multiple of `LANES`, with the bounds of
+/// [`band_steps`]; with `OWN`, `at >= start`.
+#[inline(always)]
+unsafe fn block<S: Simd<E = f32>, const OWN: bool, const PLAIN: bool, const LO: bool>(
+    k: &Lanes<S>,
+    at: usize,
+    carry: &mut Carry<S::V>,
+) {
+    let s = k.s;
+    // SAFETY: `at` is inside the arrays (caller's contract).
+    let (ax, axl, av) = unsafe { k.particle::<LO>(at) };
+    let a = (&ax, &axl, &av);
+    // SAFETY: as above.
+    let real_a = unsafe { s.load(k.real.add(at)) };
+    // SAFETY: every forward neighbour of `at` is inside the arrays (as above).
+    let to =
+        |offset: usize, kind: usize| unsafe { k.spring_to::<LO>(a, real_a, at + offset, kind) };
+    let along = to(1, 0);
+    let mut own = along;
+    let shifted: [S::V; 3] = std::array::from_fn(|i| s.shift1(carry.along[i], along[i]));
+    carry.along = along;
+    for (r, &first) in k.runs.iter().enumerate() {
+        // Runs along y (r = 0) and of dy = 0 (r = 2) have an axis spring in the
+        // middle and face diagonals at the sides; the others a face diagonal and
+        // body diagonals.
+        let middle = r % 2;
+        let (left, centre, right) = (
+            to(first, middle + 1),
+            to(first + 1, middle),
+            to(first + 2, middle + 1),
+        );
+        let [previous_centre, previous_right] = carry.runs[r];
+        for i in 0..3 {
+            own[i] = s.add(own[i], s.add(s.add(left[i], centre[i]), right[i]));
+            let other = s.add(
+                s.add(left[i], s.shift1(previous_centre[i], centre[i])),
+                s.shift2(previous_right[i], right[i]),
+            );
+            // SAFETY: the accumulator holds every index a band's springs reach.
+            unsafe {
+                let q = k.acc[i].add(at + first - k.from);
+                s.store(q, s.sub(s.load(q), other));
+            }
+        }
+        carry.runs[r] = [centre, right];
+    }
+    if OWN {
+        // SAFETY: as above.
+        let w = unsafe { s.load(k.inv_mass.add(at)) };
+        for i in 0..3 {
+            // SAFETY: the accumulator's entries for this block are complete (every
+            // other end but the `+1` run's is a row or more back); the outputs
+            // hold the band from `start`.
+            unsafe {
+                let earlier = s.load(k.acc[i].add(at - k.from));
+                let force = s.sub(s.add(earlier, own[i]), shifted[i]);
+                integrate::<S, PLAIN, LO>(&k.step, at, at - k.start, i, w, a, force);
+            }
+        }
+        if !PLAIN && k.step.sphere.is_some() {
+            // SAFETY: as above, after `integrate` ran for all three components.
+            unsafe { project_out_of_sphere::<S, LO>(&k.step, at - k.start, w) };
+        }
+    }
+}

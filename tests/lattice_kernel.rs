@@ -1,0 +1,335 @@
+//! The lattice kernel (`sim::grid_kernel::lattice`) against the f64 general engine
+//! (the exact reference), feature by feature, on the jelly cube made bigger; its
+//! threads and SIMD levels; its choice of precision at every stiffness; and what it
+//! leaves to the other engines.
+//!
+//! Tolerance. The kernel computes spring forces in float32 on double-float
+//! positions, in the precision that `Precision::cheapest` picks so that float32's
+//! resolution of the spring lengths, times `k / m` summed over a particle's
+//! springs, is an acceleration noise of at most `Precision::NOISE_LIMIT` (1% of
+//! gravity). A noise `a` moves a particle at most `a t² / 2` in a time `t` (the
+//! system being stable, the stiff springs and ground make the difference oscillate
+//! rather than grow), so the bound after `t` simulated seconds is
+//! `NOISE_LIMIT t² / 2` ([`bound`]): 1.8e-4 m after the 0.06 s of the cases below,
+//! which measure 2e-7 to 4e-6 m (each case prints its figure). A wrong force term
+//! moves the particles by far more: left out, the carry of one run of springs
+//! between blocks puts the jelly on the ground 1.3e-2 m away.
+
+use cloth_sandbox::sim::grid_kernel::lattice::{LatticeKernel, LatticeShape, LatticeSpec};
+use cloth_sandbox::sim::grid_kernel::{Precision, SimdLevel, SpringCoefficients};
+use cloth_sandbox::sim::{Engine, Integrator, SpringKind, System};
+use glam::DVec3;
+
+mod common;
+use common::{build, max_distance};
+
+/// Largest distance (m) allowed between the lattice kernel and the f64 engine after
+/// `time` s (see the module comment).
+fn bound(time: f64) -> f64 {
+    0.5 * Precision::NOISE_LIMIT * time * time
+}
+
+/// The jelly made `n`³.
+fn cube(n: usize) -> [String; 3] {
+    ["width", "height", "depth"].map(|k| format!("{k}={n}"))
+}
+
+/// Steps `system` on the lattice kernel and a copy of it on the f64 engine after
+/// `prepare` ran on both; returns the largest particle distance and how far the
+/// particles moved.
+fn lattice_and_exact(
+    label: &str,
+    mut fast: System,
+    steps: u64,
+    prepare: impl Fn(&mut System),
+) -> (f64, f64) {
+    let mut exact = fast.clone();
+    let start = exact.positions().to_vec();
+    fast.set_fast_path(true);
+    for system in [&mut fast, &mut exact] {
+        prepare(system);
+    }
+    assert!(
+        matches!(fast.engine(), Engine::Lattice(_)),
+        "{label}: took {:?}",
+        fast.engine()
+    );
+    assert_eq!(exact.engine(), Engine::General);
+    fast.run(steps).unwrap();
+    exact.run(steps).unwrap();
+    assert_eq!(fast.steps_taken(), exact.steps_taken());
+    let d = max_distance(fast.positions(), exact.positions());
+    let moved = max_distance(exact.positions(), &start);
+    println!("{label}: {d:.2e} m apart after moving {moved:.3e} m");
+    assert!(moved > 1e-3, "{label}: nothing moved ({moved:e} m)");
+    let bound = bound(exact.time());
+    assert!(
+        d <= bound,
+        "{label}: engines differ by {d:e} m after {steps} steps (bound {bound:e} m)"
+    );
+    // Float32 arithmetic: not bit for bit the f64 engine's, which shows that the
+    // kernel ran.
+    assert!(
+        d > 0.0,
+        "{label}: identical results: the kernel did not run"
+    );
+    (d, moved)
+}
+
+/// The lowest particle height of a system (m).
+fn lowest(system: &System) -> f64 {
+    system
+        .positions()
+        .iter()
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min)
+}
+
+#[test]
+fn a_jelly_agrees_with_the_f64_engine_feature_by_feature() {
+    let big = cube(12);
+    let with = |extra: &[String]| {
+        let overrides: Vec<&str> = big.iter().chain(extra).map(String::as_str).collect();
+        build("jelly", &overrides)
+    };
+    // Resting on the ground from the start: its lowest particle 5 cm deep.
+    let ground = format!("ground_height={}", lowest(&with(&[])) + 0.05);
+    // A sphere of radius 2 m under the cube's lowest corner, 1 cm below it: the
+    // corner lands on it after 0.045 s and is held on its surface. (A sphere that
+    // starts inside the cube throws the particles out at 1,800 m/s, and the
+    // projection's float32 round-off, 1e-6 m over a step, is then 5e-3 m/s.)
+    let start = with(&[]);
+    let corner =
+        (start.positions().iter()).fold(DVec3::INFINITY, |m, &p| if p.y < m.y { p } else { m });
+    let centre = corner - DVec3::Y * 2.01;
+    let sphere = format!("sphere_center=\"{},{},{}\"", centre.x, centre.y, centre.z);
+    let cases: Vec<(&str, Vec<String>)> = vec![
+        ("falling", vec![]),
+        ("on the ground", vec![ground.clone()]),
+        (
+            "air damping",
+            vec![ground.clone(), "air_damping=0.5".into()],
+        ),
+        ("sphere below", vec![sphere, "sphere_radius=2".into()]),
+        (
+            "verlet",
+            vec!["integrator=\"verlet\"".into(), ground.clone()],
+        ),
+        (
+            "explicit euler",
+            vec!["integrator=\"explicit-euler\"".into(), ground.clone()],
+        ),
+        (
+            "tilted gravity",
+            vec![ground.clone(), "gravity=\"3,-9.81,0\"".into()],
+        ),
+        ("applied force", vec![ground, "force=\"0.2,0,0.1\"".into()]),
+    ];
+    for (label, extra) in cases {
+        lattice_and_exact(label, with(&extra), 300, |_| {});
+    }
+}
+
+#[test]
+fn pins_grabs_and_edits_reach_the_lattice_kernel() {
+    let big = cube(12);
+    let overrides: Vec<&str> = big.iter().map(String::as_str).collect();
+    let system = build("jelly", &overrides);
+    let (d, _) = lattice_and_exact("pinned corner, edits", system, 100, |s| {
+        s.set_pinned(0, true);
+        s.run(100).unwrap();
+        s.set_spring_stiffness(SpringKind::Shear, 3000.0);
+        s.set_spring_damping(SpringKind::Other, 2.0);
+        s.grab(100, DVec3::new(1.0, 9.0, 0.5));
+        s.run(100).unwrap();
+        s.release();
+        s.set_pinned(0, false);
+        s.set_particle_mass(0.2);
+    });
+    assert!(d > 0.0);
+}
+
+#[test]
+fn edits_update_the_kernel_in_place() {
+    let big = cube(12);
+    let overrides: Vec<&str> = big.iter().map(String::as_str).collect();
+    let mut system = build("jelly", &overrides);
+    system.set_fast_path(true);
+    system.run(10).unwrap();
+    system.set_spring_stiffness(SpringKind::Structural, 2500.0);
+    system.set_spring_damping(SpringKind::Shear, 1.0);
+    system.set_particle_mass(0.12);
+    system.set_pinned(3, true);
+    system.run(10).unwrap();
+    assert!(matches!(system.engine(), Engine::Lattice(_)));
+    assert_eq!(system.kernel_builds(), 1, "an edit rebuilt the kernel");
+}
+
+/// A lattice spec for the kernel alone: `shape`, the jelly's springs, gravity and
+/// a ground below.
+fn spec(shape: LatticeShape, integrator: Integrator) -> LatticeSpec {
+    LatticeSpec {
+        shape,
+        spacing: 1.0,
+        particle_mass: 0.1,
+        kinds: [
+            SpringCoefficients { k: 2000.0, b: 0.7 },
+            SpringCoefficients { k: 2000.0, b: 0.7 },
+            SpringCoefficients { k: 2000.0, b: 0.7 },
+        ],
+        gravity: [0.0, -9.81, 0.0],
+        air_damping: 0.0,
+        ground: Some(cloth_sandbox::sim::Ground {
+            height: 0.5,
+            stiffness: 50_000.0,
+            damping: 5.0,
+            friction: 0.0,
+        }),
+        sphere: None,
+        integrator,
+        precision: Precision::Mixed,
+    }
+}
+
+/// Positions and velocities after `steps` steps of the kernel on `threads`
+/// threads at `simd`, from a lattice shaken by a velocity field.
+fn kernel_run(
+    spec: &LatticeSpec,
+    threads: usize,
+    simd: SimdLevel,
+    steps: usize,
+) -> (Vec<DVec3>, Vec<DVec3>) {
+    let LatticeShape { width, height, .. } = spec.shape;
+    let n = spec.shape.len();
+    let at = |p: usize| {
+        DVec3::new(
+            (p % width) as f64,
+            ((p / width) % height) as f64,
+            (p / (width * height)) as f64,
+        )
+    };
+    let x: Vec<DVec3> = (0..n).map(|p| at(p) + DVec3::Y).collect();
+    let v: Vec<DVec3> = (0..n)
+        .map(|p| {
+            let q = at(p);
+            DVec3::new((q.y * 0.7).sin(), (q.z * 0.3).cos(), (q.x * 0.5).sin()) * 0.5
+        })
+        .collect();
+    let mut kernel = LatticeKernel::new(spec.clone());
+    kernel.set_threads(threads);
+    assert_eq!(kernel.is_parallel(), threads > 1);
+    kernel.set_simd_level(simd);
+    kernel.set_pinned(7, true);
+    kernel.set_state(&x, &v);
+    kernel.set_update_velocities(&v);
+    kernel.steps(2e-4, steps);
+    let (mut x, mut v) = (vec![DVec3::ZERO; n], vec![DVec3::ZERO; n]);
+    kernel.positions_into(&mut x);
+    kernel.velocities_into(&mut v);
+    (x, v)
+}
+
+#[test]
+fn one_two_and_three_threads_give_identical_results() {
+    // 4,624 particles: past `lattice::PARALLEL_MIN_PARTICLES`, 17 slabs cut into
+    // bands that start mid-block.
+    let shape = LatticeShape {
+        width: 17,
+        height: 16,
+        depth: 17,
+    };
+    for integrator in [Integrator::SymplecticEuler, Integrator::Verlet] {
+        let spec = spec(shape, integrator);
+        let simd = SimdLevel::detect();
+        let one = kernel_run(&spec, 1, simd, 60);
+        for threads in [2, 3] {
+            let many = kernel_run(&spec, threads, simd, 60);
+            assert!(
+                one == many,
+                "{integrator:?}: 1 and {threads} threads differ"
+            );
+        }
+    }
+}
+
+#[test]
+fn every_simd_level_agrees() {
+    let shape = LatticeShape {
+        width: 9,
+        height: 7,
+        depth: 6,
+    };
+    let spec = spec(shape, Integrator::SymplecticEuler);
+    let (reference, _) = kernel_run(&spec, 1, SimdLevel::Baseline, 200);
+    for simd in [SimdLevel::Avx2, SimdLevel::Avx512] {
+        let (x, _) = kernel_run(&spec, 1, simd, 200);
+        let d = max_distance(&x, &reference);
+        println!("{simd:?} against the portable lanes: {d:e} m");
+        // The levels differ only in `1 / l` (a reciprocal square root estimate and
+        // a Newton step against `1 / sqrt`): float32 round-off.
+        assert!(d < 1e-5, "{simd:?}: {d:e} m from the portable lanes");
+    }
+}
+
+#[test]
+fn a_stiff_jelly_does_not_heat_up_on_the_fast_engines() {
+    // The jelly resting on the ground (its lowest corner 1 cm deep), stepped at
+    // the safe step for each stiffness: the fast engine's kinetic energy must
+    // follow the f64 engine's to 1% at every stiffness, down to the round-off of a
+    // cube at rest. The precision rule sends the stiffest to the f64 mesh engine.
+    use cloth_sandbox::sim::safe;
+    let mut engines = Vec::new();
+    for (k, m) in [(1e3, 0.1), (1e5, 0.1), (1e7, 0.1), (1e9, 1e-3)] {
+        let cube = cube(6);
+        let overrides: Vec<String> = cube
+            .into_iter()
+            .chain([format!("stiffness={k}"), format!("particle_mass={m}")])
+            .collect();
+        let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
+        let ground = format!(
+            "ground_height={}",
+            lowest(&build("jelly", &overrides)) + 0.01
+        );
+        let overrides: Vec<&str> = overrides.into_iter().chain([ground.as_str()]).collect();
+        let mut exact = build("jelly", &overrides);
+        let step = safe::safe_step(exact.model(), 1.0 / 60.0, safe::DEFAULT_SAFETY, 1 << 20);
+        let mut params = *exact.params();
+        params.dt = step.dt;
+        exact.set_params(params);
+        let mut fast = exact.clone();
+        fast.set_fast_path(true);
+        engines.push(fast.engine());
+        for system in [&mut fast, &mut exact] {
+            system.run(1000).unwrap();
+        }
+        let (fast, exact) = (fast.energy().kinetic, exact.energy().kinetic);
+        let scale = 216.0 * m * 9.81 * 0.01;
+        println!("k = {k:e}, m = {m}: kinetic {fast:.4e} J (fast) vs {exact:.4e} J (f64)");
+        assert!(
+            (fast - exact).abs() <= 0.01 * exact + 1e-12 * scale,
+            "k = {k:e}: kinetic energy {fast:e} J against {exact:e} J"
+        );
+    }
+    println!("engines: {engines:?}");
+    assert!(matches!(engines[0], Engine::Lattice(_)));
+    assert_eq!(engines[3], Engine::Mesh);
+}
+
+#[test]
+fn what_the_lattice_kernel_does_not_model_runs_on_the_other_engines() {
+    for (overrides, engine) in [
+        (&["friction=0.3", "ground_height=0"][..], Engine::Mesh),
+        (&["stretch_limit=0.1"][..], Engine::Mesh),
+        (&["integrator=\"rk4\""][..], Engine::General),
+    ] {
+        let mut system = build("jelly", overrides);
+        system.set_fast_path(true);
+        assert_eq!(system.engine(), engine, "{overrides:?}");
+        system.run(10).unwrap();
+    }
+    let mut system = build("jelly", &[]);
+    system.set_fast_path(true);
+    assert!(matches!(system.engine(), Engine::Lattice(_)));
+    system.refuse_lattice_kernel(true);
+    assert_eq!(system.engine(), Engine::Mesh);
+}
