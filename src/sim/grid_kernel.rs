@@ -2712,9 +2712,18 @@ fn stretch_limit_line<E: Real, const LO: bool>(
                 &mut xl[range.clone()],
                 &mut v[range.clone()],
             );
+            // Verlet's `u`, or nothing for the other integrators.
+            let u = if verlet { &mut u[range] } else { &mut [][..] };
+            let u_blocks = u.chunks_exact_mut(PL).map(Some);
             let blocks = x.chunks_exact_mut(PL).zip(xl.chunks_exact_mut(PL));
             let blocks = blocks.zip(v.chunks_exact_mut(PL)).zip(w.chunks_exact(PL));
-            for ((((x, xl), v), w), f) in blocks.zip(f.chunks_exact(PL)) {
+            let blocks = blocks.zip(u_blocks.chain(std::iter::repeat_with(|| None)));
+            for (((((x, xl), v), w), u), f) in blocks.zip(f.chunks_exact(PL)) {
+                // Most springs are within the limit, and a block of particles that
+                // none of its springs moves is left alone (the moves would add 0).
+                if f.iter().fold(true, |zero, &f| zero & (f == E::ZERO)) {
+                    continue;
+                }
                 let t: [E; PL] = std::array::from_fn(|l| sign * w[l] * f[l]);
                 if LO {
                     let old = (x[..].try_into().unwrap(), xl[..].try_into().unwrap());
@@ -2725,10 +2734,8 @@ fn stretch_limit_line<E: Real, const LO: bool>(
                     x.iter_mut().zip(t).for_each(|(x, t)| *x += t);
                 }
                 v.iter_mut().zip(t).for_each(|(v, t)| *v += t * inv_dt);
-            }
-            if verlet {
-                for ((u, &w), &f) in u[range].iter_mut().zip(w).zip(f) {
-                    *u += sign * w * f * inv_dt;
+                if let Some(u) = u {
+                    u.iter_mut().zip(t).for_each(|(u, t)| *u += t * inv_dt);
                 }
             }
         }
