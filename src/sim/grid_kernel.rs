@@ -2817,11 +2817,14 @@ impl<E: Real> ContactRows<'_, E> {
             for i in start..start + self.width {
                 let j = i - first * self.stride;
                 let w = self.inv_mass[i];
-                if !self.reach.may_touch([0, 1, 2].map(|a| pos[a][j]), w) {
+                // (Arrays written out: `[0, 1, 2].map` was not inlined here, and
+                // cost a fifth of the drape's contact pass.)
+                if !self.reach.may_touch([pos[0][j], pos[1][j], pos[2][j]], w) {
                     continue;
                 }
-                let x = DVec3::from_array([0, 1, 2].map(|a| pos[a][j].f64() + lows[a][j].f64()));
-                let v = DVec3::from_array([0, 1, 2].map(|a| vel[a][j].f64()));
+                let at = |a: usize| pos[a][j].f64() + lows[a][j].f64();
+                let x = DVec3::new(at(0), at(1), at(2));
+                let v = DVec3::new(vel[0][j].f64(), vel[1][j].f64(), vel[2][j].f64());
                 let (to, v_new) = self.contact.resolve(x, v, w.f64());
                 if to != x {
                     for a in 0..3 {
