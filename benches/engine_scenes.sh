@@ -51,3 +51,25 @@ for n in $SIZES; do
     printf '%-34s %-10s %14.1f %10.2f\n' "$name" "$engine" "$(python3 -c "print($best/1e6)")" "$(python3 -c "print($base/$best)")"
   done
 done
+
+# The jelly cube made 32^3 (lifted clear of the ground) against the 128 x 128 bench,
+# per spring-step: the lattice kernel's target is at most 2x.
+best_rate() {
+  # Prints "spring-steps/s engine" of the fastest of RUNS runs of `cloth run $1`.
+  for _ in $(seq "$RUNS"); do
+    # shellcheck disable=SC2086
+    $CLOTH run $1 --warmup 16 --json 2>/dev/null | tail -1 || true
+  done | python3 -c "
+import json, sys
+runs = [json.loads(line) for line in sys.stdin if line.startswith('{')]
+best = max(runs, key=lambda d: d['spring_steps_per_second'])
+print(best['spring_steps_per_second'], best['engine'])"
+}
+echo
+jelly=$(best_rate "--scene jelly --set width=32 --set height=32 --set depth=32 --set origin=0,30,0 --steps 200")
+bench=$(best_rate "--scene bench --set width=128 --set height=128 --steps $STEPS")
+python3 -c "
+import sys
+j, je, b = sys.argv[1].split()[0], sys.argv[1].split()[1], sys.argv[2].split()[0]
+print(f'jelly 32^3 on {je}: {float(j):.3e} spring-steps/s; bench 128: {float(b):.3e}; cost per spring-step {float(b)/float(j):.2f}x')
+" "$jelly" "$bench"
