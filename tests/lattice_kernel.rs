@@ -110,7 +110,14 @@ fn a_jelly_agrees_with_the_f64_engine_feature_by_feature() {
             "air damping",
             vec![ground.clone(), "air_damping=0.5".into()],
         ),
-        ("sphere below", vec![sphere, "sphere_radius=2".into()]),
+        (
+            "sphere below",
+            vec![sphere.clone(), "sphere_radius=2".into()],
+        ),
+        (
+            "sphere below, friction",
+            vec![sphere, "sphere_radius=2".into(), "friction=0.5".into()],
+        ),
         (
             "verlet",
             vec!["integrator=\"verlet\"".into(), ground.clone()],
@@ -123,7 +130,28 @@ fn a_jelly_agrees_with_the_f64_engine_feature_by_feature() {
             "tilted gravity",
             vec![ground.clone(), "gravity=\"3,-9.81,0\"".into()],
         ),
-        ("applied force", vec![ground, "force=\"0.2,0,0.1\"".into()]),
+        (
+            "applied force",
+            vec![ground.clone(), "force=\"0.2,0,0.1\"".into()],
+        ),
+        // Friction on a tilted gravity, so that the cube slides or grips.
+        (
+            "ground friction",
+            vec![
+                ground.clone(),
+                "friction=0.3".into(),
+                "gravity=\"3,-9.81,0\"".into(),
+            ],
+        ),
+        (
+            "verlet, friction",
+            vec![
+                "integrator=\"verlet\"".into(),
+                ground,
+                "friction=0.3".into(),
+                "gravity=\"3,-9.81,0\"".into(),
+            ],
+        ),
     ];
     for (label, extra) in cases {
         lattice_and_exact(label, with(&extra), 300, |_| {});
@@ -186,6 +214,7 @@ fn spec(shape: LatticeShape, integrator: Integrator) -> LatticeSpec {
             friction: 0.0,
         }),
         sphere: None,
+        friction: 0.0,
         integrator,
         precision: Precision::Mixed,
     }
@@ -318,7 +347,6 @@ fn a_stiff_jelly_does_not_heat_up_on_the_fast_engines() {
 #[test]
 fn what_the_lattice_kernel_does_not_model_runs_on_the_other_engines() {
     for (overrides, engine) in [
-        (&["friction=0.3", "ground_height=0"][..], Engine::Mesh),
         (&["stretch_limit=0.1"][..], Engine::Mesh),
         (&["integrator=\"rk4\""][..], Engine::General),
     ] {

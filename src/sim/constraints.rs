@@ -119,6 +119,12 @@ impl Contact {
         self.sphere.is_some() || self.ground.is_some_and(|g| g.friction > 0.0)
     }
 
+    /// Whether either collider has friction (the sphere's `friction`, the ground's
+    /// own).
+    pub fn has_friction(&self) -> bool {
+        self.friction > 0.0 || self.ground.is_some_and(|g| g.friction > 0.0)
+    }
+
     /// The contact of a free particle at `x` with velocity `v` (every other
     /// constraint's move already added to it) and inverse mass `w`, after a step
     /// `h`: the particle is projected out of the sphere, its move over the step

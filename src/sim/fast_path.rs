@@ -466,9 +466,9 @@ impl System {
 
     /// The lattice kernel's description of this system, if it models it: a
     /// lattice whose springs are checked to be its stencil's, one mass, gravity and
-    /// the applied force, air damping, a penalty ground and a sphere without
-    /// friction, symplectic Euler, explicit Euler or Verlet, and a precision short
-    /// of float64.
+    /// the applied force, air damping, a penalty ground and a sphere with or
+    /// without friction, symplectic Euler, explicit Euler or Verlet, and a
+    /// precision short of float64.
     ///
     /// Every parameter is named here (no `..`): a new one fails to compile until
     /// it is either passed to the kernel or made a reason to refuse it.
@@ -507,8 +507,7 @@ impl System {
             ground: _, // `ground` itself says
             applied,
         } = model.terms;
-        let frictional = friction > 0.0 || ground.is_some_and(|g| g.friction > 0.0);
-        let constrained = stretch_limit.is_some() || !model.bars.is_empty() || frictional;
+        let constrained = stretch_limit.is_some() || !model.bars.is_empty();
         let others = aero || self_collision || tear_strain.is_some() || max_speed.is_some();
         if !springs.lattice || constrained || others || !LatticeSpec::supports(integrator) {
             return None;
@@ -530,6 +529,7 @@ impl System {
             air_damping: if air_damping_on { air_damping } else { 0.0 },
             ground,
             sphere,
+            friction,
             integrator,
             precision: Precision::Single,
         };

@@ -543,7 +543,13 @@ impl<E: Real> Params<E> {
         // XPBD's springs are constraints (`constrain`), not forces: the fused pass
         // predicts with every other force.
         let xpbd = spec.integrator == Integrator::Xpbd;
-        let frictional = spec.friction > 0.0 || spec.ground.is_some_and(|g| g.friction > 0.0);
+        let frictional = constraints::Contact {
+            sphere: spec.sphere,
+            ground: spec.ground,
+            friction: spec.friction,
+            dt: 0.0,
+        }
+        .has_friction();
         let force = |kind: SpringCoefficients| {
             if xpbd {
                 SpringCoefficients::default()

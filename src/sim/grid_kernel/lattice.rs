@@ -4,11 +4,12 @@
 //! body diagonals of rest `h√3`, one stiffness and damping per kind), under
 //! gravity (and the applied force, as an acceleration), air damping and a penalty
 //! ground, stepped by symplectic Euler, explicit Euler or position Verlet, then
-//! projected out of a frictionless sphere. These are the grid kernel's forces,
-//! integrators and projection, written once in [`super`] and shared: a spring is
-//! [`spring`], a particle's step [`integrate`], the sphere
-//! [`project_out_of_sphere`]. What the lattice does not model (friction, the
-//! stretch limit, bars, drag, tearing) runs on the mesh engine instead
+//! projected out of a sphere, and with friction on the sphere or the ground
+//! resolved with it. These are the grid kernel's forces, integrators, projection
+//! and contact, written once in [`super`] and shared: a spring is [`spring`], a
+//! particle's step [`integrate`], the sphere [`project_out_of_sphere`], contact with
+//! friction [`ContactRows`] (over [`Contact::resolve`]). What the lattice does not
+//! model (the stretch limit, bars, drag, tearing) runs on the mesh engine instead
 //! (`super::super::fast_path` decides, spring by spring).
 //!
 //! # Layout
@@ -44,9 +45,11 @@
 use glam::DVec3;
 
 use super::{
-    BLOCK, Buf, Out, Params, Particle, Portable, Precision, Simd, SimdLevel, SpringCoefficients,
-    State, StepLanes, integrate, position_parts, project_out_of_sphere, spring,
+    BLOCK, Buf, ContactRows, Out, Params, Particle, Portable, Precision, Reach, Simd, SimdLevel,
+    SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
+    row_may_touch_dispatch, spring,
 };
+use crate::sim::constraints::Contact;
 use crate::sim::{Ground, Integrator, Sphere};
 
 /// Lattices with fewer particles than this run on the calling thread.
@@ -147,10 +150,12 @@ pub struct LatticeSpec {
     pub gravity: [f64; 3],
     /// Viscous air damping `c` in N·s/m (0: off).
     pub air_damping: f64,
-    /// Penalty ground (its friction must be 0).
+    /// Penalty ground, with its friction.
     pub ground: Option<Ground>,
-    /// Frictionless sphere collider.
+    /// Sphere collider.
     pub sphere: Option<Sphere>,
+    /// Coulomb friction coefficient of the sphere.
+    pub friction: f64,
     /// Symplectic Euler, explicit Euler or position Verlet.
     pub integrator: Integrator,
     /// [`Precision::Single`] or [`Precision::Mixed`].
@@ -296,6 +301,8 @@ pub struct LatticeKernel {
     bands: Vec<Band>,
     pool: Option<rayon::ThreadPool>,
     simd: SimdLevel,
+    /// Per lattice row, whether a particle of it may touch a collider.
+    contact_rows: Vec<bool>,
 }
 
 impl std::fmt::Debug for LatticeKernel {
@@ -346,6 +353,7 @@ impl LatticeKernel {
             bands: make_bands(&geometry, 1),
             pool: None,
             simd: SimdLevel::detect(),
+            contact_rows: Vec::new(),
             spec,
         };
         kernel.reset_masses();
@@ -377,10 +385,25 @@ impl LatticeKernel {
             verlet_half_dt: 0.0,
             verlet: spec.integrator == Integrator::Verlet,
             compensated: spec.precision == Precision::Mixed,
-            sphere: spec.sphere.map(|s| {
-                let r = s.radius as f32;
-                (s.center.to_array().map(|c| c as f32), r, r * r)
-            }),
+            // With friction the sphere is resolved after the step, with the
+            // ground's friction, in the f64 engine's order (`resolve_contact`).
+            sphere: spec
+                .sphere
+                .filter(|_| !Self::contact(spec, 0.0).has_friction())
+                .map(|s| {
+                    let r = s.radius as f32;
+                    (s.center.to_array().map(|c| c as f32), r, r * r)
+                }),
+        }
+    }
+
+    /// The colliders as the f64 engine resolves them after a step `dt`.
+    fn contact(spec: &LatticeSpec, dt: f64) -> Contact {
+        Contact {
+            sphere: spec.sphere,
+            ground: spec.ground,
+            friction: spec.friction,
+            dt,
         }
     }
 
@@ -573,11 +596,47 @@ impl LatticeKernel {
             self.params.verlet_half_dt = (0.5 * dt) as f32;
         }
         let pool = self.pool.take();
+        let mut step = || {
+            self.one_step(pool.is_some());
+            self.resolve_contact(dt);
+        };
         match &pool {
-            Some(pool) => pool.install(|| (0..n).for_each(|_| self.one_step(true))),
-            None => (0..n).for_each(|_| self.one_step(false)),
+            Some(pool) => pool.install(|| (0..n).for_each(|_| step())),
+            None => (0..n).for_each(|_| step()),
         }
         self.pool = pool;
+    }
+
+    /// The colliders with friction, after the step (without friction the step
+    /// projected the particles out of the sphere itself): the grid kernel's
+    /// contact rows, one lattice row each, on this thread.
+    fn resolve_contact(&mut self, dt: f64) {
+        let contact = Self::contact(&self.spec, dt);
+        if !contact.is_active() || self.params.sphere.is_some() {
+            return;
+        }
+        let reach = Reach::of(&contact);
+        let g = self.geometry;
+        let rows = (g.shape.height + 1) * g.shape.depth;
+        let width = g.shape.width;
+        let (cur, inv_mass) = (&mut self.cur, self.inv_mass.as_slice());
+        self.contact_rows.clear();
+        self.contact_rows.extend(
+            (0..rows).map(|r| {
+                row_may_touch_dispatch(self.simd, cur, inv_mass, (r * g.row, width), &reach)
+            }),
+        );
+        let rows_of = ContactRows {
+            flags: &self.contact_rows,
+            width,
+            stride: g.row,
+            inv_mass,
+            reach,
+            contact: &contact,
+            compensated: self.params.compensated,
+            verlet: self.params.verlet,
+        };
+        rows_of.resolve(&mut cur.rows(), 0, 0..rows);
     }
 
     fn one_step(&mut self, parallel: bool) {
