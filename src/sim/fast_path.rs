@@ -411,6 +411,13 @@ impl System {
         }
     }
 
+    /// How far from the origin (m) the particles may go for the precision rule
+    /// ([`Precision::cheapest`]) of the float32 engines: twice the start's farthest
+    /// point.
+    fn float32_reach(&self) -> f64 {
+        2.0 * (self.runaway.center.length() + self.runaway.extent)
+    }
+
     /// Runs `n` steps on the lattice kernel if allowed and it models the system;
     /// `None` when another engine must run them. Call after [`Self::run_on_grid`]
     /// declined.
@@ -450,13 +457,7 @@ impl System {
         };
         if !lattice.in_sync {
             lattice.load(self);
-            lattice.held.clear();
-            for (i, &w) in self.model.inv_mass.iter().enumerate() {
-                lattice.kernel.set_pinned(i, w == 0.0);
-                if w == 0.0 {
-                    lattice.held.push((i, self.state.positions[i]));
-                }
-            }
+            lattice.held = self.held(|i, pinned| lattice.kernel.set_pinned(i, pinned));
             lattice.in_sync = true;
         }
         let result = self.run_in_chunks(n, &mut lattice, settle);
@@ -517,15 +518,11 @@ impl System {
             spacing: springs.spacing,
             particle_mass: springs.mass,
             kinds: springs.coefficients,
-            // The applied force on every particle of the one mass is an
-            // acceleration like gravity.
-            gravity: (if gravity_on { gravity } else { DVec3::ZERO }
-                + if applied {
-                    force / springs.mass
-                } else {
-                    DVec3::ZERO
-                })
-            .to_array(),
+            gravity: uniform_acceleration(
+                gravity_on.then_some(gravity),
+                applied.then_some(force),
+                springs.mass,
+            ),
             air_damping: if air_damping_on { air_damping } else { 0.0 },
             ground,
             sphere,
@@ -533,9 +530,7 @@ impl System {
             integrator,
             precision: Precision::Single,
         };
-        // As for the grid: twice the start's farthest point from the origin.
-        let reach = 2.0 * (self.runaway.center.length() + self.runaway.extent);
-        spec.precision = Precision::cheapest(|r| spec.float32_noise(r), reach);
+        spec.precision = Precision::cheapest(|r| spec.float32_noise(r), self.float32_reach());
         (spec.precision != Precision::Double).then_some(spec)
     }
 
@@ -564,11 +559,7 @@ impl System {
             }
         };
         if !mesh.in_sync {
-            mesh.kernel
-                .set_state(&self.state.positions, &self.state.velocities);
-            if let Some(u) = self.verlet_update_velocities() {
-                mesh.kernel.set_update_velocities(&u);
-            }
+            load_state(&mut mesh.kernel, self);
             mesh.in_sync = true;
         }
         let result = self.run_in_chunks(n, &mut mesh, settle);
@@ -632,15 +623,11 @@ impl System {
             structural,
             shear,
             bend,
-            // The applied force on every particle of the grid's one mass is an
-            // acceleration like gravity.
-            gravity: (if gravity_on { gravity } else { DVec3::ZERO }
-                + if applied {
-                    force / springs.mass
-                } else {
-                    DVec3::ZERO
-                })
-            .to_array(),
+            gravity: uniform_acceleration(
+                gravity_on.then_some(gravity),
+                applied.then_some(force),
+                springs.mass,
+            ),
             wind: wind.to_array(),
             air_density,
             drag_coefficient,
@@ -657,10 +644,7 @@ impl System {
             present: springs.present,
             precision: Precision::Single,
         };
-        // How far from the origin the cloth may go before float32 positions lose
-        // what the precision rule allowed: twice its start's farthest point.
-        let reach = 2.0 * (self.runaway.center.length() + self.runaway.extent);
-        spec.precision = Precision::needed(&spec, reach);
+        spec.precision = Precision::needed(&spec, self.float32_reach());
         Some(spec)
     }
 
@@ -705,23 +689,28 @@ impl System {
             fast.springs_seen = Some(self.engines.springs_version);
         }
         if !fast.in_sync {
-            fast.kernel
-                .set_state(&self.state.positions, &self.state.velocities);
-            if let Some(u) = self.verlet_update_velocities() {
-                fast.kernel.set_update_velocities(&u);
-            }
-            fast.held.clear();
-            for (i, &w) in self.model.inv_mass.iter().enumerate() {
-                fast.kernel.set_pinned(i, w == 0.0);
-                if w == 0.0 {
-                    fast.held.push((i, self.state.positions[i]));
-                }
-            }
+            load_state(&mut fast.kernel, self);
+            fast.held = self.held(|i, pinned| fast.kernel.set_pinned(i, pinned));
             fast.in_sync = true;
         }
         let result = self.run_in_chunks(n, &mut fast, settle);
         self.engines.grid = Some(fast);
         Some(result)
+    }
+
+    /// The particles held in place (pinned or grabbed: inverse mass 0) with their
+    /// positions exactly as the f64 state has them, after telling an engine which
+    /// particles are held (`set_pinned(i, held)` for every particle): a float32
+    /// engine holds them only to its precision, and puts them back on copying out.
+    fn held(&self, mut set_pinned: impl FnMut(usize, bool)) -> Vec<(usize, DVec3)> {
+        let mut held = Vec::new();
+        for (i, &w) in self.model.inv_mass.iter().enumerate() {
+            set_pinned(i, w == 0.0);
+            if w == 0.0 {
+                held.push((i, self.state.positions[i]));
+            }
+        }
+        held
     }
 
     /// Runs `n` steps on a fast engine in chunks of [`CHUNK`]. Simulated time
@@ -911,19 +900,10 @@ impl FastEngine for FastPath {
             // The kernel broke them itself: its masks are the model's.
             self.springs_seen = Some(system.engines.springs_version);
         }
-        self.kernel.positions_into(&mut system.state.positions);
-        self.kernel.velocities_into(&mut system.state.velocities);
-        for &(i, position) in &self.held {
-            system.state.positions[i] = position;
-        }
-        system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
+        copy_state_back(&self.kernel, &self.held, system);
     }
     fn load(&mut self, system: &System) {
-        let state = &system.state;
-        self.kernel.set_state(&state.positions, &state.velocities);
-        if let Some(u) = system.verlet_update_velocities() {
-            self.kernel.set_update_velocities(&u);
-        }
+        load_state(&mut self.kernel, system);
     }
 }
 
@@ -936,19 +916,10 @@ impl FastEngine for LatticePath {
         self.kernel.extremes(center)
     }
     fn copy_back(&mut self, system: &mut System) {
-        self.kernel.positions_into(&mut system.state.positions);
-        self.kernel.velocities_into(&mut system.state.velocities);
-        for &(i, position) in &self.held {
-            system.state.positions[i] = position;
-        }
-        system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
+        copy_state_back(&self.kernel, &self.held, system);
     }
     fn load(&mut self, system: &System) {
-        let state = &system.state;
-        self.kernel.set_state(&state.positions, &state.velocities);
-        if let Some(u) = system.verlet_update_velocities() {
-            self.kernel.set_update_velocities(&u);
-        }
+        load_state(&mut self.kernel, system);
     }
 }
 
@@ -961,17 +932,70 @@ impl FastEngine for MeshPath {
         self.kernel.extremes(center)
     }
     fn copy_back(&mut self, system: &mut System) {
-        self.kernel.positions_into(&mut system.state.positions);
-        self.kernel.velocities_into(&mut system.state.velocities);
-        system.set_verlet_history(|u| self.kernel.update_velocities_into(u));
+        copy_state_back(&self.kernel, &[], system);
     }
     fn load(&mut self, system: &System) {
-        let state = &system.state;
-        self.kernel.set_state(&state.positions, &state.velocities);
-        if let Some(u) = system.verlet_update_velocities() {
-            self.kernel.set_update_velocities(&u);
-        }
+        load_state(&mut self.kernel, system);
     }
+}
+
+/// The acceleration (m/s²) of every free particle of a system of one `mass` (kg)
+/// under `gravity` and an applied `force` (N) on each particle, when on.
+fn uniform_acceleration(gravity: Option<DVec3>, force: Option<DVec3>, mass: f64) -> [f64; 3] {
+    (gravity.unwrap_or(DVec3::ZERO) + force.map_or(DVec3::ZERO, |f| f / mass)).to_array()
+}
+
+/// How a fast engine's state goes in and out: the same calls on each kernel.
+trait KernelState {
+    fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]);
+    fn set_update_velocities(&mut self, u: &[DVec3]);
+    fn positions_into(&self, out: &mut [DVec3]);
+    fn velocities_into(&self, out: &mut [DVec3]);
+    fn update_velocities_into(&self, out: &mut [DVec3]);
+}
+
+macro_rules! kernel_state {
+    ($($kernel:ty),*) => {$(
+        impl KernelState for $kernel {
+            fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
+                <$kernel>::set_state(self, positions, velocities);
+            }
+            fn set_update_velocities(&mut self, u: &[DVec3]) {
+                <$kernel>::set_update_velocities(self, u);
+            }
+            fn positions_into(&self, out: &mut [DVec3]) {
+                <$kernel>::positions_into(self, out);
+            }
+            fn velocities_into(&self, out: &mut [DVec3]) {
+                <$kernel>::velocities_into(self, out);
+            }
+            fn update_velocities_into(&self, out: &mut [DVec3]) {
+                <$kernel>::update_velocities_into(self, out);
+            }
+        }
+    )*};
+}
+
+kernel_state!(GridCloth, LatticeKernel, MeshKernel);
+
+/// The system's f64 state (and Verlet's update velocities) into `kernel`.
+fn load_state(kernel: &mut impl KernelState, system: &System) {
+    let state = &system.state;
+    kernel.set_state(&state.positions, &state.velocities);
+    if let Some(u) = system.verlet_update_velocities() {
+        kernel.set_update_velocities(&u);
+    }
+}
+
+/// `kernel`'s state into the system's f64 state, the `held` particles put back
+/// exactly where the f64 state had them.
+fn copy_state_back(kernel: &impl KernelState, held: &[(usize, DVec3)], system: &mut System) {
+    kernel.positions_into(&mut system.state.positions);
+    kernel.velocities_into(&mut system.state.velocities);
+    for &(i, position) in held {
+        system.state.positions[i] = position;
+    }
+    system.set_verlet_history(|u| kernel.update_velocities_into(u));
 }
 
 /// Threads a fast engine steps on: one per core.
