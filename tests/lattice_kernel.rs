@@ -134,6 +134,11 @@ fn a_jelly_agrees_with_the_f64_engine_feature_by_feature() {
             "applied force",
             vec![ground.clone(), "force=\"0.2,0,0.1\"".into()],
         ),
+        // Stiff enough for float64 (`lattice-f64`).
+        (
+            "stiff, float64",
+            vec![ground.clone(), "stiffness=20000".into()],
+        ),
         // Friction on a tilted gravity, so that the cube slides or grips.
         (
             "ground friction",
@@ -267,15 +272,22 @@ fn one_two_and_three_threads_give_identical_results() {
         height: 16,
         depth: 17,
     };
-    for integrator in [Integrator::SymplecticEuler, Integrator::Verlet] {
-        let spec = spec(shape, integrator);
+    for (integrator, precision) in [
+        (Integrator::SymplecticEuler, Precision::Mixed),
+        (Integrator::Verlet, Precision::Mixed),
+        (Integrator::SymplecticEuler, Precision::Double),
+    ] {
+        let spec = LatticeSpec {
+            precision,
+            ..spec(shape, integrator)
+        };
         let simd = SimdLevel::detect();
         let one = kernel_run(&spec, 1, simd, 60);
         for threads in [2, 3] {
             let many = kernel_run(&spec, threads, simd, 60);
             assert!(
                 one == many,
-                "{integrator:?}: 1 and {threads} threads differ"
+                "{integrator:?} {precision:?}: 1 and {threads} threads differ"
             );
         }
     }
@@ -301,11 +313,11 @@ fn every_simd_level_agrees() {
 }
 
 #[test]
-fn a_stiff_jelly_does_not_heat_up_on_the_fast_engines() {
+fn a_stiff_jelly_does_not_heat_up_on_the_lattice_kernel() {
     // The jelly resting on the ground (its lowest corner 1 cm deep), stepped at
-    // the safe step for each stiffness: the fast engine's kinetic energy must
+    // the safe step for each stiffness: the lattice kernel's kinetic energy must
     // follow the f64 engine's to 1% at every stiffness, down to the round-off of a
-    // cube at rest. The precision rule sends the stiffest to the f64 mesh engine.
+    // cube at rest. The precision rule has the stiff ones computed in float64.
     use cloth_sandbox::sim::safe;
     let mut engines = Vec::new();
     for (k, m) in [(1e3, 0.1), (1e5, 0.1), (1e7, 0.1), (1e9, 1e-3)] {
@@ -340,8 +352,8 @@ fn a_stiff_jelly_does_not_heat_up_on_the_fast_engines() {
         );
     }
     println!("engines: {engines:?}");
-    assert!(matches!(engines[0], Engine::Lattice(_)));
-    assert_eq!(engines[3], Engine::Mesh);
+    assert_eq!(engines[0], Engine::Lattice(Precision::Mixed));
+    assert_eq!(engines[3], Engine::Lattice(Precision::Double));
 }
 
 #[test]

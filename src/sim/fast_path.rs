@@ -43,8 +43,8 @@ pub enum Engine {
     /// The f64 mesh engine ([`super::mesh_kernel`]): any topology, results equal to
     /// the general path's to f64 round-off.
     Mesh,
-    /// The lattice stencil kernel ([`grid_kernel::lattice`]), float32 on float32 or
-    /// double-float positions.
+    /// The lattice stencil kernel ([`grid_kernel::lattice`]), in the precision the
+    /// lattice needs.
     Lattice(Precision),
 }
 
@@ -59,7 +59,6 @@ impl Engine {
             Self::Mesh => "mesh-f64",
             Self::Lattice(Precision::Single) => "lattice-f32",
             Self::Lattice(Precision::Mixed) => "lattice-mixed",
-            // Never built: such a lattice runs on the mesh engine.
             Self::Lattice(Precision::Double) => "lattice-f64",
         }
     }
@@ -468,8 +467,8 @@ impl System {
     /// The lattice kernel's description of this system, if it models it: a
     /// lattice whose springs are checked to be its stencil's, one mass, gravity and
     /// the applied force, air damping, a penalty ground and a sphere with or
-    /// without friction, symplectic Euler, explicit Euler or Verlet, and a
-    /// precision short of float64.
+    /// without friction, symplectic Euler, explicit Euler or Verlet, in the
+    /// precision the precision rule asks for.
     ///
     /// Every parameter is named here (no `..`): a new one fails to compile until
     /// it is either passed to the kernel or made a reason to refuse it.
@@ -531,7 +530,7 @@ impl System {
             precision: Precision::Single,
         };
         spec.precision = Precision::cheapest(|r| spec.float32_noise(r), self.float32_reach());
-        (spec.precision != Precision::Double).then_some(spec)
+        Some(spec)
     }
 
     /// Runs `n` steps on the mesh engine if allowed and it models the system

@@ -80,8 +80,6 @@ use super::duo::Duo;
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 
-pub mod lattice;
-
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
 const EPS2: f32 = 1e-24;
@@ -386,11 +384,14 @@ trait Real:
     fn mul_add(self, a: Self, b: Self) -> Self;
     /// Runs one band of a step, with the best code this CPU has for this type.
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
+    /// Runs one band of a lattice's step, likewise.
+    fn lattice_band(ctx: &lattice::Ctx<Self>, band: &mut lattice::Band<Self>, out: Out<Self>);
 }
 
 /// `Real` for a float type: its constants and the row functions of each SIMD level.
 macro_rules! real {
-    ($t:ident, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident) => {
+    ($t:ident, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
+     lattice: $lattice512:ident, $lattice2:ident) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -434,14 +435,31 @@ macro_rules! real {
                     _ => band_rows(ctx, band, out, row_portable::<$t>),
                 }
             }
+            fn lattice_band(
+                ctx: &lattice::Ctx<Self>,
+                band: &mut lattice::Band<Self>,
+                out: Out<Self>,
+            ) {
+                match ctx.simd {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    SimdLevel::Avx512 => unsafe { x86::$lattice512(ctx, band, out) },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    SimdLevel::Avx2 => unsafe { x86::$lattice2(ctx, band, out) },
+                    _ => lattice::band_modes(Portable::<$t>::default(), ctx, band, out),
+                }
+            }
         }
     };
 }
 
 // Float32: the intrinsics of `x86`. Float64: the portable lanes compiled for each
 // level's features.
-real!(f32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2);
-real!(f64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64);
+real!(f32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
+      lattice: lattice_band_avx512, lattice_band_avx2);
+real!(f64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
+      lattice: lattice_band_avx512_f64, lattice_band_avx2_f64);
 
 /// 16 floats, so that buffers and padded rows start on a cache line.
 #[derive(Clone, Copy, Debug)]
@@ -1840,6 +1858,9 @@ macro_rules! forward {
     };
 }
 
+// After `forward!`, which the lattice kernel uses too.
+pub mod lattice;
+
 impl GridCloth {
     /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the
     /// spec's precision. Runs on one thread until [`GridCloth::set_threads`] is
@@ -2291,8 +2312,8 @@ mod x86 {
     #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
     #[inline(never)]
     pub(super) unsafe fn lattice_band_avx512(
-        ctx: &lattice::Ctx,
-        band: &mut lattice::Band,
+        ctx: &lattice::Ctx<f32>,
+        band: &mut lattice::Band<f32>,
         out: Out<f32>,
     ) {
         lattice::band_modes(Avx512(()), ctx, band, out);
@@ -2305,11 +2326,41 @@ mod x86 {
     #[target_feature(enable = "avx2,fma")]
     #[inline(never)]
     pub(super) unsafe fn lattice_band_avx2(
-        ctx: &lattice::Ctx,
-        band: &mut lattice::Band,
+        ctx: &lattice::Ctx<f32>,
+        band: &mut lattice::Band<f32>,
         out: Out<f32>,
     ) {
         lattice::band_modes(Avx2(()), ctx, band, out);
+    }
+
+    /// One band of a lattice in float64 with the portable lanes, compiled for
+    /// AVX-512.
+    ///
+    /// # Safety
+    /// As for `row_avx512`.
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn lattice_band_avx512_f64(
+        ctx: &lattice::Ctx<f64>,
+        band: &mut lattice::Band<f64>,
+        out: Out<f64>,
+    ) {
+        lattice::band_modes(Portable::<f64>::default(), ctx, band, out);
+    }
+
+    /// One band of a lattice in float64 with the portable lanes, compiled for
+    /// AVX2.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn lattice_band_avx2_f64(
+        ctx: &lattice::Ctx<f64>,
+        band: &mut lattice::Band<f64>,
+        out: Out<f64>,
+    ) {
+        lattice::band_modes(Portable::<f64>::default(), ctx, band, out);
     }
 
     /// The tear scan's `row_may_tear`, compiled for AVX2 and FMA.

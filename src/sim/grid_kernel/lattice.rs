@@ -13,9 +13,11 @@
 //! (`super::super::fast_path` decides, spring by spring).
 //!
 //! # Layout
-//! Structure of arrays in float32 with the grid kernel's precision levels
-//! ([`Precision::Single`] or [`Precision::Mixed`]; a lattice that needs
-//! [`Precision::Double`] runs on the f64 mesh engine). Particle `(x, y, z)` is at
+//! Structure of arrays in the grid kernel's precision levels: float32 arithmetic
+//! on float32 or double-float positions ([`Precision::Single`],
+//! [`Precision::Mixed`]), or float64 throughout ([`Precision::Double`], the same
+//! code at half the lanes), as [`Precision::cheapest`] finds for the lattice's
+//! springs ([`LatticeSpec::float32_noise`]). Particle `(x, y, z)` is at
 //! array index `x + y W + z W H` with `W = width + 1` and `H = height + 1`: one
 //! ghost column after each row and one ghost row after each slab, and ghost slabs
 //! after the last. Every one of the 13 forward neighbours `(x + dx, y + dy, z + dz)`
@@ -45,7 +47,7 @@
 use glam::DVec3;
 
 use super::{
-    BLOCK, Buf, ContactRows, Out, Params, Particle, Portable, Precision, Reach, Simd, SimdLevel,
+    BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
     SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
     row_may_touch_dispatch, spring,
 };
@@ -158,7 +160,7 @@ pub struct LatticeSpec {
     pub friction: f64,
     /// Symplectic Euler, explicit Euler or position Verlet.
     pub integrator: Integrator,
-    /// [`Precision::Single`] or [`Precision::Mixed`].
+    /// The precision to compute in.
     pub precision: Precision,
 }
 
@@ -232,7 +234,7 @@ impl Geometry {
 
 /// A band of blocks one thread steps, with its own accumulator.
 #[derive(Clone, Debug)]
-pub(super) struct Band {
+pub(super) struct Band<E> {
     /// The band's first index and one past its last (multiples of [`BLOCK`]).
     start: usize,
     end: usize,
@@ -241,10 +243,10 @@ pub(super) struct Band {
     from: usize,
     /// Forces on the particles `from ..` (x, y, z) from the springs of earlier
     /// blocks.
-    acc: [Vec<f32>; 3],
+    acc: [Vec<E>; 3],
 }
 
-impl Band {
+impl<E: Real> Band<E> {
     fn new(start: usize, end: usize, geometry: &Geometry) -> Self {
         let reach = Geometry::reach(geometry.slab, geometry.row).next_multiple_of(BLOCK);
         // One block more than the springs reach, for the lanes the runs carry.
@@ -254,13 +256,13 @@ impl Band {
             start,
             end,
             from,
-            acc: std::array::from_fn(|_| vec![0.0; len]),
+            acc: std::array::from_fn(|_| vec![E::ZERO; len]),
         }
     }
 }
 
 /// `n` bands of whole slabs (as nearly equal as the blocks allow).
-fn make_bands(geometry: &Geometry, n: usize) -> Vec<Band> {
+fn make_bands<E: Real>(geometry: &Geometry, n: usize) -> Vec<Band<E>> {
     let depth = geometry.shape.depth;
     let n = n.clamp(1, depth.max(1));
     let cut = |i: usize| {
@@ -276,38 +278,142 @@ fn make_bands(geometry: &Geometry, n: usize) -> Vec<Band> {
 }
 
 /// What a band reads.
-pub(super) struct Ctx<'a> {
-    p: Params<f32>,
+pub(super) struct Ctx<'a, E> {
+    p: Params<E>,
     geometry: Geometry,
-    x: [&'a [f32]; 3],
-    xl: [&'a [f32]; 3],
-    v: [&'a [f32]; 3],
-    u: [&'a [f32]; 3],
-    real: &'a [f32],
-    inv_mass: &'a [f32],
-    simd: SimdLevel,
+    x: [&'a [E]; 3],
+    xl: [&'a [E]; 3],
+    v: [&'a [E]; 3],
+    u: [&'a [E]; 3],
+    real: &'a [E],
+    inv_mass: &'a [E],
+    pub(super) simd: SimdLevel,
 }
 
-/// The fast engine for a lattice (see the module doc).
-pub struct LatticeKernel {
+/// The fast engine for a lattice (see the module doc): float32 arithmetic on
+/// float32 or double-float positions, or float64 throughout, as the spec's
+/// precision says.
+#[derive(Debug)]
+pub struct LatticeKernel(Kernels);
+
+#[derive(Debug)]
+enum Kernels {
+    /// Float32 arithmetic: [`Precision::Single`] and [`Precision::Mixed`].
+    Single(Lattice<f32>),
+    /// Float64: [`Precision::Double`].
+    Double(Lattice<f64>),
+}
+
+// `forward!` is the grid kernel's: a method that the kernel of either float type
+// has, called on the one held.
+impl LatticeKernel {
+    /// A lattice at the origin, at rest, every particle free; on one thread.
+    ///
+    /// # Panics
+    /// If the spec's integrator is one the kernel does not model
+    /// ([`LatticeSpec::supports`]).
+    pub fn new(spec: LatticeSpec) -> Self {
+        assert!(
+            LatticeSpec::supports(spec.integrator),
+            "integrator not modelled"
+        );
+        LatticeKernel(match spec.precision {
+            Precision::Double => Kernels::Double(Lattice::new(spec)),
+            Precision::Single | Precision::Mixed => Kernels::Single(Lattice::new(spec)),
+        })
+    }
+
+    forward!(
+        /// Changes coefficients in place (stiffness, damping, mass, rest length,
+        /// gravity, air damping, colliders). Returns `false`, changing nothing, when
+        /// `spec` has another shape, integrator or precision: then build a new
+        /// kernel. Every particle is freed (pin them again).
+        fn respec(&mut self, spec: LatticeSpec) -> bool
+    );
+    forward!(
+        /// The spec the kernel models now.
+        fn spec(&self) -> &LatticeSpec
+    );
+    forward!(
+        /// Number of particles.
+        fn len(&self) -> usize
+    );
+    forward!(
+        /// True if the lattice has no particles.
+        fn is_empty(&self) -> bool
+    );
+    forward!(
+        /// Use `n` threads (at least 1) for lattices of [`PARALLEL_MIN_PARTICLES`] or
+        /// more particles and at least `n` slabs; others run on the calling thread.
+        /// Builds a rayon pool (this allocates; the steps do not).
+        fn set_threads(&mut self, n: usize)
+    );
+    forward!(
+        /// True if steps run on several threads.
+        fn is_parallel(&self) -> bool
+    );
+    forward!(
+        /// Force a SIMD level (for tests and benches). A level this CPU lacks is
+        /// ignored.
+        fn set_simd_level(&mut self, level: SimdLevel)
+    );
+    forward!(
+        /// Pins (inverse mass 0) or frees model particle `p`.
+        fn set_pinned(&mut self, p: usize, pinned: bool)
+    );
+    forward!(
+        /// Sets positions (m) and velocities (m/s) of the model's particles.
+        fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3])
+    );
+    forward!(
+        /// Sets Verlet's velocities of the last position update (ignored for the
+        /// other integrators).
+        fn set_update_velocities(&mut self, u: &[DVec3])
+    );
+    forward!(
+        /// Positions in m (high plus low part), in model order.
+        fn positions_into(&self, out: &mut [DVec3])
+    );
+    forward!(
+        /// Velocities in m/s, in model order.
+        fn velocities_into(&self, out: &mut [DVec3])
+    );
+    forward!(
+        /// Verlet's velocities of the last position update (the velocities for the
+        /// other integrators).
+        fn update_velocities_into(&self, out: &mut [DVec3])
+    );
+    forward!(
+        /// The largest squared speed and squared distance from `center` of any
+        /// particle (infinite if any is NaN).
+        fn extremes(&self, center: DVec3) -> (f64, f64)
+    );
+    forward!(
+        /// Advances `n` steps of `dt` seconds (inside the thread pool once).
+        fn steps(&mut self, dt: f64, n: usize)
+    );
+}
+
+/// The lattice kernel in one float type (see [`LatticeKernel`], which holds one).
+struct Lattice<E: Real> {
     spec: LatticeSpec,
     geometry: Geometry,
-    params: Params<f32>,
-    cur: State<f32>,
-    next: State<f32>,
+    params: Params<E>,
+    cur: State<E>,
+    next: State<E>,
     /// 1 for particles, 0 for ghosts.
-    real: Buf<f32>,
-    inv_mass: Buf<f32>,
-    bands: Vec<Band>,
+    real: Buf<E>,
+    inv_mass: Buf<E>,
+    bands: Vec<Band<E>>,
     pool: Option<rayon::ThreadPool>,
     simd: SimdLevel,
     /// Per lattice row, whether a particle of it may touch a collider.
     contact_rows: Vec<bool>,
 }
 
-impl std::fmt::Debug for LatticeKernel {
+impl<E: Real> std::fmt::Debug for Lattice<E> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("LatticeKernel")
+        f.debug_struct("Lattice")
             .field("spec", &self.spec)
             .field("bands", &self.bands.len())
             .field("simd", &self.simd)
@@ -315,21 +421,8 @@ impl std::fmt::Debug for LatticeKernel {
     }
 }
 
-impl LatticeKernel {
-    /// A lattice at the origin, at rest, every particle free; on one thread.
-    ///
-    /// # Panics
-    /// If the spec asks for [`Precision::Double`] or an integrator the kernel does
-    /// not model ([`LatticeSpec::supports`]).
-    pub fn new(spec: LatticeSpec) -> Self {
-        assert!(
-            spec.precision != Precision::Double,
-            "the lattice kernel is float32"
-        );
-        assert!(
-            LatticeSpec::supports(spec.integrator),
-            "integrator not modelled"
-        );
+impl<E: Real> Lattice<E> {
+    fn new(spec: LatticeSpec) -> Self {
         let geometry = Geometry::new(spec.shape);
         let len = geometry.len;
         let verlet = spec.integrator == Integrator::Verlet;
@@ -341,9 +434,9 @@ impl LatticeKernel {
         };
         let mut real = Buf::zeros(len);
         for p in 0..spec.shape.len() {
-            real.as_mut_slice()[geometry.index(p)] = 1.0;
+            real.as_mut_slice()[geometry.index(p)] = E::ONE;
         }
-        let mut kernel = LatticeKernel {
+        let mut kernel = Lattice {
             params: Self::params(&spec),
             geometry,
             next: cur.clone(),
@@ -362,27 +455,27 @@ impl LatticeKernel {
 
     /// The per-step constants of `spec` (the step `dt` is set by each run). The
     /// kinds are indexed 0 axis, 1 face diagonal, 2 body diagonal.
-    fn params(spec: &LatticeSpec) -> Params<f32> {
+    fn params(spec: &LatticeSpec) -> Params<E> {
         let h = spec.spacing;
         let rests = [h, h * 2f64.sqrt(), h * 3f64.sqrt()];
         Params {
-            ks: spec.kinds.map(|kind| kind.k as f32),
-            kls: std::array::from_fn(|i| (spec.kinds[i].k * rests[i]) as f32),
-            bs: spec.kinds.map(|kind| kind.b as f32),
-            gravity: spec.gravity.map(|g| g as f32),
-            wind: [0.0; 3],
-            drag: 0.0,
-            dt: 0.0,
-            neg_air: -spec.air_damping as f32,
-            ground: spec.ground.map_or([f32::MIN, 0.0, 0.0], |g| {
-                [g.height, g.stiffness, g.damping].map(|c| c as f32)
+            ks: spec.kinds.map(|kind| E::of(kind.k)),
+            kls: std::array::from_fn(|i| E::of(spec.kinds[i].k * rests[i])),
+            bs: spec.kinds.map(|kind| E::of(kind.b)),
+            gravity: spec.gravity.map(E::of),
+            wind: [E::ZERO; 3],
+            drag: E::ZERO,
+            dt: E::ZERO,
+            neg_air: E::of(-spec.air_damping),
+            ground: spec.ground.map_or([E::LOWEST, E::ZERO, E::ZERO], |g| {
+                [g.height, g.stiffness, g.damping].map(E::of)
             }),
             explicit: if spec.integrator == Integrator::ExplicitEuler {
-                1.0
+                E::ONE
             } else {
-                0.0
+                E::ZERO
             },
-            verlet_half_dt: 0.0,
+            verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
             compensated: spec.precision == Precision::Mixed,
             // With friction the sphere is resolved after the step, with the
@@ -391,8 +484,8 @@ impl LatticeKernel {
                 .sphere
                 .filter(|_| !Self::contact(spec, 0.0).has_friction())
                 .map(|s| {
-                    let r = s.radius as f32;
-                    (s.center.to_array().map(|c| c as f32), r, r * r)
+                    let r = E::of(s.radius);
+                    (s.center.to_array().map(E::of), r, r * r)
                 }),
         }
     }
@@ -410,9 +503,9 @@ impl LatticeKernel {
     /// Every particle free, with the spec's mass.
     fn reset_masses(&mut self) {
         let inv_m = if self.spec.particle_mass > 0.0 {
-            (1.0 / self.spec.particle_mass) as f32
+            E::of(1.0 / self.spec.particle_mass)
         } else {
-            0.0
+            E::ZERO
         };
         for p in 0..self.len() {
             self.inv_mass.as_mut_slice()[self.geometry.index(p)] = inv_m;
@@ -423,7 +516,7 @@ impl LatticeKernel {
     /// gravity, air damping, colliders). Returns `false`, changing nothing, when
     /// `spec` has another shape, integrator or precision: then build a new kernel.
     /// Every particle is freed (pin them again).
-    pub fn respec(&mut self, spec: LatticeSpec) -> bool {
+    fn respec(&mut self, spec: LatticeSpec) -> bool {
         let same = spec.shape == self.spec.shape
             && spec.integrator == self.spec.integrator
             && spec.precision == self.spec.precision;
@@ -439,24 +532,24 @@ impl LatticeKernel {
     }
 
     /// The spec the kernel models now.
-    pub fn spec(&self) -> &LatticeSpec {
+    fn spec(&self) -> &LatticeSpec {
         &self.spec
     }
 
     /// Number of particles.
-    pub fn len(&self) -> usize {
+    fn len(&self) -> usize {
         self.spec.shape.len()
     }
 
     /// True if the lattice has no particles.
-    pub fn is_empty(&self) -> bool {
+    fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
     /// Use `n` threads (at least 1) for lattices of [`PARALLEL_MIN_PARTICLES`] or
     /// more particles and at least `n` slabs; others run on the calling thread.
     /// Builds a rayon pool (this allocates; the steps do not).
-    pub fn set_threads(&mut self, n: usize) {
+    fn set_threads(&mut self, n: usize) {
         let n = n.max(1);
         let parallel = n > 1 && self.len() >= PARALLEL_MIN_PARTICLES && self.spec.shape.depth >= n;
         self.pool = parallel
@@ -473,13 +566,13 @@ impl LatticeKernel {
     }
 
     /// True if steps run on several threads.
-    pub fn is_parallel(&self) -> bool {
+    fn is_parallel(&self) -> bool {
         self.pool.is_some()
     }
 
     /// Force a SIMD level (for tests and benches). A level this CPU lacks is
     /// ignored.
-    pub fn set_simd_level(&mut self, level: SimdLevel) {
+    fn set_simd_level(&mut self, level: SimdLevel) {
         let best = SimdLevel::detect();
         let ok = match level {
             SimdLevel::Baseline => true,
@@ -492,19 +585,19 @@ impl LatticeKernel {
     }
 
     /// Pins (inverse mass 0) or frees model particle `p`.
-    pub fn set_pinned(&mut self, p: usize, pinned: bool) {
+    fn set_pinned(&mut self, p: usize, pinned: bool) {
         if p < self.len() {
             let inv_m = if pinned || self.spec.particle_mass <= 0.0 {
-                0.0
+                E::ZERO
             } else {
-                (1.0 / self.spec.particle_mass) as f32
+                E::of(1.0 / self.spec.particle_mass)
             };
             self.inv_mass.as_mut_slice()[self.geometry.index(p)] = inv_m;
         }
     }
 
     /// Sets positions (m) and velocities (m/s) of the model's particles.
-    pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
+    fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
         let compensated = self.params.compensated;
         for (p, (q, v)) in positions
             .iter()
@@ -514,46 +607,46 @@ impl LatticeKernel {
         {
             let i = self.geometry.index(p);
             for a in 0..3 {
-                let (hi, lo) = position_parts::<f32>(q[a], compensated);
+                let (hi, lo) = position_parts::<E>(q[a], compensated);
                 self.cur.x[a].as_mut_slice()[i] = hi;
                 self.cur.xl[a].as_mut_slice()[i] = lo;
-                self.cur.v[a].as_mut_slice()[i] = v[a] as f32;
+                self.cur.v[a].as_mut_slice()[i] = E::of(v[a]);
             }
         }
     }
 
     /// Sets Verlet's velocities of the last position update (ignored for the
     /// other integrators).
-    pub fn set_update_velocities(&mut self, u: &[DVec3]) {
+    fn set_update_velocities(&mut self, u: &[DVec3]) {
         if !self.params.verlet {
             return;
         }
         for (p, u) in u.iter().enumerate().take(self.len()) {
             let i = self.geometry.index(p);
             for a in 0..3 {
-                self.cur.u[a].as_mut_slice()[i] = u[a] as f32;
+                self.cur.u[a].as_mut_slice()[i] = E::of(u[a]);
             }
         }
     }
 
     /// Positions in m (high plus low part), in model order.
-    pub fn positions_into(&self, out: &mut [DVec3]) {
+    fn positions_into(&self, out: &mut [DVec3]) {
         for (p, o) in out.iter_mut().enumerate().take(self.len()) {
             let i = self.geometry.index(p);
             *o = DVec3::from_array(std::array::from_fn(|a| {
-                self.cur.x[a].as_slice()[i] as f64 + self.cur.xl[a].as_slice()[i] as f64
+                self.cur.x[a].as_slice()[i].f64() + self.cur.xl[a].as_slice()[i].f64()
             }));
         }
     }
 
     /// Velocities in m/s, in model order.
-    pub fn velocities_into(&self, out: &mut [DVec3]) {
+    fn velocities_into(&self, out: &mut [DVec3]) {
         self.read_into(&self.cur.v, out);
     }
 
     /// Verlet's velocities of the last position update (the velocities for the
     /// other integrators).
-    pub fn update_velocities_into(&self, out: &mut [DVec3]) {
+    fn update_velocities_into(&self, out: &mut [DVec3]) {
         let u = if self.params.verlet {
             &self.cur.u
         } else {
@@ -562,38 +655,43 @@ impl LatticeKernel {
         self.read_into(u, out);
     }
 
-    fn read_into(&self, arrays: &[Buf<f32>; 3], out: &mut [DVec3]) {
+    fn read_into(&self, arrays: &[Buf<E>; 3], out: &mut [DVec3]) {
         for (p, o) in out.iter_mut().enumerate().take(self.len()) {
             let i = self.geometry.index(p);
-            *o = DVec3::from_array(std::array::from_fn(|a| arrays[a].as_slice()[i] as f64));
+            *o = DVec3::from_array(std::array::from_fn(|a| arrays[a].as_slice()[i].f64()));
         }
     }
 
     /// The largest squared speed and squared distance from `center` of any
     /// particle (infinite if any is NaN).
-    pub fn extremes(&self, center: DVec3) -> (f64, f64) {
+    fn extremes(&self, center: DVec3) -> (f64, f64) {
         let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
         let [vx, vy, vz] = self.cur.v.each_ref().map(Buf::as_slice);
-        let [cx, cy, cz] = center.to_array().map(|c| c as f32);
-        let (mut speed2, mut dist2) = (0f32, 0f32);
+        let [cx, cy, cz] = center.to_array().map(E::of);
+        let (mut speed2, mut dist2) = (E::ZERO, E::ZERO);
         for i in 0..self.geometry.blocks {
             let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
             let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
             let d2 = dx * dx + dy * dy + dz * dz;
-            if v2.is_nan() || d2.is_nan() {
+            // NaN fails every comparison: test for it, or the maximum would drop it.
+            if v2.partial_cmp(&v2).is_none() || d2.partial_cmp(&d2).is_none() {
                 return (f64::INFINITY, f64::INFINITY);
             }
-            speed2 = speed2.max(v2);
-            dist2 = dist2.max(d2);
+            if v2 > speed2 {
+                speed2 = v2;
+            }
+            if d2 > dist2 {
+                dist2 = d2;
+            }
         }
-        (speed2 as f64, dist2 as f64)
+        (speed2.f64(), dist2.f64())
     }
 
     /// Advances `n` steps of `dt` seconds (inside the thread pool once).
-    pub fn steps(&mut self, dt: f64, n: usize) {
-        self.params.dt = dt as f32;
+    fn steps(&mut self, dt: f64, n: usize) {
+        self.params.dt = E::of(dt);
         if self.params.verlet {
-            self.params.verlet_half_dt = (0.5 * dt) as f32;
+            self.params.verlet_half_dt = E::of(0.5 * dt);
         }
         let pool = self.pool.take();
         let mut step = || {
@@ -658,9 +756,9 @@ impl LatticeKernel {
 
 /// Runs the bands, splitting the outputs (which start at the first band's start)
 /// among them; in parallel with `rayon::join` when `parallel`.
-fn run_bands(ctx: &Ctx, bands: &mut [Band], out: Out<f32>, parallel: bool) {
+fn run_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, parallel: bool) {
     if let [band] = bands {
-        band_dispatch(ctx, band, out);
+        E::lattice_band(ctx, band, out);
         return;
     }
     let mid = bands.len() / 2;
@@ -677,22 +775,9 @@ fn run_bands(ctx: &Ctx, bands: &mut [Band], out: Out<f32>, parallel: bool) {
     }
 }
 
-/// One band with the best code this CPU has.
-fn band_dispatch(ctx: &Ctx, band: &mut Band, out: Out<f32>) {
-    match ctx.simd {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-        SimdLevel::Avx512 => unsafe { super::x86::lattice_band_avx512(ctx, band, out) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 => unsafe { super::x86::lattice_band_avx2(ctx, band, out) },
-        _ => band_modes(Portable::<f32>::default(), ctx, band, out),
-    }
-}
-
 /// [`band_steps`] for the spec's integrator terms and precision.
 #[inline(always)]
-pub(super) fn band_modes<S: Simd<E = f32>>(s: S, ctx: &Ctx, band: &mut Band, out: Out<f32>) {
+pub(super) fn band_modes<S: Simd>(s: S, ctx: &Ctx<S::E>, band: &mut Band<S::E>, out: Out<S::E>) {
     match (ctx.p.is_plain(), ctx.p.compensated) {
         (true, true) => band_steps::<S, true, true>(s, ctx, band, out),
         (true, false) => band_steps::<S, true, false>(s, ctx, band, out),
@@ -720,7 +805,7 @@ struct Lanes<S: Simd> {
     runs: [usize; 4],
 }
 
-impl<S: Simd<E = f32>> Lanes<S> {
+impl<S: Simd> Lanes<S> {
     /// Positions (high and low parts, or zeros without `LO`) and velocities of the
     /// particles at `i .. i + LANES`.
     ///
@@ -730,7 +815,7 @@ impl<S: Simd<E = f32>> Lanes<S> {
     unsafe fn particle<const LO: bool>(&self, i: usize) -> Lanes3<S::V> {
         let s = self.s;
         // SAFETY: caller's contract.
-        let ld = |p: [*const f32; 3]| unsafe {
+        let ld = |p: [*const S::E; 3]| unsafe {
             [
                 s.load(p[0].add(i)),
                 s.load(p[1].add(i)),
@@ -774,11 +859,11 @@ struct Carry<V> {
 
 /// The band's blocks: those before `start` only for their springs, then its own.
 #[inline(always)]
-fn band_steps<S: Simd<E = f32>, const PLAIN: bool, const LO: bool>(
+fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
     s: S,
-    ctx: &Ctx,
-    band: &mut Band,
-    mut out: Out<f32>,
+    ctx: &Ctx<S::E>,
+    band: &mut Band<S::E>,
+    mut out: Out<S::E>,
 ) {
     let g = &ctx.geometry;
     let reach = Geometry::reach(g.slab, g.row);
@@ -806,7 +891,7 @@ fn band_steps<S: Simd<E = f32>, const PLAIN: bool, const LO: bool>(
         assert!(o.len() >= band.end - band.start);
     }
     for a in &mut band.acc {
-        a.fill(0.0);
+        a.fill(S::E::ZERO);
     }
     let p = &ctx.p;
     let kind = |i: usize| [s.splat(-p.ks[i]), s.splat(p.kls[i]), s.splat(-p.bs[i])];
@@ -814,9 +899,9 @@ fn band_steps<S: Simd<E = f32>, const PLAIN: bool, const LO: bool>(
         s,
         step: StepLanes::new(s, p, ctx.u, ctx.v, &mut out),
         kinds: [kind(0), kind(1), kind(2)],
-        x: ctx.x.map(<[f32]>::as_ptr),
-        xl: ctx.xl.map(<[f32]>::as_ptr),
-        v: ctx.v.map(<[f32]>::as_ptr),
+        x: ctx.x.map(<[S::E]>::as_ptr),
+        xl: ctx.xl.map(<[S::E]>::as_ptr),
+        v: ctx.v.map(<[S::E]>::as_ptr),
         real: ctx.real.as_ptr(),
         inv_mass: ctx.inv_mass.as_ptr(),
         acc: band.acc.each_mut().map(|a| a.as_mut_ptr()),
@@ -849,7 +934,7 @@ fn band_steps<S: Simd<E = f32>, const PLAIN: bool, const LO: bool>(
 /// `from <= at < blocks`, a multiple of `LANES`, with the bounds of
 /// [`band_steps`]; with `OWN`, `at >= start`.
 #[inline(always)]
-unsafe fn block<S: Simd<E = f32>, const OWN: bool, const PLAIN: bool, const LO: bool>(
+unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const LO: bool>(
     k: &Lanes<S>,
     at: usize,
     carry: &mut Carry<S::V>,
