@@ -76,12 +76,15 @@ fn stepping_allocates_nothing() {
         let n = allocations_during(scene, &[], 1_000);
         assert_eq!(n, 0, "{scene} allocated {n} times in 1,000 steps");
     }
-    // The mesh engine, on one thread and (16³ particles) on the machine's threads,
-    // which it enters once per chunk of 32 steps: rayon's queue allocates a block
-    // every 63 entries.
+    // The mesh engine (the jelly with a stretch limit) and the lattice engine (the
+    // jelly, with friction, in float64), on one thread and (16³ particles) on the
+    // machine's threads, which they enter once per chunk of 32 steps: rayon's queue
+    // allocates a block every 63 entries.
     for (scene, overrides) in [
         ("rope", &[][..]),
         ("jelly", &[][..]),
+        ("jelly", &["friction=0.3", "integrator=\"verlet\""][..]),
+        ("jelly", &["stiffness=5000"][..]),
         ("chain", &[][..]),
         ("spring", &[][..]),
         (
@@ -92,13 +95,13 @@ fn stepping_allocates_nothing() {
         let n = allocations_on(true, scene, overrides, 1_000);
         assert_eq!(
             n, 0,
-            "{scene} on the mesh engine allocated {n} times in 1,000 steps"
+            "{scene} {overrides:?} on a fast engine allocated {n} times in 1,000 steps"
         );
     }
     let n = allocations_on(true, "jelly", &["width=16", "height=16", "depth=16"], 1_000);
     assert!(
         n <= 1,
-        "the threaded mesh engine allocated {n} times in 1,000 steps"
+        "the threaded lattice engine allocated {n} times in 1,000 steps"
     );
     // Self-collision on the grid engine (the drape at its default size, and at
     // 64 x 64, where the pass runs on threads), falling onto its sphere while
