@@ -265,12 +265,12 @@ fn kernel_run(
 
 #[test]
 fn one_two_and_three_threads_give_identical_results() {
-    // 4,624 particles: past `lattice::PARALLEL_MIN_PARTICLES`, 17 slabs cut into
-    // bands that start mid-block.
+    // 21,168 particles: past `lattice::PARALLEL_MIN_PARTICLES`, 27 slabs cut into
+    // bands that start mid-block; two threads hand over by spinning, three join.
     let shape = LatticeShape {
-        width: 17,
-        height: 16,
-        depth: 17,
+        width: 28,
+        height: 28,
+        depth: 27,
     };
     for (integrator, precision) in [
         (Integrator::SymplecticEuler, Precision::Mixed),
