@@ -60,6 +60,19 @@ impl Duo {
         }
     }
 
+    /// [`Duo::fork`] with a second half that runs once.
+    pub fn fork_once(&self, second: impl FnOnce() + Send, first: impl FnOnce()) {
+        let mut second = Some(second);
+        self.fork(
+            &mut || {
+                if let Some(second) = second.take() {
+                    second();
+                }
+            },
+            first,
+        );
+    }
+
     /// Takes and runs posted jobs until [`Duo::finish`] is called.
     pub fn serve(&self) {
         let (mut seen, mut wait) = (0, Backoff::default());
@@ -106,6 +119,33 @@ impl Duo {
         // A panic inside a job is carried by the thread that ran it; the slot
         // itself is always left consistent.
         self.slot.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+/// Runs `run` inside `pool` (on this thread when there is none). With `spin` (and
+/// a pool), the pool's other worker serves a [`Duo`] for the whole run, and `run`
+/// is given it to fork each step's second half to; the server returns when `run`
+/// does, also when it panics.
+pub(crate) fn run_in_pool(
+    pool: Option<&rayon::ThreadPool>,
+    spin: bool,
+    mut run: impl FnMut(Option<&Duo>) + Send,
+) {
+    match pool {
+        Some(pool) if spin => {
+            let duo = Duo::default();
+            pool.install(|| {
+                rayon::join(
+                    || {
+                        let _finish = duo.finish_on_drop();
+                        run(Some(&duo));
+                    },
+                    || duo.serve(),
+                )
+            });
+        }
+        Some(pool) => pool.install(|| run(None)),
+        None => run(None),
     }
 }
 

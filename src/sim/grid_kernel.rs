@@ -76,7 +76,7 @@ use bytemuck::Pod;
 use glam::DVec3;
 
 use super::constraints;
-use super::duo::Duo;
+use super::duo::{Duo, run_in_pool};
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 
@@ -1069,7 +1069,7 @@ impl<E: Real> Kernel<E> {
             && self.par_bands.len() == 2
             && self.len() >= SPIN_MIN_PARTICLES
             && !self.has_pooled_constraints();
-        let mut run = |duo: Option<&Duo>| {
+        let run = |duo: Option<&Duo>| {
             for i in 0..n {
                 if let Some((t0, wind)) = wind {
                     self.set_wind(wind.at(t0 + i as f64 * dt));
@@ -1078,23 +1078,7 @@ impl<E: Real> Kernel<E> {
                 self.constrain(dt, parallel, duo);
             }
         };
-        match &pool {
-            Some(pool) if spin => {
-                let duo = Duo::default();
-                pool.install(|| {
-                    rayon::join(
-                        || {
-                            // The server returns even if a step panics.
-                            let _finish = duo.finish_on_drop();
-                            run(Some(&duo));
-                        },
-                        || duo.serve(),
-                    )
-                });
-            }
-            Some(pool) => pool.install(|| run(None)),
-            None => run(None),
-        }
+        run_in_pool(pool.as_ref(), spin, run);
         self.pool = pool;
     }
 
@@ -2082,13 +2066,10 @@ fn run_two_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, duo:
     let at = (bands[1].r0 - bands[0].r0) * ctx.grid.stride;
     let (first, second) = bands.split_at_mut(1);
     let (out_first, out_second) = out.split_at(at);
-    let mut out_second = Some(out_second);
-    let mut job = || {
-        if let Some(out) = out_second.take() {
-            E::band_dispatch(ctx, &mut second[0], out);
-        }
-    };
-    duo.fork(&mut job, || E::band_dispatch(ctx, &mut first[0], out_first));
+    duo.fork_once(
+        || E::band_dispatch(ctx, &mut second[0], out_second),
+        || E::band_dispatch(ctx, &mut first[0], out_first),
+    );
 }
 
 /// One row with the portable lanes.

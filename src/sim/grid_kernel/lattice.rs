@@ -53,7 +53,7 @@ use super::{
     row_may_touch_dispatch, spring,
 };
 use crate::sim::constraints::Contact;
-use crate::sim::duo::Duo;
+use crate::sim::duo::{Duo, run_in_pool};
 use crate::sim::{Ground, Integrator, Sphere};
 
 /// Lattices with fewer particles than this run on the calling thread. Measured on
@@ -701,32 +701,15 @@ impl<E: Real> Lattice<E> {
         let pool = self.pool.take();
         let parallel = pool.is_some();
         let two_bands = self.bands.len() == 2;
-        let mut run = |duo: Option<&Duo>| {
+        let run = |duo: Option<&Duo>| {
             for _ in 0..n {
                 self.one_step(parallel, duo);
                 self.resolve_contact(dt);
             }
         };
-        match &pool {
-            // Two bands: the second is handed to the pool's other thread by
-            // spinning (`Duo`), as the grid kernel's are, rather than woken by
-            // `rayon::join` each step.
-            Some(pool) if two_bands => {
-                let duo = Duo::default();
-                pool.install(|| {
-                    rayon::join(
-                        || {
-                            // The server returns even if a step panics.
-                            let _finish = duo.finish_on_drop();
-                            run(Some(&duo));
-                        },
-                        || duo.serve(),
-                    )
-                });
-            }
-            Some(pool) => pool.install(|| run(None)),
-            None => run(None),
-        }
+        // Two bands: the second is handed to the pool's other thread by spinning,
+        // as the grid kernel's are, rather than woken by `rayon::join` each step.
+        run_in_pool(pool.as_ref(), two_bands, run);
         self.pool = pool;
     }
 
@@ -778,13 +761,10 @@ impl<E: Real> Lattice<E> {
         match (duo, &mut self.bands[..]) {
             (Some(duo), [first, second]) => {
                 let (out_first, out_second) = out.split_at(second.start);
-                let mut out_second = Some(out_second);
-                let mut job = || {
-                    if let Some(out) = out_second.take() {
-                        E::lattice_band(&ctx, second, out);
-                    }
-                };
-                duo.fork(&mut job, || E::lattice_band(&ctx, first, out_first));
+                duo.fork_once(
+                    || E::lattice_band(&ctx, second, out_second),
+                    || E::lattice_band(&ctx, first, out_first),
+                );
             }
             (_, bands) => run_bands(&ctx, bands, out, parallel),
         }
