@@ -208,3 +208,43 @@ fn threads_give_bit_identical_results_with_every_feature() {
         }
     }
 }
+
+/// The stretch limit's pass at every SIMD level this CPU has, in each precision,
+/// against the portable lanes: the bench cloth (45 wide, so rows end inside a block)
+/// with a 10% limit under Verlet, whose weak springs put most springs over the limit
+/// every step (tests/stretch_limit.rs). The levels' steps differ by the round-off of
+/// their fused multiply-adds and float32 reciprocal square roots: without the limit
+/// they part by 6e-7 m in float32 after these 240 steps, with it by 1.6e-6 m (both
+/// measured with AVX2 on 2026-11-24). Bound: 1e-5 m. A lane given the wrong spring
+/// moves particles by millimetres (8.6e-3 m when the AVX-512 lanes ignored the
+/// colour classes along rows).
+#[test]
+fn every_simd_level_limits_the_stretch_alike() {
+    use cloth_sandbox::sim::Integrator;
+    use cloth_sandbox::sim::grid_kernel::Precision;
+    for precision in [Precision::Single, Precision::Mixed, Precision::Double] {
+        let state = |level: SimdLevel| {
+            let mut spec = GridSpec::peer_bench(45, true);
+            spec.integrator = Integrator::Verlet;
+            spec.stretch_limit = Some(0.1);
+            spec.precision = precision;
+            let mut cloth = GridCloth::new(spec);
+            cloth.set_simd_level(level);
+            cloth.steps(DT, 240);
+            let mut x = vec![DVec3::ZERO; cloth.len()];
+            cloth.positions_into(&mut x);
+            (x, cloth.simd_level())
+        };
+        let (portable, _) = state(SimdLevel::Baseline);
+        for level in [SimdLevel::Avx2, SimdLevel::Avx512] {
+            let (x, ran) = state(level);
+            let apart = x
+                .iter()
+                .zip(&portable)
+                .map(|(a, b)| a.distance(*b))
+                .fold(0.0, f64::max);
+            println!("{precision:?} {ran:?}: {apart:e} m from the portable lanes");
+            assert!(apart < 1e-5, "{precision:?} {ran:?}: {apart:e} m");
+        }
+    }
+}

@@ -386,12 +386,21 @@ trait Real:
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
     /// Runs one band of a lattice's step, likewise.
     fn lattice_band(ctx: &lattice::Ctx<Self>, band: &mut lattice::Band<Self>, out: Out<Self>);
+    /// Runs [`stretch_limit_line`], likewise.
+    fn stretch_line(
+        simd: SimdLevel,
+        out: &mut Out<Self>,
+        base: usize,
+        inv_mass: &[Self],
+        alive: Option<&[Self]>,
+        line: &StretchLine<Self>,
+    );
 }
 
 /// `Real` for a float type: its constants and the row functions of each SIMD level.
 macro_rules! real {
     ($t:ident, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
-     lattice: $lattice512:ident, $lattice2:ident) => {
+     lattice: $lattice512:ident, $lattice2:ident, stretch: $stretch512:ident, $stretch2:ident) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -450,6 +459,44 @@ macro_rules! real {
                     _ => lattice::band_modes(Portable::<$t>::default(), ctx, band, out),
                 }
             }
+            fn stretch_line(
+                simd: SimdLevel,
+                out: &mut Out<Self>,
+                base: usize,
+                inv_mass: &[Self],
+                alive: Option<&[Self]>,
+                line: &StretchLine<Self>,
+            ) {
+                // Positions with low parts (`compensated`) or without.
+                let lo = line.compensated;
+                let portable = Portable::<$t>::default();
+                match simd {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    SimdLevel::Avx512 if lo => unsafe {
+                        x86::$stretch512::<true>(out, base, inv_mass, alive, line)
+                    },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    SimdLevel::Avx512 => unsafe {
+                        x86::$stretch512::<false>(out, base, inv_mass, alive, line)
+                    },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    SimdLevel::Avx2 if lo => unsafe {
+                        x86::$stretch2::<true>(out, base, inv_mass, alive, line)
+                    },
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: as above.
+                    SimdLevel::Avx2 => unsafe {
+                        x86::$stretch2::<false>(out, base, inv_mass, alive, line)
+                    },
+                    _ if lo => {
+                        stretch_limit_line::<_, true>(portable, out, base, inv_mass, alive, line)
+                    }
+                    _ => stretch_limit_line::<_, false>(portable, out, base, inv_mass, alive, line),
+                }
+            }
         }
     };
 }
@@ -457,9 +504,11 @@ macro_rules! real {
 // Float32: the intrinsics of `x86`. Float64: the portable lanes compiled for each
 // level's features.
 real!(f32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
-      lattice: lattice_band_avx512, lattice_band_avx2);
+      lattice: lattice_band_avx512, lattice_band_avx2,
+      stretch: stretch_limit_line_avx512, stretch_limit_line_avx2);
 real!(f64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
-      lattice: lattice_band_avx512_f64, lattice_band_avx2_f64);
+      lattice: lattice_band_avx512_f64, lattice_band_avx2_f64,
+      stretch: stretch_limit_line_avx512_f64, stretch_limit_line_avx2_f64);
 
 /// 16 floats, so that buffers and padded rows start on a cache line.
 #[derive(Clone, Copy, Debug)]
@@ -711,9 +760,6 @@ struct Kernel<E: Real> {
     f64_copies_scratch: F64Copies,
     /// Self-collision's candidate pairs.
     self_collision: SelfCollision,
-    /// The stretch limit's corrections along one row, per axis (`nv + PL` floats),
-    /// for each of two threads.
-    stretch_fix: [[Vec<E>; 3]; 2],
     /// The springs left when some tore or were cut (`None`: the whole stencil).
     torn: Option<Torn<E>>,
     /// Springs torn by the steps since [`GridCloth::take_torn`]: (particle in cloth
@@ -929,9 +975,6 @@ impl<E: Real> Kernel<E> {
             simd: SimdLevel::detect(),
             f64_copies_scratch: F64Copies::default(),
             self_collision: SelfCollision::default(),
-            stretch_fix: std::array::from_fn(|_| {
-                std::array::from_fn(|_| vec![E::ZERO; grid.nv + PL])
-            }),
             torn: None,
             torn_log: Vec::new(),
             tear_rows: Vec::new(),
@@ -1601,21 +1644,16 @@ impl<E: Real> Kernel<E> {
                 let inv_mass = self.inv_mass.as_slice();
                 let alive = self.torn.as_ref().map(|t| t.springs[d].as_slice());
                 let out = self.cur.rows();
-                let [fix_lo, fix_hi] = &mut self.stretch_fix;
                 let simd = self.simd;
-                let run = |out: &mut Out<E>,
-                           base: usize,
-                           fix: &mut _,
-                           rows: std::ops::Range<usize>| {
+                let run = |out: &mut Out<E>, base: usize, rows: std::ops::Range<usize>| {
                     for r in rows.filter(in_class) {
-                        let line = line(r);
-                        stretch_limit_line_dispatch(simd, out, base, inv_mass, alive, fix, &line);
+                        E::stretch_line(simd, out, base, inv_mass, alive, &line(r));
                     }
                 };
                 if parallel {
                     let (mut lo, mut hi) = out.split_at(split * st);
-                    let mut second = || run(&mut hi, split * st, fix_hi, rows(split..h));
-                    let first = || run(&mut lo, 0, fix_lo, rows(0..split));
+                    let mut second = || run(&mut hi, split * st, rows(split..h));
+                    let first = || run(&mut lo, 0, rows(0..split));
                     match duo {
                         Some(duo) => duo.fork(&mut second, first),
                         None => {
@@ -1623,7 +1661,7 @@ impl<E: Real> Kernel<E> {
                         }
                     }
                 } else {
-                    run(&mut { out }, 0, fix_lo, rows(0..h));
+                    run(&mut { out }, 0, rows(0..h));
                 }
             }
         }
@@ -2175,6 +2213,10 @@ trait Simd: Copy {
     fn rsqrt_or_zero(self, x: Self::V, eps: Self::E) -> Self::V;
     /// `a` where `m > 0`, else 0.
     fn keep_if_positive(self, m: Self::V, a: Self::V) -> Self::V;
+    /// `a / b`.
+    fn div(self, a: Self::V, b: Self::V) -> Self::V;
+    /// Whether any lane of `m` is positive.
+    fn any_positive(self, m: Self::V) -> bool;
     /// Lanes moved up by one: `[prev[LANES-1], cur[0], .., cur[LANES-2]]`.
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V;
     /// Lanes moved up by two: `[prev[LANES-2], prev[LANES-1], cur[0], ..]`.
@@ -2240,6 +2282,14 @@ impl<E: Real> Simd for Portable<E> {
     #[inline(always)]
     fn keep_if_positive(self, m: Self::V, a: Self::V) -> Self::V {
         std::array::from_fn(|i| if m[i] > E::ZERO { a[i] } else { E::ZERO })
+    }
+    #[inline(always)]
+    fn div(self, a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| a[i] / b[i])
+    }
+    #[inline(always)]
+    fn any_positive(self, m: Self::V) -> bool {
+        m.iter().fold(false, |any, &m| any | (m > E::ZERO))
     }
     #[inline(always)]
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V {
@@ -2372,38 +2422,71 @@ mod x86 {
         row_may_touch(state, inv_mass, row, reach)
     }
 
-    /// The stretch limit's `stretch_limit_line`, compiled for AVX2 and FMA.
+    /// The stretch limit's `stretch_limit_line` with AVX2 lanes (float32) or the
+    /// portable ones (float64) compiled for AVX2 and FMA.
     ///
     /// # Safety
     /// As for `row_avx2`.
     #[target_feature(enable = "avx2,fma")]
     #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx2<E: Real, const LO: bool>(
-        out: &mut Out<E>,
+    pub(super) unsafe fn stretch_limit_line_avx2<const LO: bool>(
+        out: &mut Out<f32>,
         base: usize,
-        inv_mass: &[E],
-        alive: Option<&[E]>,
-        fix: &mut [Vec<E>; 3],
-        line: &StretchLine<E>,
+        inv_mass: &[f32],
+        alive: Option<&[f32]>,
+        line: &StretchLine<f32>,
     ) {
-        stretch_limit_line::<E, LO>(out, base, inv_mass, alive, fix, line);
+        stretch_limit_line::<_, LO>(Avx2(()), out, base, inv_mass, alive, line)
     }
 
-    /// The stretch limit's `stretch_limit_line`, compiled for AVX-512.
+    /// As `stretch_limit_line_avx2`, in float64.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn stretch_limit_line_avx2_f64<const LO: bool>(
+        out: &mut Out<f64>,
+        base: usize,
+        inv_mass: &[f64],
+        alive: Option<&[f64]>,
+        line: &StretchLine<f64>,
+    ) {
+        let s = Portable::<f64>::default();
+        stretch_limit_line::<_, LO>(s, out, base, inv_mass, alive, line)
+    }
+
+    /// The stretch limit's `stretch_limit_line` with AVX-512 lanes (float32).
     ///
     /// # Safety
     /// As for `row_avx512`.
     #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
     #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx512<E: Real, const LO: bool>(
-        out: &mut Out<E>,
+    pub(super) unsafe fn stretch_limit_line_avx512<const LO: bool>(
+        out: &mut Out<f32>,
         base: usize,
-        inv_mass: &[E],
-        alive: Option<&[E]>,
-        fix: &mut [Vec<E>; 3],
-        line: &StretchLine<E>,
+        inv_mass: &[f32],
+        alive: Option<&[f32]>,
+        line: &StretchLine<f32>,
     ) {
-        stretch_limit_line::<E, LO>(out, base, inv_mass, alive, fix, line);
+        stretch_limit_line::<_, LO>(Avx512(()), out, base, inv_mass, alive, line)
+    }
+
+    /// As `stretch_limit_line_avx512`, in float64 with the portable lanes.
+    ///
+    /// # Safety
+    /// As for `row_avx512`.
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn stretch_limit_line_avx512_f64<const LO: bool>(
+        out: &mut Out<f64>,
+        base: usize,
+        inv_mass: &[f64],
+        alive: Option<&[f64]>,
+        line: &StretchLine<f64>,
+    ) {
+        let s = Portable::<f64>::default();
+        stretch_limit_line::<_, LO>(s, out, base, inv_mass, alive, line)
     }
 
     /// One row in float64 with the portable lanes, compiled for the same features
@@ -2517,6 +2600,14 @@ mod x86 {
             }
         }
         #[inline(always)]
+        fn div(self, a: __m512, b: __m512) -> __m512 {
+            unsafe { _mm512_div_ps(a, b) }
+        }
+        #[inline(always)]
+        fn any_positive(self, m: __m512) -> bool {
+            unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(m, _mm512_setzero_ps()) != 0 }
+        }
+        #[inline(always)]
         fn shift1(self, prev: __m512, cur: __m512) -> __m512 {
             unsafe {
                 _mm512_castsi512_ps(_mm512_alignr_epi32::<15>(
@@ -2592,6 +2683,17 @@ mod x86 {
             }
         }
         #[inline(always)]
+        fn div(self, a: __m256, b: __m256) -> __m256 {
+            unsafe { _mm256_div_ps(a, b) }
+        }
+        #[inline(always)]
+        fn any_positive(self, m: __m256) -> bool {
+            unsafe {
+                let ok = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_setzero_ps());
+                _mm256_movemask_ps(ok) != 0
+            }
+        }
+        #[inline(always)]
         fn shift1(self, prev: __m256, cur: __m256) -> __m256 {
             unsafe {
                 // [prev 4..8, cur 0..4], then per 128-bit half take 3 floats up.
@@ -2631,56 +2733,26 @@ struct StretchLine<E> {
     compensated: bool,
 }
 
-/// [`stretch_limit_line`] with the best code this CPU has.
-fn stretch_limit_line_dispatch<E: Real>(
-    simd: SimdLevel,
-    out: &mut Out<E>,
-    base: usize,
-    inv_mass: &[E],
-    alive: Option<&[E]>,
-    fix: &mut [Vec<E>; 3],
-    line: &StretchLine<E>,
-) {
-    // Positions with low parts (`compensated`) or without.
-    macro_rules! each_precision {
-        ($($f:ident)::+) => {
-            if line.compensated {
-                $($f)::+::<E, true>(out, base, inv_mass, alive, fix, line)
-            } else {
-                $($f)::+::<E, false>(out, base, inv_mass, alive, fix, line)
-            }
-        };
-    }
-    match simd {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-        SimdLevel::Avx512 => unsafe { each_precision!(x86::stretch_limit_line_avx512) },
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 => unsafe { each_precision!(x86::stretch_limit_line_avx2) },
-        _ => each_precision!(stretch_limit_line),
-    }
-}
-
 /// Corrects the springs of `line` that are longer than `line.longest` as
 /// [`constraints::length_correction`] does, in `out` (the state's arrays from array
-/// index `base` on): first every correction, lane by lane into the scratch rows
-/// `fix` (a loop the compiler vectorises; a line with no spring over the limit
-/// stops there), then the moves of the first ends, then those of the second ends.
-/// Each particle has at most one spring in a class, so the moves do not interact.
-/// A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`). Springs that
-/// tore (0 in `alive`, the direction's mask, when some did) are skipped. The lanes are
-/// whole portable blocks: lanes past `len` reach ghost columns inside the row's
-/// padding and are given no correction.
+/// index `base` on), in blocks of `S::LANES` springs: a block's lengths, and when
+/// one of them is over the limit, its corrections and at once the moves of its
+/// first ends and of its second ends. Each particle has at most one spring in a
+/// class, so the moves do not interact: a lane out of the class (or past the
+/// line, or a spring that tore: 0 in `alive`, the direction's mask, when some did)
+/// gets a move of 0, which leaves its particle as it was. A move `δ` adds `δ / h`
+/// to the velocity (and to Verlet's `u`). The lanes past `len` reach ghost columns
+/// inside the row's padding (rows are [`BLOCK`] floats longer than their blocks).
 #[inline(always)]
-fn stretch_limit_line<E: Real, const LO: bool>(
-    out: &mut Out<E>,
+fn stretch_limit_line<S: Simd, const LO: bool>(
+    s: S,
+    out: &mut Out<S::E>,
     base: usize,
-    inv_mass: &[E],
-    alive: Option<&[E]>,
-    fix: &mut [Vec<E>; 3],
-    line: &StretchLine<E>,
+    inv_mass: &[S::E],
+    alive: Option<&[S::E]>,
+    line: &StretchLine<S::E>,
 ) {
+    let n = S::LANES;
     let &StretchLine {
         len,
         c0,
@@ -2689,91 +2761,88 @@ fn stretch_limit_line<E: Real, const LO: bool>(
         inv_dt,
         ..
     } = line;
+    let (zero, one) = (S::E::ZERO, S::E::ONE);
     let (a, b) = (line.a - base, line.b - base);
+    let lanes = len.next_multiple_of(n);
+    let end = a.max(b) + lanes;
     let inv_mass = &inv_mass[base..];
-    let lanes = len.next_multiple_of(PL);
-    // Both ends' arrays cut to `lanes` floats, so that the loops have no bounds checks.
-    fn ends<E>(p: &[E], a: usize, b: usize, lanes: usize) -> (&[E], &[E]) {
-        (&p[a..a + lanes], &p[b..b + lanes])
-    }
-    let [x, y, z, xl, yl, zl, ..] = &out.0;
-    {
-        let [(xa, xb), (ya, yb), (za, zb)] = [x, y, z].map(|p| ends(p, a, b, lanes));
-        let [(la, lb), (ma, mb), (na, nb)] = [xl, yl, zl].map(|p| ends(p, a, b, lanes));
-        let (wa, wb) = ends(inv_mass, a, b, lanes);
-        // Springs that tore stay out (`alive` is indexed like the state, not from
-        // `base`).
-        let alive = alive.map(|m| &m[line.a..line.a + lanes]);
-        let [fx, fy, fz] = fix.each_mut().map(|f| &mut f[..lanes]);
-        let (own_colour, shift) = colour.unwrap_or((0, 0));
-        let every_column = colour.is_none();
-        let longest2 = longest * longest;
-        let mut any = false;
-        for j in 0..lanes {
-            let (mut dx, mut dy, mut dz) = (xa[j] - xb[j], ya[j] - yb[j], za[j] - zb[j]);
-            if LO {
-                (dx, dy, dz) = (
-                    dx + (la[j] - lb[j]),
-                    dy + (ma[j] - mb[j]),
-                    dz + (na[j] - nb[j]),
-                );
-            }
-            let l2 = dx * dx + dy * dy + dz * dz;
-            let w = wa[j] + wb[j];
-            let in_class = every_column || ((c0 + j) >> shift) & 1 == own_colour;
-            let there = alive.is_none_or(|m| m[j] != E::ZERO);
-            let over = j < len && in_class && l2 > longest2 && w > E::ZERO && there;
-            let l = l2.sqrt();
-            let scale = if over {
-                (l - longest) / (l * w)
-            } else {
-                E::ZERO
-            };
-            any |= over;
-            (fx[j], fy[j], fz[j]) = (scale * dx, scale * dy, scale * dz);
-        }
-        if !any {
-            return;
-        }
-    }
-    let pl = Portable::<E>::default();
     let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
     let verlet = !ux.is_empty();
-    let mut axes = [(x, xl, vx, ux), (y, yl, vy, uy), (z, zl, vz, uz)];
-    for (start, sign) in [(a, E::ZERO - E::ONE), (b, E::ONE)] {
-        let w = &inv_mass[start..start + lanes];
-        for ((x, xl, v, u), f) in axes.iter_mut().zip(fix.iter()) {
-            let f = &f[..lanes];
-            let range = start..start + lanes;
-            let (x, xl, v) = (
-                &mut x[range.clone()],
-                &mut xl[range.clone()],
-                &mut v[range.clone()],
+    let fits = |arrays: [&[S::E]; 3]| arrays.iter().all(|p| p.len() >= end);
+    // Every block below reads and writes inside these bounds.
+    assert!(inv_mass.len() >= end && fits([x, y, z]) && fits([vx, vy, vz]));
+    assert!((!LO || fits([xl, yl, zl])) && (!verlet || fits([ux, uy, uz])));
+    let alive = alive.map(|m| &m[line.a..line.a + lanes]);
+    let pos = [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()];
+    let low = [xl.as_mut_ptr(), yl.as_mut_ptr(), zl.as_mut_ptr()];
+    let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
+    let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
+    // 1 for the lanes in the class: along rows, every other run of `dc` columns, a
+    // pattern of 2 or 4 lanes that repeats in every block.
+    let class: [S::E; BLOCK] = std::array::from_fn(|l| match colour {
+        Some((own, shift)) if ((c0 + l) >> shift) & 1 != own => zero,
+        _ => one,
+    });
+    let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
+    let (longest_v, one_v) = (s.splat(longest), s.splat(one));
+    for j in (0..lanes).step_by(n) {
+        // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
+        // `a + lanes` and `b + lanes` floats (asserted above).
+        let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
+        let d: [S::V; 3] = std::array::from_fn(|k| {
+            let d = s.sub(load(pos[k], a + j), load(pos[k], b + j));
+            if LO {
+                s.add(d, s.sub(load(low[k], a + j), load(low[k], b + j)))
+            } else {
+                d
+            }
+        });
+        let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
+        let mut keep = load(class.as_ptr(), 0);
+        if j + n > len {
+            let tail: [S::E; BLOCK] = std::array::from_fn(|l| if j + l < len { one } else { zero });
+            keep = s.mul(keep, load(tail.as_ptr(), 0));
+        }
+        if let Some(m) = alive {
+            keep = s.mul(keep, load(m.as_ptr(), j));
+        }
+        let w = s.add(
+            load(inv_mass.as_ptr(), a + j),
+            load(inv_mass.as_ptr(), b + j),
+        );
+        // Positive where the spring is in the class, over the limit and not pinned
+        // at both ends.
+        let over = s.keep_if_positive(w, s.mul_sub(l2, keep, longest2));
+        if !s.any_positive(over) {
+            continue;
+        }
+        // (l - longest) / (l w), with 1 / l from the lanes' reciprocal square root.
+        let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
+        let scale = s.keep_if_positive(over, s.div(shortening, w));
+        for (start, sign) in [(a, zero - one), (b, one)] {
+            let k = s.mul(
+                s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
+                scale,
             );
-            // Verlet's `u`, or nothing for the other integrators.
-            let u = if verlet { &mut u[range] } else { &mut [][..] };
-            let u_blocks = u.chunks_exact_mut(PL).map(Some);
-            let blocks = x.chunks_exact_mut(PL).zip(xl.chunks_exact_mut(PL));
-            let blocks = blocks.zip(v.chunks_exact_mut(PL)).zip(w.chunks_exact(PL));
-            let blocks = blocks.zip(u_blocks.chain(std::iter::repeat_with(|| None)));
-            for (((((x, xl), v), w), u), f) in blocks.zip(f.chunks_exact(PL)) {
-                // Most springs are within the limit, and a block of particles that
-                // none of its springs moves is left alone (the moves would add 0).
-                if f.iter().fold(true, |zero, &f| zero & (f == E::ZERO)) {
-                    continue;
-                }
-                let t: [E; PL] = std::array::from_fn(|l| sign * w[l] * f[l]);
-                if LO {
-                    let old = (x[..].try_into().unwrap(), xl[..].try_into().unwrap());
-                    let (hi, lo) = add_double(pl, old, t);
-                    x.copy_from_slice(&hi);
-                    xl.copy_from_slice(&lo);
-                } else {
-                    x.iter_mut().zip(t).for_each(|(x, t)| *x += t);
-                }
-                v.iter_mut().zip(t).for_each(|(v, t)| *v += t * inv_dt);
-                if let Some(u) = u {
-                    u.iter_mut().zip(t).for_each(|(u, t)| *u += t * inv_dt);
+            for axis in 0..3 {
+                let t = s.mul(k, d[axis]);
+                let i = start + j;
+                // SAFETY: as above.
+                unsafe {
+                    if LO {
+                        let old = (load(pos[axis], i), load(low[axis], i));
+                        let (hi, lo) = add_double(s, old, t);
+                        s.store(pos[axis].add(i), hi);
+                        s.store(low[axis].add(i), lo);
+                    } else {
+                        s.store(pos[axis].add(i), s.add(load(pos[axis], i), t));
+                    }
+                    let v = s.mul_add(t, inv_dt_v, load(vel[axis], i));
+                    s.store(vel[axis].add(i), v);
+                    if verlet {
+                        let u = s.mul_add(t, inv_dt_v, load(upd[axis], i));
+                        s.store(upd[axis].add(i), u);
+                    }
                 }
             }
         }
