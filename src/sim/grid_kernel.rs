@@ -77,6 +77,7 @@ use glam::DVec3;
 
 use super::constraints;
 use super::duo::{Duo, run_in_pool};
+use super::lanes::{F64s, V3};
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 
@@ -1381,6 +1382,7 @@ impl<E: Real> Kernel<E> {
         // The flagged rows' particles, in two halves of the rows on two threads
         // when allowed (each particle's resolution is its own: the same results).
         let ctx = ContactRows {
+            simd: self.simd,
             flags: &rows,
             width: w,
             stride: st,
@@ -2307,8 +2309,8 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine, lattice, row_may_tear,
-        row_may_touch, row_variant, stretch_limit_line,
+        Band, ContactRows, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine, lattice,
+        row_may_tear, row_may_touch, row_variant, stretch_limit_line,
     };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -2420,6 +2422,36 @@ mod x86 {
         reach: &Reach<E>,
     ) -> bool {
         row_may_touch(state, inv_mass, row, reach)
+    }
+
+    /// Contact with friction (`ContactRows::resolve`), compiled for AVX2 and FMA.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn contact_rows_avx2<E: Real>(
+        ctx: &ContactRows<E>,
+        out: &mut Out<E>,
+        first: usize,
+        rows: std::ops::Range<usize>,
+    ) {
+        ctx.resolve_rows(out, first, rows)
+    }
+
+    /// Contact with friction (`ContactRows::resolve`), compiled for AVX-512.
+    ///
+    /// # Safety
+    /// As for `row_avx512`.
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    #[inline(never)]
+    pub(super) unsafe fn contact_rows_avx512<E: Real>(
+        ctx: &ContactRows<E>,
+        out: &mut Out<E>,
+        first: usize,
+        rows: std::ops::Range<usize>,
+    ) {
+        ctx.resolve_rows(out, first, rows)
     }
 
     /// The stretch limit's `stretch_limit_line` with AVX2 lanes (float32) or the
@@ -2901,6 +2933,7 @@ fn row_may_tear<E: Real>(
 
 /// What resolving the contacts of flagged rows reads ([`Kernel::resolve_contact`]).
 struct ContactRows<'a, E> {
+    simd: SimdLevel,
     /// Per row, whether a particle of it may touch.
     flags: &'a [bool],
     width: usize,
@@ -2912,37 +2945,101 @@ struct ContactRows<'a, E> {
     verlet: bool,
 }
 
+/// Particles [`ContactRows`] resolves together, one per float64 lane.
+const CONTACT_LANES: usize = 8;
+
 impl<E: Real> ContactRows<'_, E> {
     /// Resolves the particles of the flagged rows among `rows`, whose arrays `out`
-    /// holds from row `first` on.
+    /// holds from row `first` on: in blocks of [`CONTACT_LANES`] columns, those
+    /// that may touch ([`Reach::may_touch`]) together
+    /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
+    /// `resolve` gives it alone). Blocks past the row's last column read ghost
+    /// columns inside its padding (rows are [`BLOCK`] floats longer than their
+    /// blocks) and leave them alone.
     fn resolve(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {
+        match self.simd {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+            SimdLevel::Avx512 => unsafe { x86::contact_rows_avx512(self, out, first, rows) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
+            SimdLevel::Avx2 => unsafe { x86::contact_rows_avx2(self, out, first, rows) },
+            _ => self.resolve_rows(out, first, rows),
+        }
+    }
+
+    /// [`ContactRows::resolve`], compiled for the caller's SIMD level.
+    #[inline(always)]
+    fn resolve_rows(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {
+        const N: usize = CONTACT_LANES;
         let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
         let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
         let lows = [xl, yl, zl];
         for r in rows.filter(|&r| self.flags[r]) {
             let start = r * self.stride;
-            for i in start..start + self.width {
-                let j = i - first * self.stride;
-                let w = self.inv_mass[i];
-                // (Arrays written out: `[0, 1, 2].map` was not inlined here, and
-                // cost a fifth of the drape's contact pass.)
-                if !self.reach.may_touch([pos[0][j], pos[1][j], pos[2][j]], w) {
+            for c in (0..self.width).step_by(N) {
+                let (i, j) = (start + c, (r - first) * self.stride + c);
+                // Every slice `N` long, in the compiler's sight. (Written out:
+                // arrays' `map` was left a call in this loop.)
+                let w = &self.inv_mass[i..i + N];
+                let (px, py, pz) = (&pos[0][j..j + N], &pos[1][j..j + N], &pos[2][j..j + N]);
+                let mut touch = [false; N];
+                for (l, touch) in touch.iter_mut().enumerate() {
+                    let real = c + l < self.width;
+                    *touch = real & self.reach.may_touch([px[l], py[l], pz[l]], w[l]);
+                }
+                if !touch.contains(&true) {
                     continue;
                 }
-                let at = |a: usize| pos[a][j].f64() + lows[a][j].f64();
-                let x = DVec3::new(at(0), at(1), at(2));
-                let v = DVec3::new(vel[0][j].f64(), vel[1][j].f64(), vel[2][j].f64());
-                let (to, v_new) = self.contact.resolve(x, v, w.f64());
-                if to != x {
-                    for a in 0..3 {
-                        (pos[a][j], lows[a][j]) = position_parts(to[a], self.compensated);
+                let lanes = |p: &[E]| {
+                    let p = &p[j..j + N];
+                    F64s::<N>(std::array::from_fn(|l| p[l].f64()))
+                };
+                let v = V3 {
+                    x: lanes(vel[0]),
+                    y: lanes(vel[1]),
+                    z: lanes(vel[2]),
+                };
+                let at = V3 {
+                    x: lanes(pos[0]) + lanes(lows[0]),
+                    y: lanes(pos[1]) + lanes(lows[1]),
+                    z: lanes(pos[2]) + lanes(lows[2]),
+                };
+                let mass = F64s::<N>(std::array::from_fn(|l| w[l].f64()));
+                let (to, v_new) = self.contact.resolve_lanes(at, v, mass);
+                // Back into the touching lanes, all lanes at once: a particle
+                // that moved gets its new position (every axis), its velocity the
+                // change. The other lanes are written what they held.
+                let moved: [bool; N] = std::array::from_fn(|l| {
+                    let (x, y, z) = (to.x.0[l], to.y.0[l], to.z.0[l]);
+                    touch[l] & ((x != at.x.0[l]) | (y != at.y.0[l]) | (z != at.z.0[l]))
+                });
+                let axes = [
+                    (to.x, v_new.x, v.x),
+                    (to.y, v_new.y, v.y),
+                    (to.z, v_new.z, v.z),
+                ];
+                for (a, (to, v_new, v)) in axes.into_iter().enumerate() {
+                    let (p, q) = (&mut pos[a][j..j + N], &mut lows[a][j..j + N]);
+                    for l in 0..N {
+                        let (hi, lo) = position_parts::<E>(to.0[l], self.compensated);
+                        p[l] = if moved[l] { hi } else { p[l] };
+                        q[l] = if moved[l] { lo } else { q[l] };
                     }
-                }
-                let dv = v_new - v;
-                for a in 0..3 {
-                    vel[a][j] += E::of(dv[a]);
+                    let dv: [E; N] = std::array::from_fn(|l| E::of(v_new.0[l] - v.0[l]));
+                    let speed = &mut vel[a][j..j + N];
+                    for l in 0..N {
+                        speed[l] = if touch[l] { speed[l] + dv[l] } else { speed[l] };
+                    }
                     if self.verlet {
-                        upd[a][j] += E::of(dv[a]);
+                        let update = &mut upd[a][j..j + N];
+                        for l in 0..N {
+                            update[l] = if touch[l] {
+                                update[l] + dv[l]
+                            } else {
+                                update[l]
+                            };
+                        }
                     }
                 }
             }
@@ -3270,7 +3367,8 @@ struct StepLanes<S: Simd> {
 
 impl<S: Simd> StepLanes<S> {
     /// The lanes of `p`, reading Verlet's `u` from `u` (else from `v`) and writing
-    /// to `out`.
+    /// to `out`. (Inlined: called once a row, it cost the drape 3% as a call.)
+    #[inline(always)]
     fn new(s: S, p: &Params<S::E>, u: [&[S::E]; 3], v: [&[S::E]; 3], out: &mut Out<S::E>) -> Self {
         StepLanes {
             s,

@@ -7,7 +7,8 @@
 //!   (the f64 general engine, the reference);
 //! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook
 //!   into [`System::run`]; `duo`: its two threads handing over each step by
-//!   spinning;
+//!   spinning; `lanes`: float64 lanes, so that contact is written once for one
+//!   particle and for a block of them;
 //! - [`self_collision`]: particles of a cloth kept a thickness apart, with friction;
 //! - [`tearing`]: springs that tear past a strain or are cut, and leave the model;
 //! - [`divergence`], [`energy_budget`], [`stability`], [`safe`]: when a run has
@@ -29,6 +30,7 @@ pub mod grab;
 pub mod grid_kernel;
 pub mod implicit;
 pub mod integrators;
+pub(crate) mod lanes;
 pub mod mesh_kernel;
 pub mod model;
 pub mod safe;

@@ -733,6 +733,7 @@ impl<E: Real> Lattice<E> {
             }),
         );
         let rows_of = ContactRows {
+            simd: self.simd,
             flags: &self.contact_rows,
             width,
             stride: g.row,

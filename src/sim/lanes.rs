@@ -1,0 +1,213 @@
+//! Float64 lanes for the physics every engine shares but the fast engines apply to
+//! many particles at once (contact and friction, [`super::constraints::Contact`]).
+//! The physics is written once over [`Lanes`]: `f64` for one particle (the f64
+//! engine), [`F64s`] for a block of them (the grid and lattice kernels). Branches
+//! become per-lane selects, so each lane computes exactly what the `f64` version
+//! computes for its particle (IEEE operations, no fused multiply-adds): the fast
+//! engines' contact agrees with the f64 engine's bit for bit.
+
+use std::ops::{Add, Div, Mul, Sub};
+
+use glam::DVec3;
+
+/// Numbers of one particle (`f64`) or of a block of particles ([`F64s`]).
+pub(crate) trait Lanes:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    /// Per lane, a yes or no.
+    type Mask: Copy;
+    fn splat(x: f64) -> Self;
+    fn sqrt(self) -> Self;
+    fn lt(self, other: Self) -> Self::Mask;
+    fn le(self, other: Self) -> Self::Mask;
+    fn gt(self, other: Self) -> Self::Mask;
+    /// Whether any lane says yes.
+    fn any(m: Self::Mask) -> bool;
+
+    /// `a` in the lanes where `m` says yes, else `b`.
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+}
+
+impl Lanes for f64 {
+    type Mask = bool;
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    #[inline(always)]
+    fn lt(self, other: Self) -> bool {
+        self < other
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> bool {
+        self <= other
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> bool {
+        self > other
+    }
+    #[inline(always)]
+    fn any(m: bool) -> bool {
+        m
+    }
+
+    #[inline(always)]
+    fn select(m: bool, a: Self, b: Self) -> Self {
+        if m { a } else { b }
+    }
+}
+
+/// `N` lanes of f64: plain arrays, vectorised by the compiler for the target
+/// features of the function they are inlined into.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct F64s<const N: usize>(pub [f64; N]);
+
+macro_rules! lanewise {
+    ($trait:ident, $method:ident, $op:tt) => {
+        impl<const N: usize> $trait for F64s<N> {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, other: Self) -> Self {
+                F64s(std::array::from_fn(|i| self.0[i] $op other.0[i]))
+            }
+        }
+    };
+}
+lanewise!(Add, add, +);
+lanewise!(Sub, sub, -);
+lanewise!(Mul, mul, *);
+lanewise!(Div, div, /);
+
+impl<const N: usize> Lanes for F64s<N> {
+    type Mask = [bool; N];
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        F64s([x; N])
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        // (`from_fn`, not `map`: `map` was left a call in the hot loop.)
+        F64s(std::array::from_fn(|i| self.0[i].sqrt()))
+    }
+    #[inline(always)]
+    fn lt(self, other: Self) -> [bool; N] {
+        std::array::from_fn(|i| self.0[i] < other.0[i])
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> [bool; N] {
+        std::array::from_fn(|i| self.0[i] <= other.0[i])
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> [bool; N] {
+        std::array::from_fn(|i| self.0[i] > other.0[i])
+    }
+    #[inline(always)]
+    fn any(m: [bool; N]) -> bool {
+        m.iter().fold(false, |any, &m| any | m)
+    }
+
+    #[inline(always)]
+    fn select(m: [bool; N], a: Self, b: Self) -> Self {
+        F64s(std::array::from_fn(|i| if m[i] { a.0[i] } else { b.0[i] }))
+    }
+}
+
+/// A 3-vector of lanes, with the operations of [`DVec3`] that the shared physics
+/// uses, computed in the same order as glam computes them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct V3<T> {
+    pub x: T,
+    pub y: T,
+    pub z: T,
+}
+
+impl<T: Lanes> V3<T> {
+    /// `v` in every lane.
+    #[inline(always)]
+    pub fn splat(v: DVec3) -> Self {
+        V3 {
+            x: T::splat(v.x),
+            y: T::splat(v.y),
+            z: T::splat(v.z),
+        }
+    }
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> T {
+        self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    #[inline(always)]
+    pub fn length(self) -> T {
+        self.dot(self).sqrt()
+    }
+    #[inline(always)]
+    pub fn scale(self, s: T) -> Self {
+        V3 {
+            x: self.x * s,
+            y: self.y * s,
+            z: self.z * s,
+        }
+    }
+    #[inline(always)]
+    pub fn over(self, s: T) -> Self {
+        V3 {
+            x: self.x / s,
+            y: self.y / s,
+            z: self.z / s,
+        }
+    }
+    /// `a` in the lanes where `m` says yes, else `b`.
+    #[inline(always)]
+    pub fn select(m: T::Mask, a: Self, b: Self) -> Self {
+        V3 {
+            x: T::select(m, a.x, b.x),
+            y: T::select(m, a.y, b.y),
+            z: T::select(m, a.z, b.z),
+        }
+    }
+}
+
+impl<T: Lanes> Add for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        V3 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+
+impl<T: Lanes> Sub for V3<T> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        V3 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+
+impl From<DVec3> for V3<f64> {
+    #[inline(always)]
+    fn from(v: DVec3) -> Self {
+        V3 {
+            x: v.x,
+            y: v.y,
+            z: v.z,
+        }
+    }
+}
+
+impl From<V3<f64>> for DVec3 {
+    #[inline(always)]
+    fn from(v: V3<f64>) -> Self {
+        DVec3::new(v.x, v.y, v.z)
+    }
+}
