@@ -1623,12 +1623,12 @@ impl<E: Real> Kernel<E> {
             for colour in 0..2 {
                 // Springs along rows alternate in runs of `dc` columns, the others'
                 // rows in runs of `dr` rows: rows `2 dr m + dr colour + j`, j < dr.
+                let class = StretchLine::class(c0, (dr == 0).then_some((colour, dc)));
                 let line = |r: usize| StretchLine {
                     a: r * st + c0,
                     b: ((r + dr) * st + c0).wrapping_add_signed(dc),
                     len,
-                    c0,
-                    colour: (dr == 0).then(|| (colour, dc.unsigned_abs().trailing_zeros())),
+                    class,
                     longest,
                     inv_dt,
                     compensated,
@@ -2755,14 +2755,24 @@ struct StretchLine<E> {
     a: usize,
     b: usize,
     len: usize,
-    /// Column of the first spring.
-    c0: usize,
-    /// For springs along rows: the colour and `log2 dc`; only the springs starting
-    /// at columns `c` with `(c >> log2 dc) % 2 == colour` are in the class.
-    colour: Option<(usize, u32)>,
+    /// 1 for the lanes of a block in the class, else 0 (see [`StretchLine::class`]).
+    class: [E; BLOCK],
     longest: E,
     inv_dt: E,
     compensated: bool,
+}
+
+impl<E: Real> StretchLine<E> {
+    /// 1 for the lanes of a block in the class, first column `c0`: every lane, or
+    /// along rows (`along` = the colour and `dc`) the springs starting at columns
+    /// `c` with `(c / dc) % 2 == colour`, a pattern of 2 or 4 lanes that repeats in
+    /// every block.
+    fn class(c0: usize, along: Option<(usize, isize)>) -> [E; BLOCK] {
+        std::array::from_fn(|l| match along {
+            Some((colour, dc)) if ((c0 + l) / dc.unsigned_abs()) % 2 != colour => E::ZERO,
+            _ => E::ONE,
+        })
+    }
 }
 
 /// Corrects the springs of `line` that are longer than `line.longest` as
@@ -2787,8 +2797,6 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
     let n = S::LANES;
     let &StretchLine {
         len,
-        c0,
-        colour,
         longest,
         inv_dt,
         ..
@@ -2809,12 +2817,6 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
     let low = [xl.as_mut_ptr(), yl.as_mut_ptr(), zl.as_mut_ptr()];
     let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
     let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
-    // 1 for the lanes in the class: along rows, every other run of `dc` columns, a
-    // pattern of 2 or 4 lanes that repeats in every block.
-    let class: [S::E; BLOCK] = std::array::from_fn(|l| match colour {
-        Some((own, shift)) if ((c0 + l) >> shift) & 1 != own => zero,
-        _ => one,
-    });
     let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
     let (longest_v, one_v) = (s.splat(longest), s.splat(one));
     for j in (0..lanes).step_by(n) {
@@ -2830,7 +2832,7 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
             }
         });
         let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
-        let mut keep = load(class.as_ptr(), 0);
+        let mut keep = load(line.class.as_ptr(), 0);
         if j + n > len {
             let tail: [S::E; BLOCK] = std::array::from_fn(|l| if j + l < len { one } else { zero });
             keep = s.mul(keep, load(tail.as_ptr(), 0));
