@@ -149,19 +149,25 @@ impl Contact {
         if let Some(sphere) = self.sphere {
             let (center, radius) = (V3::splat(sphere.center), T::splat(sphere.radius));
             let d = x - center;
-            let dist = d.length();
-            let inside = dist.lt(radius);
-            if T::any(inside) {
-                let outside = nearest_surface(d, dist, &sphere);
-                let push = outside - x;
-                let mut pushed = v + push.over(h);
-                if self.friction > 0.0 {
-                    let normal = (outside - center).over(radius);
-                    let most = T::splat(self.friction) * push.length() / h;
-                    pushed = coulomb(pushed, normal, most);
+            let dist2 = d.dot(d);
+            // The cheap test first: particles all farther than the radius by much
+            // more than a square root's rounding are outside, without the root.
+            let reach2 = sphere.radius * sphere.radius * (1.0 + 1e-9);
+            if T::any(dist2.lt(T::splat(reach2))) {
+                let dist = dist2.sqrt();
+                let inside = dist.lt(radius);
+                if T::any(inside) {
+                    let outside = nearest_surface(d, dist, &sphere);
+                    let push = outside - x;
+                    let mut pushed = v + push.over(h);
+                    if self.friction > 0.0 {
+                        let normal = (outside - center).over(radius);
+                        let most = T::splat(self.friction) * push.length() / h;
+                        pushed = coulomb(pushed, normal, most);
+                    }
+                    x = V3::select(inside, outside, x);
+                    v = V3::select(inside, pushed, v);
                 }
-                x = V3::select(inside, outside, x);
-                v = V3::select(inside, pushed, v);
             }
         }
         if let Some(ground) = self.ground.filter(|g| g.friction > 0.0) {
@@ -313,7 +319,8 @@ mod tests {
     /// Contact on a block of lanes gives each lane bit for bit what it gives its
     /// particle alone: particles in, on and around a sphere with friction and on
     /// a frictional ground, sliding and resting, with lanes of both kinds mixed in
-    /// one block, one at the sphere's centre and one NaN.
+    /// one block, one at the sphere's centre and one NaN; and no particle inside
+    /// the sphere is left there, also within 2e-9 of its surface.
     #[test]
     fn lanes_resolve_each_particle_as_alone() {
         let contact = Contact {
@@ -336,8 +343,15 @@ mod tests {
             let mut x = [DVec3::ZERO; 8];
             let mut v = [DVec3::ZERO; 8];
             let mut w = [0.0; 8];
+            // Every third block lies all within 2e-9 of the sphere's surface, where
+            // the cheap test on squared distances must decide as the root would.
+            let shell = block % 3 == 0;
             for l in 0..8 {
-                let r: f64 = rng.random_range(0.0..0.7);
+                let r: f64 = if shell {
+                    0.5 * (1.0 + rng.random_range(-2e-9..2e-9))
+                } else {
+                    rng.random_range(0.0..0.7)
+                };
                 let dir = DVec3::new(
                     rng.random_range(-1.0..1.0),
                     rng.random_range(-1.0..1.0),
@@ -376,9 +390,17 @@ mod tests {
                     lane(&v_new)
                 );
                 differ += usize::from(x1 != x[l] || v1 != v[l]);
+                // A particle left where it was is not inside the sphere.
+                let sphere = contact.sphere.unwrap();
+                let left = x1 == x[l] && x[l].is_finite();
+                assert!(
+                    !left || x[l].distance(sphere.center) >= sphere.radius,
+                    "{}",
+                    x[l]
+                );
             }
         }
         // The contact did act on most particles.
-        assert!(differ > 8000, "{differ} of 16000 changed");
+        assert!(differ > 6000, "{differ} of 16000 changed");
     }
 }
