@@ -468,34 +468,36 @@ macro_rules! real {
                 alive: Option<&[Self]>,
                 line: &StretchLine<Self>,
             ) {
-                // Positions with low parts (`compensated`) or without.
-                let lo = line.compensated;
-                let portable = Portable::<$t>::default();
-                match simd {
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: as above.
-                    SimdLevel::Avx512 if lo => unsafe {
-                        x86::$stretch512::<true>(out, base, inv_mass, alive, line)
-                    },
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: as above.
-                    SimdLevel::Avx512 => unsafe {
-                        x86::$stretch512::<false>(out, base, inv_mass, alive, line)
-                    },
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: as above.
-                    SimdLevel::Avx2 if lo => unsafe {
-                        x86::$stretch2::<true>(out, base, inv_mass, alive, line)
-                    },
-                    #[cfg(target_arch = "x86_64")]
-                    // SAFETY: as above.
-                    SimdLevel::Avx2 => unsafe {
-                        x86::$stretch2::<false>(out, base, inv_mass, alive, line)
-                    },
-                    _ if lo => {
-                        stretch_limit_line::<_, true>(portable, out, base, inv_mass, alive, line)
+                fn at<const LO: bool>(
+                    simd: SimdLevel,
+                    out: &mut Out<$t>,
+                    base: usize,
+                    inv_mass: &[$t],
+                    alive: Option<&[$t]>,
+                    line: &StretchLine<$t>,
+                ) {
+                    match simd {
+                        #[cfg(target_arch = "x86_64")]
+                        // SAFETY: as above.
+                        SimdLevel::Avx512 => unsafe {
+                            x86::$stretch512::<LO>(out, base, inv_mass, alive, line)
+                        },
+                        #[cfg(target_arch = "x86_64")]
+                        // SAFETY: as above.
+                        SimdLevel::Avx2 => unsafe {
+                            x86::$stretch2::<LO>(out, base, inv_mass, alive, line)
+                        },
+                        _ => {
+                            let portable = Portable::<$t>::default();
+                            stretch_limit_line::<_, LO>(portable, out, base, inv_mass, alive, line)
+                        }
                     }
-                    _ => stretch_limit_line::<_, false>(portable, out, base, inv_mass, alive, line),
+                }
+                // Positions with low parts (`compensated`) or without.
+                if line.compensated {
+                    at::<true>(simd, out, base, inv_mass, alive, line)
+                } else {
+                    at::<false>(simd, out, base, inv_mass, alive, line)
                 }
             }
         }
@@ -2454,71 +2456,32 @@ mod x86 {
         ctx.resolve_rows(out, first, rows)
     }
 
-    /// The stretch limit's `stretch_limit_line` with AVX2 lanes (float32) or the
-    /// portable ones (float64) compiled for AVX2 and FMA.
-    ///
-    /// # Safety
-    /// As for `row_avx2`.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx2<const LO: bool>(
-        out: &mut Out<f32>,
-        base: usize,
-        inv_mass: &[f32],
-        alive: Option<&[f32]>,
-        line: &StretchLine<f32>,
-    ) {
-        stretch_limit_line::<_, LO>(Avx2(()), out, base, inv_mass, alive, line)
+    /// The stretch limit's `stretch_limit_line` compiled for a SIMD level, in each
+    /// precision: `name: target features, float type, lanes`.
+    macro_rules! stretch_limit_lines {
+        ($($name:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
+            /// `stretch_limit_line` with these lanes and target features.
+            ///
+            /// # Safety
+            /// The CPU must have the target features.
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn $name<const LO: bool>(
+                out: &mut Out<$t>,
+                base: usize,
+                inv_mass: &[$t],
+                alive: Option<&[$t]>,
+                line: &StretchLine<$t>,
+            ) {
+                stretch_limit_line::<_, LO>($lanes, out, base, inv_mass, alive, line)
+            }
+        )*};
     }
-
-    /// As `stretch_limit_line_avx2`, in float64.
-    ///
-    /// # Safety
-    /// As for `row_avx2`.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx2_f64<const LO: bool>(
-        out: &mut Out<f64>,
-        base: usize,
-        inv_mass: &[f64],
-        alive: Option<&[f64]>,
-        line: &StretchLine<f64>,
-    ) {
-        let s = Portable::<f64>::default();
-        stretch_limit_line::<_, LO>(s, out, base, inv_mass, alive, line)
-    }
-
-    /// The stretch limit's `stretch_limit_line` with AVX-512 lanes (float32).
-    ///
-    /// # Safety
-    /// As for `row_avx512`.
-    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx512<const LO: bool>(
-        out: &mut Out<f32>,
-        base: usize,
-        inv_mass: &[f32],
-        alive: Option<&[f32]>,
-        line: &StretchLine<f32>,
-    ) {
-        stretch_limit_line::<_, LO>(Avx512(()), out, base, inv_mass, alive, line)
-    }
-
-    /// As `stretch_limit_line_avx512`, in float64 with the portable lanes.
-    ///
-    /// # Safety
-    /// As for `row_avx512`.
-    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn stretch_limit_line_avx512_f64<const LO: bool>(
-        out: &mut Out<f64>,
-        base: usize,
-        inv_mass: &[f64],
-        alive: Option<&[f64]>,
-        line: &StretchLine<f64>,
-    ) {
-        let s = Portable::<f64>::default();
-        stretch_limit_line::<_, LO>(s, out, base, inv_mass, alive, line)
+    stretch_limit_lines! {
+        stretch_limit_line_avx2: "avx2,fma", f32, Avx2(());
+        stretch_limit_line_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
+        stretch_limit_line_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+        stretch_limit_line_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
     }
 
     /// One row in float64 with the portable lanes, compiled for the same features
