@@ -2340,62 +2340,30 @@ mod x86 {
         row_variant(Avx512(()), ctx, band, row, out, lo, own);
     }
 
-    /// One band of a lattice with AVX-512 (see `lattice::band_steps`).
-    ///
-    /// # Safety
-    /// As for `row_avx512`.
-    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn lattice_band_avx512(
-        ctx: &lattice::Ctx<f32>,
-        band: &mut lattice::Band<f32>,
-        out: Out<f32>,
-    ) {
-        lattice::band_modes(Avx512(()), ctx, band, out);
+    /// One band of a lattice (see `lattice::band_steps`) compiled for a SIMD level,
+    /// in each precision: `name: target features, float type, lanes`.
+    macro_rules! lattice_bands {
+        ($($name:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
+            /// `lattice::band_modes` with these lanes and target features.
+            ///
+            /// # Safety
+            /// The CPU must have the target features.
+            #[target_feature(enable = $features)]
+            #[inline(never)]
+            pub(super) unsafe fn $name(
+                ctx: &lattice::Ctx<$t>,
+                band: &mut lattice::Band<$t>,
+                out: Out<$t>,
+            ) {
+                lattice::band_modes($lanes, ctx, band, out);
+            }
+        )*};
     }
-
-    /// One band of a lattice with AVX2 (see `lattice::band_steps`).
-    ///
-    /// # Safety
-    /// As for `row_avx2`.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn lattice_band_avx2(
-        ctx: &lattice::Ctx<f32>,
-        band: &mut lattice::Band<f32>,
-        out: Out<f32>,
-    ) {
-        lattice::band_modes(Avx2(()), ctx, band, out);
-    }
-
-    /// One band of a lattice in float64 with the portable lanes, compiled for
-    /// AVX-512.
-    ///
-    /// # Safety
-    /// As for `row_avx512`.
-    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn lattice_band_avx512_f64(
-        ctx: &lattice::Ctx<f64>,
-        band: &mut lattice::Band<f64>,
-        out: Out<f64>,
-    ) {
-        lattice::band_modes(Portable::<f64>::default(), ctx, band, out);
-    }
-
-    /// One band of a lattice in float64 with the portable lanes, compiled for
-    /// AVX2.
-    ///
-    /// # Safety
-    /// As for `row_avx2`.
-    #[target_feature(enable = "avx2,fma")]
-    #[inline(never)]
-    pub(super) unsafe fn lattice_band_avx2_f64(
-        ctx: &lattice::Ctx<f64>,
-        band: &mut lattice::Band<f64>,
-        out: Out<f64>,
-    ) {
-        lattice::band_modes(Portable::<f64>::default(), ctx, band, out);
+    lattice_bands! {
+        lattice_band_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+        lattice_band_avx2: "avx2,fma", f32, Avx2(());
+        lattice_band_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
+        lattice_band_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
     }
 
     /// The tear scan's `row_may_tear`, compiled for AVX2 and FMA.
@@ -2918,9 +2886,10 @@ impl<E: Real> ContactRows<'_, E> {
     /// holds from row `first` on: in blocks of [`CONTACT_LANES`] columns, those
     /// that may touch ([`Reach::may_touch`]) together
     /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
-    /// `resolve` gives it alone). Blocks past the row's last column read ghost
-    /// columns inside its padding (rows are [`BLOCK`] floats longer than their
-    /// blocks) and leave them alone.
+    /// `resolve` gives it alone). A row's last block reads past its last column:
+    /// the grid's ghost columns (its rows are [`BLOCK`] floats longer than their
+    /// blocks), or the next row of a lattice (whose arrays end in ghosts); lanes
+    /// that do not touch are written back what they held.
     fn resolve(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {
         match self.simd {
             #[cfg(target_arch = "x86_64")]
