@@ -2750,67 +2750,105 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
     let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
     let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
     let (longest_v, one_v) = (s.splat(longest), s.splat(one));
-    for j in (0..lanes).step_by(n) {
-        // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
-        // `a + lanes` and `b + lanes` floats (asserted above).
-        let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
-        let d: [S::V; 3] = std::array::from_fn(|k| {
-            let d = s.sub(load(pos[k], a + j), load(pos[k], b + j));
-            if LO {
-                s.add(d, s.sub(load(low[k], a + j), load(low[k], b + j)))
-            } else {
-                d
+    // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
+    // `a + lanes` and `b + lanes` floats (asserted above).
+    let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
+    // The block at `j`: its springs' vectors `d` (first end less second), and the
+    // scale of their corrections (0 where a spring is left alone), and whether
+    // any spring is over the limit.
+    macro_rules! measure {
+        ($j:expr) => {{
+            let j = $j;
+            let d: [S::V; 3] = std::array::from_fn(|k| {
+                let d = s.sub(load(pos[k], a + j), load(pos[k], b + j));
+                if LO {
+                    s.add(d, s.sub(load(low[k], a + j), load(low[k], b + j)))
+                } else {
+                    d
+                }
+            });
+            let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
+            let mut keep = load(line.class.as_ptr(), 0);
+            if j + n > len {
+                let tail: [S::E; BLOCK] =
+                    std::array::from_fn(|l| if j + l < len { one } else { zero });
+                keep = s.mul(keep, load(tail.as_ptr(), 0));
             }
-        });
-        let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
-        let mut keep = load(line.class.as_ptr(), 0);
-        if j + n > len {
-            let tail: [S::E; BLOCK] = std::array::from_fn(|l| if j + l < len { one } else { zero });
-            keep = s.mul(keep, load(tail.as_ptr(), 0));
-        }
-        if let Some(m) = alive {
-            keep = s.mul(keep, load(m.as_ptr(), j));
-        }
-        let w = s.add(
-            load(inv_mass.as_ptr(), a + j),
-            load(inv_mass.as_ptr(), b + j),
-        );
-        // Positive where the spring is in the class, over the limit and not pinned
-        // at both ends.
-        let over = s.keep_if_positive(w, s.mul_sub(l2, keep, longest2));
-        if !s.any_positive(over) {
-            continue;
-        }
-        // (l - longest) / (l w), with 1 / l from the lanes' reciprocal square root.
-        let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
-        let scale = s.keep_if_positive(over, s.div(shortening, w));
-        for (start, sign) in [(a, zero - one), (b, one)] {
-            let k = s.mul(
-                s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
-                scale,
+            if let Some(m) = alive {
+                keep = s.mul(keep, load(m.as_ptr(), j));
+            }
+            let w = s.add(
+                load(inv_mass.as_ptr(), a + j),
+                load(inv_mass.as_ptr(), b + j),
             );
-            for axis in 0..3 {
-                let t = s.mul(k, d[axis]);
-                let i = start + j;
-                // SAFETY: as above.
-                unsafe {
-                    if LO {
-                        let old = (load(pos[axis], i), load(low[axis], i));
-                        let (hi, lo) = add_double(s, old, t);
-                        s.store(pos[axis].add(i), hi);
-                        s.store(low[axis].add(i), lo);
-                    } else {
-                        s.store(pos[axis].add(i), s.add(load(pos[axis], i), t));
-                    }
-                    let v = s.mul_add(t, inv_dt_v, load(vel[axis], i));
-                    s.store(vel[axis].add(i), v);
-                    if verlet {
-                        let u = s.mul_add(t, inv_dt_v, load(upd[axis], i));
-                        s.store(upd[axis].add(i), u);
+            // Positive where the spring is in the class, over the limit and not
+            // pinned at both ends.
+            let over = s.keep_if_positive(w, s.mul_sub(l2, keep, longest2));
+            // (l - longest) / (l w), with 1 / l from the lanes' reciprocal square root.
+            let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
+            let scale = s.keep_if_positive(over, s.div(shortening, w));
+            (d, scale, s.any_positive(over))
+        }};
+    }
+    // Moves the ends of the block at `j` by their corrections.
+    macro_rules! correct {
+        ($j:expr, $d:expr, $scale:expr) => {{
+            let (j, d, scale) = ($j, $d, $scale);
+            for (start, sign) in [(a, zero - one), (b, one)] {
+                let k = s.mul(
+                    s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
+                    scale,
+                );
+                for axis in 0..3 {
+                    let t = s.mul(k, d[axis]);
+                    let i = start + j;
+                    // SAFETY: as above.
+                    unsafe {
+                        if LO {
+                            let old = (load(pos[axis], i), load(low[axis], i));
+                            let (hi, lo) = add_double(s, old, t);
+                            s.store(pos[axis].add(i), hi);
+                            s.store(low[axis].add(i), lo);
+                        } else {
+                            s.store(pos[axis].add(i), s.add(load(pos[axis], i), t));
+                        }
+                        let v = s.mul_add(t, inv_dt_v, load(vel[axis], i));
+                        s.store(vel[axis].add(i), v);
+                        if verlet {
+                            let u = s.mul_add(t, inv_dt_v, load(upd[axis], i));
+                            s.store(upd[axis].add(i), u);
+                        }
                     }
                 }
             }
-        }
+        }};
+    }
+    // Blocks four at a time (then two, then one), all measured before any moves,
+    // so that their measurements overlap in the core: a block's springs in the
+    // class share no particle with the next block's, and a lane out of the class
+    // moves nothing, so a block's moves change nothing the next one measured.
+    macro_rules! blocks {
+        ($j:expr; $($k:tt)+) => {{
+            let j = $j;
+            let m = ($(measure!(j + $k * n),)+);
+            $(
+                if m.$k.2 {
+                    correct!(j + $k * n, m.$k.0, m.$k.1);
+                }
+            )+
+        }};
+    }
+    let mut j = 0;
+    while j + 3 * n < lanes {
+        blocks!(j; 0 1 2 3);
+        j += 4 * n;
+    }
+    if j + n < lanes {
+        blocks!(j; 0 1);
+        j += 2 * n;
+    }
+    if j < lanes {
+        blocks!(j; 0);
     }
 }
 
