@@ -2777,23 +2777,24 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
             if let Some(m) = alive {
                 keep = s.mul(keep, load(m.as_ptr(), j));
             }
-            let w = s.add(
-                load(inv_mass.as_ptr(), a + j),
-                load(inv_mass.as_ptr(), b + j),
-            );
-            // Positive where the spring is in the class, over the limit and not
-            // pinned at both ends.
-            let over = s.keep_if_positive(w, s.mul_sub(l2, keep, longest2));
-            // (l - longest) / (l w), with 1 / l from the lanes' reciprocal square root.
-            let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
-            let scale = s.keep_if_positive(over, s.div(shortening, w));
-            (d, scale, s.any_positive(over))
+            // Positive where the spring is in the class and over the limit.
+            let over = s.mul_sub(l2, keep, longest2);
+            (d, l2, over, s.any_positive(over))
         }};
     }
     // Moves the ends of the block at `j` by their corrections.
     macro_rules! correct {
-        ($j:expr, $d:expr, $scale:expr) => {{
-            let (j, d, scale) = ($j, $d, $scale);
+        ($j:expr, $d:expr, $l2:expr, $over:expr) => {{
+            let (j, d, l2, over) = ($j, $d, $l2, $over);
+            let w = s.add(
+                load(inv_mass.as_ptr(), a + j),
+                load(inv_mass.as_ptr(), b + j),
+            );
+            // Positive where a spring over the limit is not pinned at both ends.
+            let over = s.keep_if_positive(w, over);
+            // (l - longest) / (l w), with 1 / l from the lanes' reciprocal square root.
+            let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
+            let scale = s.keep_if_positive(over, s.div(shortening, w));
             for (start, sign) in [(a, zero - one), (b, one)] {
                 let k = s.mul(
                     s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
@@ -2832,8 +2833,8 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
             let j = $j;
             let m = ($(measure!(j + $k * n),)+);
             $(
-                if m.$k.2 {
-                    correct!(j + $k * n, m.$k.0, m.$k.1);
+                if m.$k.3 {
+                    correct!(j + $k * n, m.$k.0, m.$k.1, m.$k.2);
                 }
             )+
         }};
