@@ -2708,9 +2708,9 @@ impl<E: Real> StretchLine<E> {
 
 /// Corrects the springs of `line` that are longer than `line.longest` as
 /// [`constraints::length_correction`] does, in `out` (the state's arrays from array
-/// index `base` on), in blocks of `S::LANES` springs: a block's lengths, and when
-/// one of them is over the limit, its corrections and at once the moves of its
-/// first ends and of its second ends. Each particle has at most one spring in a
+/// index `base` on), in blocks of `S::LANES` springs, four blocks' lengths at a
+/// time, then for each block with a spring over the limit its corrections and at
+/// once the moves of its first ends and of its second ends. Each particle has at most one spring in a
 /// class, so the moves do not interact: a lane out of the class (or past the
 /// line, or a spring that tore: 0 in `alive`, the direction's mask, when some did)
 /// gets a move of 0, which leaves its particle as it was. A move `δ` adds `δ / h`
