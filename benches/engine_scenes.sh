@@ -23,6 +23,7 @@ CASES=(
   "bench-wind (drag)|--scene bench-wind"
   "  + Verlet|--scene bench-wind --set integrator=\"verlet\""
   "  + Verlet, 10% stretch limit (sheet)|--scene bench-wind --set integrator=\"verlet\" --set stretch_limit=0.1 --set gust=1"
+  "sheet (the scene itself)|--scene sheet"
 )
 
 simd=$(grep -qw avx512f /proc/cpuinfo && echo AVX-512 || (grep -qw avx2 /proc/cpuinfo && echo AVX2 || echo baseline))

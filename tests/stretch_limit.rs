@@ -103,3 +103,32 @@ fn the_fast_engine_agrees_with_the_f64_engine_under_the_limit() {
     assert!(moved > 0.01, "{moved}");
     assert!(apart < 2e-6, "{apart}");
 }
+
+#[test]
+fn far_from_the_origin_the_limit_still_sees_every_spring_over_it() {
+    // 1 km out, float32 positions resolve only 6e-5 m, so the engine keeps
+    // double-float ones (`grid-mixed`) and tests a block's springs on their high
+    // parts first, with a margin for the low parts. A margin too small would skip
+    // springs barely over the limit; the cloth would then part from the f64
+    // engine's by far more than near the origin.
+    let far = |fast: bool| {
+        let mut system = build(
+            "bench",
+            &[
+                "width=48",
+                "height=48",
+                "stretch_limit=0.1",
+                "origin=1000,1001,1000",
+            ],
+        );
+        system.set_fast_path(fast);
+        system
+    };
+    let (mut fast, mut exact) = (far(true), far(false));
+    assert_eq!(fast.engine().name(), "grid-mixed");
+    fast.run(240).unwrap();
+    exact.run(240).unwrap();
+    let apart = max_distance(fast.positions(), exact.positions());
+    println!("apart {apart:e} m");
+    assert!(apart < 2e-6, "{apart}");
+}

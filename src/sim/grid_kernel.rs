@@ -1614,6 +1614,13 @@ impl<E: Real> Kernel<E> {
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
         let inv_dt = E::of(1.0 / dt);
         let compensated = self.params.compensated;
+        // With double-float positions, how far the high parts' difference may be
+        // from a spring's length, with room to spare: see `StretchLine::near2`.
+        let slack = if compensated {
+            16.0 * largest_magnitude(self.simd, &self.cur.x) * f32::EPSILON as f64
+        } else {
+            0.0
+        };
         for (d, ((dr, dc), rest, present, _)) in self.stencil().into_iter().enumerate() {
             // Columns c with both ends on the cloth: 0 <= c + dc < w.
             let c0 = (-dc).max(0) as usize;
@@ -1622,6 +1629,8 @@ impl<E: Real> Kernel<E> {
                 continue;
             }
             let longest = E::of((1.0 + tau) * rest);
+            let near = ((1.0 + tau) * rest - slack).max(0.0);
+            let near2 = E::of(near * near * (1.0 - 1.0 / 65536.0));
             for colour in 0..2 {
                 // Springs along rows alternate in runs of `dc` columns, the others'
                 // rows in runs of `dr` rows: rows `2 dr m + dr colour + j`, j < dr.
@@ -1632,6 +1641,7 @@ impl<E: Real> Kernel<E> {
                     len,
                     class,
                     longest,
+                    near2,
                     inv_dt,
                     compensated,
                 };
@@ -2311,8 +2321,9 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, ContactRows, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine, lattice,
-        row_may_tear, row_may_touch, row_variant, stretch_limit_line,
+        Band, ContactRows, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine,
+        largest_magnitude_bits, lattice, row_may_tear, row_may_touch, row_variant,
+        stretch_limit_line,
     };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -2378,6 +2389,15 @@ mod x86 {
         scan2: E,
     ) -> bool {
         row_may_tear(state, ends, alive, scan2)
+    }
+
+    /// `largest_magnitude_bits`, compiled for AVX2.
+    ///
+    /// # Safety
+    /// As for `row_avx2`.
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn largest_magnitude_bits_avx2(bits: &[u32]) -> u32 {
+        largest_magnitude_bits(bits)
     }
 
     /// The contact scan's `row_may_touch`, compiled for AVX2 and FMA.
@@ -2689,6 +2709,15 @@ struct StretchLine<E> {
     /// 1 for the lanes of a block in the class, else 0 (see [`StretchLine::class`]).
     class: [E; BLOCK],
     longest: E,
+    /// With double-float positions, a squared length under which the high parts'
+    /// difference shows a spring shorter than `longest` whatever the low parts: a
+    /// low part is at most half an ulp of its high part, so the two ends' low parts
+    /// and the high parts' subtraction put the difference at most `4 R 2^-24` per
+    /// coordinate from the spring's vector, for coordinates of magnitude up to `R`
+    /// (which a pass does not raise: it moves a particle towards the other end of
+    /// a spring). `near2` is `(longest - 16 R 2^-23)²`, less 2^-16 of it for the
+    /// float32 rounding of the squared lengths.
+    near2: E,
     inv_dt: E,
     compensated: bool,
 }
@@ -2709,8 +2738,10 @@ impl<E: Real> StretchLine<E> {
 /// Corrects the springs of `line` that are longer than `line.longest` as
 /// [`constraints::length_correction`] does, in `out` (the state's arrays from array
 /// index `base` on), in blocks of `S::LANES` springs, four blocks' lengths at a
-/// time, then for each block with a spring over the limit its corrections and at
-/// once the moves of its first ends and of its second ends. Each particle has at most one spring in a
+/// time (with double-float positions, from the high parts first, and from both
+/// parts only when those come near the limit: [`StretchLine::near2`]), then for
+/// each block with a spring over the limit its corrections and at once the moves
+/// of its first ends and of its second ends. Each particle has at most one spring in a
 /// class, so the moves do not interact: a lane out of the class (or past the
 /// line, or a spring that tore: 0 in `alive`, the direction's mask, when some did)
 /// gets a move of 0, which leaves its particle as it was. A move `δ` adds `δ / h`
@@ -2749,6 +2780,7 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
     let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
     let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
     let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
+    let (near2, zero_v) = (s.splat(line.near2), s.splat(zero));
     let (longest_v, one_v) = (s.splat(longest), s.splat(one));
     // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
     // `a + lanes` and `b + lanes` floats (asserted above).
@@ -2756,18 +2788,17 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
     // The block at `j`: its springs' vectors `d` (first end less second), and the
     // scale of their corrections (0 where a spring is left alone), and whether
     // any spring is over the limit.
+    macro_rules! length2 {
+        ($d:expr) => {{
+            let d = $d;
+            s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])))
+        }};
+    }
     macro_rules! measure {
         ($j:expr) => {{
             let j = $j;
-            let d: [S::V; 3] = std::array::from_fn(|k| {
-                let d = s.sub(load(pos[k], a + j), load(pos[k], b + j));
-                if LO {
-                    s.add(d, s.sub(load(low[k], a + j), load(low[k], b + j)))
-                } else {
-                    d
-                }
-            });
-            let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
+            let high: [S::V; 3] =
+                std::array::from_fn(|k| s.sub(load(pos[k], a + j), load(pos[k], b + j)));
             let mut keep = load(line.class.as_ptr(), 0);
             if j + n > len {
                 let tail: [S::E; BLOCK] =
@@ -2777,9 +2808,22 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
             if let Some(m) = alive {
                 keep = s.mul(keep, load(m.as_ptr(), j));
             }
-            // Positive where the spring is in the class and over the limit.
-            let over = s.mul_sub(l2, keep, longest2);
-            (d, l2, over, s.any_positive(over))
+            if LO && !s.any_positive(s.mul_sub(length2!(high), keep, near2)) {
+                // The high parts alone show every spring within the limit.
+                (high, zero_v, zero_v, false)
+            } else {
+                let d: [S::V; 3] = if LO {
+                    std::array::from_fn(|k| {
+                        s.add(high[k], s.sub(load(low[k], a + j), load(low[k], b + j)))
+                    })
+                } else {
+                    high
+                };
+                let l2 = length2!(d);
+                // Positive where the spring is in the class and over the limit.
+                let over = s.mul_sub(l2, keep, longest2);
+                (d, l2, over, s.any_positive(over))
+            }
         }};
     }
     // Moves the ends of the block at `j` by their corrections.
@@ -3083,6 +3127,36 @@ fn row_may_touch<E: Real>(
         any |= u8::from(reach.may_touch([x[j], y[j], z[j]], w[j]));
     }
     any != 0
+}
+
+/// The largest magnitude of the coordinates in `arrays` (infinite when one is not
+/// finite, and for float64 arrays, which have no low parts to bound).
+fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
+    let mut bits = 0;
+    for a in arrays {
+        let Ok(a) = bytemuck::try_cast_slice::<E, u32>(a.as_slice()) else {
+            return f64::INFINITY;
+        };
+        bits = bits.max(match simd {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2.
+            SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe { x86::largest_magnitude_bits_avx2(a) },
+            _ => largest_magnitude_bits(a),
+        });
+    }
+    match f32::from_bits(bits) {
+        m if m.is_nan() => f64::INFINITY,
+        m => m as f64,
+    }
+}
+
+/// The largest of the float32 bit patterns `bits` with the sign bit cleared: the
+/// bits of the largest magnitude, as the bits of floats of one sign order as
+/// their magnitudes do (a NaN's above infinity's). A plain reduction for the
+/// compiler to vectorise.
+#[inline(always)]
+fn largest_magnitude_bits(bits: &[u32]) -> u32 {
+    bits.iter().fold(0, |m, &b| m.max(b & !(1 << 31)))
 }
 
 /// [`row_may_touch`] with the best code this CPU has.
