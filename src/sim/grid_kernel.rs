@@ -2741,8 +2741,8 @@ impl<E: Real> StretchLine<E> {
 /// time (with double-float positions, from the high parts first, and from both
 /// parts only when those come near the limit: [`StretchLine::near2`]), then for
 /// each block with a spring over the limit its corrections and at once the moves
-/// of its first ends and of its second ends. Each particle has at most one spring in a
-/// class, so the moves do not interact: a lane out of the class (or past the
+/// of its first ends and of its second ends. Each particle has at most one spring
+/// in a class, so the moves do not interact: a lane out of the class (or past the
 /// line, or a spring that tore: 0 in `alive`, the direction's mask, when some did)
 /// gets a move of 0, which leaves its particle as it was. A move `δ` adds `δ / h`
 /// to the velocity (and to Verlet's `u`). The lanes past `len` reach ghost columns
@@ -2785,15 +2785,17 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
     // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
     // `a + lanes` and `b + lanes` floats (asserted above).
     let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
-    // The block at `j`: its springs' vectors `d` (first end less second), and the
-    // scale of their corrections (0 where a spring is left alone), and whether
-    // any spring is over the limit.
+    // Squared lengths of the vectors `d`.
     macro_rules! length2 {
         ($d:expr) => {{
             let d = $d;
             s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])))
         }};
     }
+    // The block at `j`: its springs' vectors `d` (first end less second), their
+    // squared lengths, positive where a spring is in the class and over the limit,
+    // and whether any is (with the high parts' vectors and zeros when, with
+    // double-float positions, those alone show none near the limit).
     macro_rules! measure {
         ($j:expr) => {{
             let j = $j;
