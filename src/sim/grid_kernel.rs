@@ -3104,7 +3104,8 @@ impl<E: Real> Reach<E> {
         let [cx, cy, cz] = self.center;
         let (dx, dy, dz) = (x - cx, y - cy, z - cz);
         let near = dx * dx + dy * dy + dz * dz < self.reach2;
-        w > E::ZERO && (y < self.ground || near)
+        // `&` and `|`, not `&&` and `||`: no branches, for the compiler to vectorise.
+        (w > E::ZERO) & ((y < self.ground) | near)
     }
 }
 
