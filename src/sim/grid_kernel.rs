@@ -3040,11 +3040,25 @@ impl<E: Real> ContactRows<'_, E> {
                 ];
                 for (a, (to, v_new, v)) in axes.into_iter().enumerate() {
                     let (p, q) = (&mut pos[a][j..j + N], &mut lows[a][j..j + N]);
-                    for l in 0..N {
-                        let (hi, lo) = position_parts::<E>(to.0[l], self.compensated);
-                        p[l] = if moved[l] { hi } else { p[l] };
-                        q[l] = if moved[l] { lo } else { q[l] };
-                    }
+                    // Both parts of every lane, with one branch on `compensated`,
+                    // and both arrays read before either is written: with a branch
+                    // in each lane, or `p` and `q` read and written in turn (two
+                    // arrays that may overlap, to the compiler), it wrote lane by
+                    // lane.
+                    let hi: [E; N] = std::array::from_fn(|l| E::of(to.0[l]));
+                    let lo: [E; N] = if self.compensated {
+                        std::array::from_fn(|l| E::of(to.0[l] - hi[l].f64()))
+                    } else {
+                        [E::ZERO; N]
+                    };
+                    let (old_hi, old_lo): ([E; N], [E; N]) =
+                        (std::array::from_fn(|l| p[l]), std::array::from_fn(|l| q[l]));
+                    let hi: [E; N] =
+                        std::array::from_fn(|l| if moved[l] { hi[l] } else { old_hi[l] });
+                    let lo: [E; N] =
+                        std::array::from_fn(|l| if moved[l] { lo[l] } else { old_lo[l] });
+                    p.copy_from_slice(&hi);
+                    q.copy_from_slice(&lo);
                     let dv: [E; N] = std::array::from_fn(|l| E::of(v_new.0[l] - v.0[l]));
                     let speed = &mut vel[a][j..j + N];
                     for l in 0..N {
