@@ -1607,8 +1607,8 @@ impl<E: Real> Kernel<E> {
     /// over the colour classes of [`super::springs::constraint_order`], the f64
     /// engine's order, each spring corrected as [`constraints::length_correction`]
     /// does. No two springs of a class share a particle, so a class's springs from
-    /// one row are corrected together ([`stretch_limit_line`]), and its rows split
-    /// between two threads (`parallel`) with the same result as on one.
+    /// one row are corrected together ([`stretch_limit_line`]); with `parallel`,
+    /// most rows by two threads in one hand-over, with the same result as on one.
     fn stretch_limit_pass(&mut self, tau: f64, dt: f64, parallel: bool, duo: Option<&Duo>) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
@@ -1621,64 +1621,90 @@ impl<E: Real> Kernel<E> {
         } else {
             0.0
         };
-        for (d, ((dr, dc), rest, present, _)) in self.stencil().into_iter().enumerate() {
+        // The sweeps in their order: each direction's two colour classes.
+        let stencil = self.stencil();
+        let sweeps: [Option<Sweep<E>>; 12] = std::array::from_fn(|k| {
+            let (d, colour) = (k / 2, k % 2);
+            let ((dr, dc), rest, present, _) = stencil[d];
             // Columns c with both ends on the cloth: 0 <= c + dc < w.
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
             if !present || len == 0 || dr >= h {
-                continue;
+                return None;
             }
-            let longest = E::of((1.0 + tau) * rest);
             let near = ((1.0 + tau) * rest - slack).max(0.0);
-            let near2 = E::of(near * near * (1.0 - 1.0 / 65536.0));
-            for colour in 0..2 {
-                // Springs along rows alternate in runs of `dc` columns, the others'
-                // rows in runs of `dr` rows: rows `2 dr m + dr colour + j`, j < dr.
-                let class = StretchLine::class(c0, (dr == 0).then_some((colour, dc)));
-                let line = |r: usize| StretchLine {
-                    a: r * st + c0,
-                    b: ((r + dr) * st + c0).wrapping_add_signed(dc),
+            Some(Sweep {
+                direction: d,
+                dr,
+                dc,
+                c0,
+                colour,
+                rows: h - dr,
+                line: StretchLine {
+                    a: 0,
+                    b: 0,
                     len,
-                    class,
-                    longest,
-                    near2,
+                    class: StretchLine::class(c0, (dr == 0).then_some((colour, dc))),
+                    longest: E::of((1.0 + tau) * rest),
+                    near2: E::of(near * near * (1.0 - 1.0 / 65536.0)),
                     inv_dt,
                     compensated,
-                };
-                let in_class = |r: &usize| dr == 0 || (r / dr) % 2 == colour;
-                // A split at the start of a run of the colour's rows (or past the
-                // last row): the rows above it move only rows above it.
-                let split = if dr == 0 {
-                    h / 2
-                } else {
-                    (h / 2).next_multiple_of(2 * dr) + colour * dr
+                },
+            })
+        });
+        let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
+        let torn = self.torn.as_ref();
+        // The lines of every sweep that `keep` keeps, in the sweeps' order, in `out`
+        // (the state's arrays from row `first` on).
+        let run =
+            |out: &mut Out<E>, first: usize, keep: &dyn Fn(usize, &Sweep<E>, usize) -> bool| {
+                for (k, sweep) in sweeps.iter().enumerate() {
+                    let Some(sweep) = sweep else { continue };
+                    let alive = torn.map(|t| t.springs[sweep.direction].as_slice());
+                    for r in sweep.lines().filter(|&r| keep(k, sweep, r)) {
+                        let line = sweep.line_at(r, st);
+                        E::stretch_line(simd, out, first * st, inv_mass, alive, &line);
+                    }
                 }
-                .min(h);
-                let rows = |range: std::ops::Range<usize>| range.start..range.end.min(h - dr);
-                let inv_mass = self.inv_mass.as_slice();
-                let alive = self.torn.as_ref().map(|t| t.springs[d].as_slice());
-                let out = self.cur.rows();
-                let simd = self.simd;
-                let run = |out: &mut Out<E>, base: usize, rows: std::ops::Range<usize>| {
-                    for r in rows.filter(in_class) {
-                        E::stretch_line(simd, out, base, inv_mass, alive, &line(r));
-                    }
-                };
-                if parallel {
-                    let (mut lo, mut hi) = out.split_at(split * st);
-                    let mut second = || run(&mut hi, split * st, rows(split..h));
-                    let first = || run(&mut lo, 0, rows(0..split));
-                    match duo {
-                        Some(duo) => duo.fork(&mut second, first),
-                        None => {
-                            rayon::join(first, second);
-                        }
-                    }
-                } else {
-                    run(&mut { out }, 0, rows(0..h));
+            };
+        if !parallel {
+            run(&mut self.cur.rows(), 0, &|_, _, _| true);
+            return;
+        }
+        // Two threads and one hand-over (a hand-over per sweep cost more than the
+        // sweep's half on this 2-core machine). Lines of different sweeps that
+        // share a row must run in the sweeps' order (lines of one sweep share no
+        // particle). The top thread runs sweep k's lines wholly above row
+        // `above[k]`, the bottom thread its lines from row `below[k]` on, each in
+        // its own rows; then this thread runs the lines left, in order. The bounds
+        // start at the middle row and move apart by each sweep's `dr`, so a line
+        // left over from sweep k (rows r to r + dr, with r + dr >= above[k] and
+        // r < below[k]) shares no row with any later sweep's line that the threads
+        // ran before it, nor with any line of theirs that should have seen it.
+        let split = h / 2;
+        let mut above = [split; 12];
+        let mut below = [split; 12];
+        for k in 1..12 {
+            let dr = sweeps[k - 1].as_ref().map_or(0, |s| s.dr);
+            above[k] = above[k - 1].saturating_sub(dr);
+            below[k] = below[k - 1] + dr;
+        }
+        let in_top = |k: usize, sweep: &Sweep<E>, r: usize| r + sweep.dr < above[k];
+        let in_bottom = |k: usize, _: &Sweep<E>, r: usize| r >= below[k];
+        {
+            let (mut top, mut bottom) = self.cur.rows().split_at(split * st);
+            let mut second = || run(&mut bottom, split, &in_bottom);
+            let first = || run(&mut top, 0, &in_top);
+            match duo {
+                Some(duo) => duo.fork(&mut second, first),
+                None => {
+                    rayon::join(first, second);
                 }
             }
         }
+        let rest =
+            |k: usize, sweep: &Sweep<E>, r: usize| !in_top(k, sweep, r) && !in_bottom(k, sweep, r);
+        run(&mut self.cur.rows(), 0, &rest);
     }
 
     /// Moves the particle at array index `i` to `to` (m) after a step of `dt`,
@@ -2732,6 +2758,39 @@ impl<E: Real> StretchLine<E> {
             Some((colour, dc)) if ((c0 + l) / dc.unsigned_abs()) % 2 != colour => E::ZERO,
             _ => E::ONE,
         })
+    }
+}
+
+/// One sweep of the stretch limit: the springs of one stencil direction `(dr, dc)`
+/// in one colour class, a [`StretchLine`] per row.
+struct Sweep<E> {
+    /// Index of the direction in the stencil (and of its tear masks).
+    direction: usize,
+    dr: usize,
+    dc: isize,
+    /// First column with both ends on the cloth.
+    c0: usize,
+    colour: usize,
+    /// Rows with both ends on the cloth: `0 .. rows`.
+    rows: usize,
+    /// The line of row 0 (its `a` and `b` set per row by [`Sweep::line_at`]).
+    line: StretchLine<E>,
+}
+
+impl<E: Real> Sweep<E> {
+    /// The rows whose springs are in the class: every row along rows (the class
+    /// is a pattern of columns), else rows `2 dr m + dr colour + j`, `j < dr`.
+    fn lines(&self) -> impl Iterator<Item = usize> + '_ {
+        (0..self.rows).filter(|r| self.dr == 0 || (r / self.dr) % 2 == self.colour)
+    }
+
+    /// The line of row `r` (rows `stride` floats apart).
+    fn line_at(&self, r: usize, stride: usize) -> StretchLine<E> {
+        StretchLine {
+            a: r * stride + self.c0,
+            b: ((r + self.dr) * stride + self.c0).wrapping_add_signed(self.dc),
+            ..self.line
+        }
     }
 }
 
