@@ -770,8 +770,6 @@ struct Kernel<E: Real> {
     torn_log: Vec<(usize, usize)>,
     /// The tear scan's verdict per stencil direction and row (scratch).
     tear_rows: Vec<bool>,
-    /// The contact scan's verdict per row (scratch).
-    contact_rows: Vec<bool>,
 }
 
 /// Which kind of spring each stencil direction holds, as an index into
@@ -981,7 +979,6 @@ impl<E: Real> Kernel<E> {
             torn: None,
             torn_log: Vec::new(),
             tear_rows: Vec::new(),
-            contact_rows: Vec::new(),
             grid,
             spec,
         }
@@ -1338,61 +1335,28 @@ impl<E: Real> Kernel<E> {
     }
 
     /// The colliders' contact of every free particle that touches one, as the f64
-    /// engine resolves it ([`constraints::Contact::resolve`]). A scan of the rows
-    /// (vectorised, on the pool's threads) finds those with a particle that may
-    /// touch ([`Reach::may_touch`]); only their particles are resolved, in particle
-    /// order. A particle out of reach would leave `resolve` unchanged, so skipping
-    /// it changes nothing.
+    /// engine resolves it ([`constraints::Contact::resolve`]), on the pool's two
+    /// threads when it has them: see [`ContactRows`].
     fn resolve_contact(
         &mut self,
         contact: &constraints::Contact,
         parallel: bool,
         duo: Option<&Duo>,
     ) {
-        let verlet = self.params.verlet;
-        let reach = Reach::of(contact);
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let mut rows = std::mem::take(&mut self.contact_rows);
-        rows.clear();
-        rows.resize(h, false);
-        // With `duo` the rows are scanned and resolved in two halves, the second
-        // on the serving thread; with `parallel` (the pool free) by rayon.
         let large = w * h >= PARALLEL_MIN_PARTICLES;
         let split = h / 2;
-        {
-            let (cur, inv_mass, simd) = (&self.cur, self.inv_mass.as_slice(), self.simd);
-            let scan = |first: usize, flags: &mut [bool]| {
-                for (k, flag) in flags.iter_mut().enumerate() {
-                    let r = first + k;
-                    *flag = row_may_touch_dispatch(simd, cur, inv_mass, (r * st, w), &reach);
-                }
-            };
-            match duo {
-                Some(duo) if large => {
-                    let (top, bottom) = rows.split_at_mut(split);
-                    duo.fork(&mut || scan(split, bottom), || scan(0, top));
-                }
-                _ if parallel && large => {
-                    use rayon::prelude::*;
-                    rows.par_chunks_mut(8)
-                        .enumerate()
-                        .for_each(|(k, flags)| scan(8 * k, flags));
-                }
-                _ => scan(0, &mut rows),
-            }
-        }
-        // The flagged rows' particles, in two halves of the rows on two threads
-        // when allowed (each particle's resolution is its own: the same results).
+        // In two halves of the rows on two threads when allowed (each particle's
+        // resolution is its own: the same results).
         let ctx = ContactRows {
             simd: self.simd,
-            flags: &rows,
             width: w,
             stride: st,
             inv_mass: self.inv_mass.as_slice(),
-            reach,
+            reach: Reach::of(contact),
             contact,
             compensated: self.params.compensated,
-            verlet,
+            verlet: self.params.verlet,
         };
         let out = self.cur.rows();
         if (parallel || duo.is_some()) && large {
@@ -1408,7 +1372,6 @@ impl<E: Real> Kernel<E> {
         } else {
             ctx.resolve(&mut { out }, 0, 0..h);
         }
-        self.contact_rows = rows;
     }
 
     /// The stencil in the order the springs sort (the f64 engine's order): (row,
@@ -2347,9 +2310,8 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, ContactRows, Ctx, Out, Portable, Reach, Real, Simd, State, StretchLine,
-        largest_magnitude_bits, lattice, row_may_tear, row_may_touch, row_variant,
-        stretch_limit_line,
+        Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, StretchLine,
+        largest_magnitude_bits, lattice, row_may_tear, row_variant, stretch_limit_line,
     };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -2424,20 +2386,6 @@ mod x86 {
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn largest_magnitude_bits_avx2(bits: &[u32]) -> u32 {
         largest_magnitude_bits(bits)
-    }
-
-    /// The contact scan's `row_may_touch`, compiled for AVX2 and FMA.
-    ///
-    /// # Safety
-    /// As for `row_avx2`.
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn row_may_touch_avx2<E: Real>(
-        state: &State<E>,
-        inv_mass: &[E],
-        row: (usize, usize),
-        reach: &Reach<E>,
-    ) -> bool {
-        row_may_touch(state, inv_mass, row, reach)
     }
 
     /// Contact with friction (`ContactRows::resolve`), compiled for AVX2 and FMA.
@@ -3011,8 +2959,6 @@ fn row_may_tear<E: Real>(
 /// What resolving the contacts of flagged rows reads ([`Kernel::resolve_contact`]).
 struct ContactRows<'a, E> {
     simd: SimdLevel,
-    /// Per row, whether a particle of it may touch.
-    flags: &'a [bool],
     width: usize,
     stride: usize,
     inv_mass: &'a [E],
@@ -3026,9 +2972,12 @@ struct ContactRows<'a, E> {
 const CONTACT_LANES: usize = 8;
 
 impl<E: Real> ContactRows<'_, E> {
-    /// Resolves the particles of the flagged rows among `rows`, whose arrays `out`
-    /// holds from row `first` on: in blocks of [`CONTACT_LANES`] columns, those
-    /// that may touch ([`Reach::may_touch`]) together
+    /// Resolves the particles of the rows `rows` that may touch a collider, whose
+    /// arrays `out` holds from row `first` on. A vectorised scan of a row first
+    /// ([`row_may_touch`]) skips the rows with none that may ([`Reach::may_touch`]:
+    /// a particle out of reach would leave `resolve` unchanged, so skipping it
+    /// changes nothing); in the others, in blocks of [`CONTACT_LANES`] columns,
+    /// those that may touch are resolved together
     /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
     /// `resolve` gives it alone). A row's last block reads past its last column:
     /// the grid's ghost columns (its rows are [`BLOCK`] floats longer than their
@@ -3053,8 +3002,14 @@ impl<E: Real> ContactRows<'_, E> {
         let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
         let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
         let lows = [xl, yl, zl];
-        for r in rows.filter(|&r| self.flags[r]) {
+        for r in rows {
             let start = r * self.stride;
+            let row = (r - first) * self.stride..(r - first) * self.stride + self.width;
+            let coordinates = [&pos[0][row.clone()], &pos[1][row.clone()], &pos[2][row]];
+            let masses = &self.inv_mass[start..start + self.width];
+            if !row_may_touch(coordinates, masses, &self.reach) {
+                continue;
+            }
             for c in (0..self.width).step_by(N) {
                 let (i, j) = (start + c, (r - first) * self.stride + c);
                 // Every slice `N` long, in the compiler's sight. (Written out:
@@ -3182,21 +3137,11 @@ impl<E: Real> Reach<E> {
     }
 }
 
-/// Whether any particle from array index `start` on, `len` of them, may touch a
+/// Whether any of the particles at `[x, y, z]` with inverse masses `w` may touch a
 /// collider ([`Reach::may_touch`]). A plain loop over slices for the compiler to
 /// vectorise; the verdict is an integer OR.
 #[inline(always)]
-fn row_may_touch<E: Real>(
-    state: &State<E>,
-    inv_mass: &[E],
-    (start, len): (usize, usize),
-    reach: &Reach<E>,
-) -> bool {
-    let [x, y, z] = state
-        .x
-        .each_ref()
-        .map(|a| &a.as_slice()[start..start + len]);
-    let w = &inv_mass[start..start + len];
+fn row_may_touch<E: Real>([x, y, z]: [&[E]; 3], w: &[E], reach: &Reach<E>) -> bool {
     let (y, z, w) = (&y[..x.len()], &z[..x.len()], &w[..x.len()]);
     let mut any = 0u8;
     for j in 0..x.len() {
@@ -3233,24 +3178,6 @@ fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
 #[inline(always)]
 fn largest_magnitude_bits(bits: &[u32]) -> u32 {
     bits.iter().fold(0, |m, &b| m.max(b & !(1 << 31)))
-}
-
-/// [`row_may_touch`] with the best code this CPU has.
-fn row_may_touch_dispatch<E: Real>(
-    simd: SimdLevel,
-    state: &State<E>,
-    inv_mass: &[E],
-    row: (usize, usize),
-    reach: &Reach<E>,
-) -> bool {
-    match simd {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
-            x86::row_may_touch_avx2(state, inv_mass, row, reach)
-        },
-        _ => row_may_touch(state, inv_mass, row, reach),
-    }
 }
 
 /// A coordinate (m) as the kernel stores it: its high part, and the rest as a low

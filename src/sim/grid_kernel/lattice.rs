@@ -49,8 +49,7 @@ use glam::DVec3;
 
 use super::{
     BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
-    SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
-    row_may_touch_dispatch, spring,
+    SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere, spring,
 };
 use crate::sim::constraints::Contact;
 use crate::sim::duo::{Duo, run_in_pool};
@@ -412,8 +411,6 @@ struct Lattice<E: Real> {
     bands: Vec<Band<E>>,
     pool: Option<rayon::ThreadPool>,
     simd: SimdLevel,
-    /// Per lattice row, whether a particle of it may touch a collider.
-    contact_rows: Vec<bool>,
 }
 
 impl<E: Real> std::fmt::Debug for Lattice<E> {
@@ -451,7 +448,6 @@ impl<E: Real> Lattice<E> {
             bands: make_bands(&geometry, 1),
             pool: None,
             simd: SimdLevel::detect(),
-            contact_rows: Vec::new(),
             spec,
         };
         kernel.reset_masses();
@@ -726,15 +722,8 @@ impl<E: Real> Lattice<E> {
         let rows = (g.shape.height + 1) * g.shape.depth;
         let width = g.shape.width;
         let (cur, inv_mass) = (&mut self.cur, self.inv_mass.as_slice());
-        self.contact_rows.clear();
-        self.contact_rows.extend(
-            (0..rows).map(|r| {
-                row_may_touch_dispatch(self.simd, cur, inv_mass, (r * g.row, width), &reach)
-            }),
-        );
         let rows_of = ContactRows {
             simd: self.simd,
-            flags: &self.contact_rows,
             width,
             stride: g.row,
             inv_mass,
