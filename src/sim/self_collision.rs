@@ -5,12 +5,13 @@
 //!
 //! # Method
 //! * Candidate pairs: every pair no spring joins closer than `reach = h_c + 2
-//!   margin`, with `margin = h_c / 2`, listed in order of `(i, j)`, `i < j` (the
-//!   same list whatever the hash, the engine's cell round-off or the threads). They
-//!   come from a spatial hash (cells of `reach`, filled by a counting sort, after
-//!   Müller's dense hash of Ten Minute Physics) whose three cells `a - 1, a, a + 1`
-//!   along the first axis fall in consecutive buckets, so that a particle reads its
-//!   27 neighbouring cells as 9 contiguous runs of a sorted copy of the positions.
+//!   margin`, with `margin = 3 h_c / 4` ([`MARGIN`]), listed in order of `(i,
+//!   j)`, `i < j` (the same list whatever the hash, the engine's cell round-off or
+//!   the threads). They come from a spatial hash (cells of `reach`, filled by a
+//!   counting sort, after Müller's dense hash of Ten Minute Physics) whose three
+//!   cells `a - 1, a, a + 1` along the first axis fall in consecutive buckets, so
+//!   that a particle reads its 27 neighbouring cells as 9 contiguous runs of a
+//!   sorted copy of the positions.
 //! * The list is rebuilt only when some particle has moved more than `margin`
 //!   since the last rebuild, a move common to the cloth taken off, so a pair
 //!   missing from it cannot have come within `h_c`: each of its particles moved
@@ -20,7 +21,7 @@
 //!   mean is nearly all of it); when the half-diagonal of that range is within
 //!   `margin`, one pass over the particles decides. A cloth at rest or falling
 //!   whole rebuilds never, a folding or draping one every few steps (the 128 x 128
-//!   drape: 88 rebuilds in 960 steps).
+//!   drape: 58 rebuilds in 960 steps, 88 with a margin of `h_c / 2`).
 //! * Each step, every candidate pair closer than `h_c` is pushed apart along its
 //!   line to `h_c`, split by inverse mass (one Gauss-Seidel pass over the list).
 //!   Then friction: the pair's relative move along the contact in this step is cut
@@ -46,7 +47,11 @@
 //! AVX-512, 2 cores shared with another build at load 1.5, 2026-11-23; ±20%): 2.7x
 //! at 64, 2.3x at 128, 2.2x at 256, against 4.1x, 4.3x and 6.1x for the one-thread
 //! pass before (same run). Nearly all of it is the rebuild's search, 88 rebuilds at
-//! 128; the target, 2x at 128, is not reached.
+//! 128; the target, 2x at 128, is not reached. With the margin at 3/4 (2026-11-24,
+//! AVX-512, 2 threads, best of 3, the machine otherwise idle): 1.20x, 1.26x and
+//! 1.32x faster at 64, 128 and 256 (30.0, 60.1 and 85.8 M particle-steps/s), and
+//! the cost against the same drape without self-collision 3.6x, 2.5x and 3.0x (the
+//! drape without it got faster the same day).
 //!
 //! # What it cannot catch
 //! It is particle against particle. A particle can pass through a patch of cloth
@@ -70,6 +75,19 @@ use rayon::prelude::*;
 /// Particles from which [`SelfCollision::apply`] uses the current rayon pool's
 /// threads when it is allowed to: smaller cloths stay on the calling thread.
 pub const PARALLEL_MIN_PARTICLES: usize = 48 * 48;
+
+/// The margin of the candidate list, in thicknesses: its pairs are those closer
+/// than `h_c (1 + 2 MARGIN)`, and it is rebuilt once a particle has moved more than
+/// `MARGIN h_c`. The results do not depend on it (a pair that comes within `h_c` is
+/// on the list either way, in the same order), only the time does: a wider margin
+/// rebuilds less often and lists more pairs. At 3/4, with the drape's and the
+/// fold's `h_c` of 0.8 spacings, the reach is 2 spacings, just short of the
+/// knight's move (`√5` spacings) of the nearest pairs no spring joins, so a flat
+/// cloth lists none. On one core, 1,920 steps of `cloth run --scene drape --set
+/// width=N --set height=N` (AVX-512, the same energies to the last digit), against
+/// 1/2: 1.16x at the default 40, 1.34x at 128, 1.30x at 256; 0.9 (knight's moves
+/// on the list) was slower than 1/2.
+const MARGIN: f64 = 0.75;
 
 /// Particles per block of the move check and of the candidate search. Fixed, so
 /// that the blocks, and with them the pairs' lists, are the same for any number of
@@ -169,7 +187,7 @@ impl SelfCollision {
             return;
         }
         let parallel = parallel && x.len() >= PARALLEL_MIN_PARTICLES;
-        let margin = 0.5 * h_c;
+        let margin = MARGIN * h_c;
         let m = self.moved_more_than(x, margin, parallel);
         if m || self.built_for != h_c {
             self.rebuild(x, h_c + 2.0 * margin, joined, parallel);
@@ -406,5 +424,65 @@ impl SelfCollision {
         } else {
             self.found.iter_mut().enumerate().for_each(search);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points from a small linear congruential generator, each coordinate in
+    /// `[0, scale)`.
+    fn points(n: usize, scale: DVec3, seed: u64) -> Vec<DVec3> {
+        let mut state = seed;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| DVec3::new(next(), next(), next()) * scale)
+            .collect()
+    }
+
+    /// After any moves of up to the margin each (plus one common to all) the list
+    /// is kept, and it holds every pair that has come within `h_c`, as a search of
+    /// every pair finds them; a move past the margin rebuilds it.
+    #[test]
+    fn the_kept_list_holds_every_pair_within_the_thickness() {
+        let (n, h_c) = (1500, 0.05);
+        let margin = MARGIN * h_c;
+        let start = points(n, DVec3::new(1.0, 1.0, 0.2), 7);
+        let mut pass = SelfCollision::default();
+        let still = |i: usize| (start[i], 0.0);
+        pass.apply(&mut start.clone(), still, h_c, 0.0, |_, _| false, false);
+        assert_eq!(pass.rebuilds(), 1);
+        // Each particle moved by 0.9 of the margin in a direction of its own, and
+        // the whole cloth by 3 m (the middle of the moves' range, taken as the
+        // common move, then lies within a tenth of the margin of the 3 m).
+        let moved: Vec<DVec3> = (start.iter().zip(points(n, DVec3::ONE, 11)))
+            .map(|(p, d)| {
+                let d = (d - DVec3::splat(0.5)).normalize_or(DVec3::X);
+                *p + d * (0.9 * margin) + DVec3::new(3.0, 0.0, 0.0)
+            })
+            .collect();
+        assert!(!pass.moved_more_than(&moved, margin, false));
+        let listed: std::collections::HashSet<[u32; 2]> =
+            pass.found.iter().flatten().copied().collect();
+        let mut within = 0;
+        for i in 0..n {
+            for j in i + 1..n {
+                if moved[i].distance(moved[j]) < h_c {
+                    within += 1;
+                    assert!(listed.contains(&[i as u32, j as u32]), "({i}, {j})");
+                }
+            }
+        }
+        assert!(within > 100, "only {within} pairs within h_c");
+        // One particle past the margin: rebuilt.
+        let mut far = moved.clone();
+        far[0] += DVec3::new(0.0, 2.0 * margin, 0.0);
+        assert!(pass.moved_more_than(&far, margin, false));
     }
 }
