@@ -386,14 +386,14 @@ trait Real:
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
     /// Runs one band of a lattice's step, likewise.
     fn lattice_band(ctx: &lattice::Ctx<Self>, band: &mut lattice::Band<Self>, out: Out<Self>);
-    /// Runs [`stretch_limit_line`], likewise.
-    fn stretch_line(
+    /// Runs [`stretch_limit_sweep`], likewise.
+    fn stretch_sweep(
         simd: SimdLevel,
         out: &mut Out<Self>,
         base: usize,
         inv_mass: &[Self],
         alive: Option<&[Self]>,
-        line: &StretchLine<Self>,
+        lines: &SweepLines<Self>,
     );
 }
 
@@ -459,13 +459,13 @@ macro_rules! real {
                     _ => lattice::band_modes(Portable::<$t>::default(), ctx, band, out),
                 }
             }
-            fn stretch_line(
+            fn stretch_sweep(
                 simd: SimdLevel,
                 out: &mut Out<Self>,
                 base: usize,
                 inv_mass: &[Self],
                 alive: Option<&[Self]>,
-                line: &StretchLine<Self>,
+                lines: &SweepLines<Self>,
             ) {
                 fn at<const LO: bool>(
                     simd: SimdLevel,
@@ -473,30 +473,32 @@ macro_rules! real {
                     base: usize,
                     inv_mass: &[$t],
                     alive: Option<&[$t]>,
-                    line: &StretchLine<$t>,
+                    lines: &SweepLines<$t>,
                 ) {
                     match simd {
                         #[cfg(target_arch = "x86_64")]
                         // SAFETY: as above.
                         SimdLevel::Avx512 => unsafe {
-                            x86::$stretch512::<LO>(out, base, inv_mass, alive, line)
+                            x86::$stretch512::<LO>(out, base, inv_mass, alive, lines)
                         },
                         #[cfg(target_arch = "x86_64")]
                         // SAFETY: as above.
                         SimdLevel::Avx2 => unsafe {
-                            x86::$stretch2::<LO>(out, base, inv_mass, alive, line)
+                            x86::$stretch2::<LO>(out, base, inv_mass, alive, lines)
                         },
                         _ => {
                             let portable = Portable::<$t>::default();
-                            stretch_limit_line::<_, LO>(portable, out, base, inv_mass, alive, line)
+                            stretch_limit_sweep::<_, LO>(
+                                portable, out, base, inv_mass, alive, lines,
+                            )
                         }
                     }
                 }
                 // Positions with low parts (`compensated`) or without.
-                if line.compensated {
-                    at::<true>(simd, out, base, inv_mass, alive, line)
+                if lines.sweep.compensated() {
+                    at::<true>(simd, out, base, inv_mass, alive, lines)
                 } else {
-                    at::<false>(simd, out, base, inv_mass, alive, line)
+                    at::<false>(simd, out, base, inv_mass, alive, lines)
                 }
             }
         }
@@ -507,10 +509,10 @@ macro_rules! real {
 // level's features.
 real!(f32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
       lattice: lattice_band_avx512, lattice_band_avx2,
-      stretch: stretch_limit_line_avx512, stretch_limit_line_avx2);
+      stretch: stretch_limit_sweep_avx512, stretch_limit_sweep_avx2);
 real!(f64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
       lattice: lattice_band_avx512_f64, lattice_band_avx2_f64,
-      stretch: stretch_limit_line_avx512_f64, stretch_limit_line_avx2_f64);
+      stretch: stretch_limit_sweep_avx512_f64, stretch_limit_sweep_avx2_f64);
 
 /// 16 floats, so that buffers and padded rows start on a cache line.
 #[derive(Clone, Copy, Debug)]
@@ -1744,7 +1746,7 @@ pub mod lattice;
 mod stretch_limit;
 
 use contact::{ContactRows, Reach};
-use stretch_limit::{StretchLine, largest_magnitude_bits, stretch_limit_line};
+use stretch_limit::{SweepLines, largest_magnitude_bits, stretch_limit_sweep};
 
 impl GridCloth {
     /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the
@@ -2170,8 +2172,8 @@ mod x86 {
     use std::arch::x86_64::*;
 
     use super::{
-        Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, StretchLine,
-        largest_magnitude_bits, lattice, row_may_tear, row_variant, stretch_limit_line,
+        Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines,
+        largest_magnitude_bits, lattice, row_may_tear, row_variant, stretch_limit_sweep,
     };
 
     /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -2278,11 +2280,11 @@ mod x86 {
         ctx.resolve_rows(out, first, rows)
     }
 
-    /// The stretch limit's `stretch_limit_line` compiled for a SIMD level, in each
+    /// The stretch limit's `stretch_limit_sweep` compiled for a SIMD level, in each
     /// precision: `name: target features, float type, lanes`.
-    macro_rules! stretch_limit_lines {
+    macro_rules! stretch_limit_sweeps {
         ($($name:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
-            /// `stretch_limit_line` with these lanes and target features.
+            /// `stretch_limit_sweep` with these lanes and target features.
             ///
             /// # Safety
             /// The CPU must have the target features.
@@ -2293,17 +2295,17 @@ mod x86 {
                 base: usize,
                 inv_mass: &[$t],
                 alive: Option<&[$t]>,
-                line: &StretchLine<$t>,
+                lines: &SweepLines<$t>,
             ) {
-                stretch_limit_line::<_, LO>($lanes, out, base, inv_mass, alive, line)
+                stretch_limit_sweep::<_, LO>($lanes, out, base, inv_mass, alive, lines)
             }
         )*};
     }
-    stretch_limit_lines! {
-        stretch_limit_line_avx2: "avx2,fma", f32, Avx2(());
-        stretch_limit_line_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
-        stretch_limit_line_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
-        stretch_limit_line_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
+    stretch_limit_sweeps! {
+        stretch_limit_sweep_avx2: "avx2,fma", f32, Avx2(());
+        stretch_limit_sweep_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
+        stretch_limit_sweep_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+        stretch_limit_sweep_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
     }
 
     /// One row in float64 with the portable lanes, compiled for the same features

@@ -73,10 +73,13 @@ impl<E: Real> Kernel<E> {
                 for (k, sweep) in sweeps.iter().enumerate() {
                     let Some(sweep) = sweep else { continue };
                     let alive = torn.map(|t| t.springs[sweep.direction].as_slice());
-                    for r in sweep.lines().filter(|&r| keep(k, sweep, r)) {
-                        let line = sweep.line_at(r, st);
-                        E::stretch_line(simd, out, first * st, inv_mass, alive, &line);
-                    }
+                    let keep = |r: usize| keep(k, sweep, r);
+                    let lines = SweepLines {
+                        sweep,
+                        stride: st,
+                        keep: &keep,
+                    };
+                    E::stretch_sweep(simd, out, first * st, inv_mass, alive, &lines);
                 }
             };
         if !parallel {
@@ -122,13 +125,13 @@ impl<E: Real> Kernel<E> {
 
 /// One row's springs of one colour class of the stretch limit: the first ends at
 /// array indices `a .. a + len`, the second ends at `b .. b + len`.
-pub(super) struct StretchLine<E> {
-    pub(super) a: usize,
-    pub(super) b: usize,
-    pub(super) len: usize,
+struct StretchLine<E> {
+    a: usize,
+    b: usize,
+    len: usize,
     /// 1 for the lanes of a block in the class, else 0 (see [`StretchLine::class`]).
-    pub(super) class: [E; BLOCK],
-    pub(super) longest: E,
+    class: [E; BLOCK],
+    longest: E,
     /// With double-float positions, a squared length under which the high parts'
     /// difference shows a spring shorter than `longest` whatever the low parts: a
     /// low part is at most half an ulp of its high part, so the two ends' low parts
@@ -137,9 +140,9 @@ pub(super) struct StretchLine<E> {
     /// (which a pass does not raise: it moves a particle towards the other end of
     /// a spring). `near2` is `(longest - 16 R 2^-23)²`, less 2^-16 of it for the
     /// float32 rounding of the squared lengths.
-    pub(super) near2: E,
-    pub(super) inv_dt: E,
-    pub(super) compensated: bool,
+    near2: E,
+    inv_dt: E,
+    compensated: bool,
 }
 
 impl<E: Real> StretchLine<E> {
@@ -157,7 +160,7 @@ impl<E: Real> StretchLine<E> {
 
 /// One sweep of the stretch limit: the springs of one stencil direction `(dr, dc)`
 /// in one colour class, a [`StretchLine`] per row.
-struct Sweep<E> {
+pub(super) struct Sweep<E> {
     /// Index of the direction in the stencil (and of its tear masks).
     direction: usize,
     dr: usize,
@@ -178,6 +181,11 @@ impl<E: Real> Sweep<E> {
         (0..self.rows).filter(|r| self.dr == 0 || (r / self.dr) % 2 == self.colour)
     }
 
+    /// Whether positions have low parts.
+    pub(super) fn compensated(&self) -> bool {
+        self.line.compensated
+    }
+
     /// The line of row `r` (rows `stride` floats apart).
     fn line_at(&self, r: usize, stride: usize) -> StretchLine<E> {
         StretchLine {
@@ -185,6 +193,30 @@ impl<E: Real> Sweep<E> {
             b: ((r + self.dr) * stride + self.c0).wrapping_add_signed(self.dc),
             ..self.line
         }
+    }
+}
+
+/// The lines of a [`Sweep`] that `keep` keeps (by row), rows `stride` floats apart.
+pub(super) struct SweepLines<'a, E> {
+    pub(super) sweep: &'a Sweep<E>,
+    pub(super) stride: usize,
+    pub(super) keep: &'a dyn Fn(usize) -> bool,
+}
+
+/// [`stretch_limit_line`] on each line of `lines`, in order of rows (one call for
+/// a sweep, where a call per line cost its set-up every 8 blocks at 128 columns).
+#[inline(always)]
+pub(super) fn stretch_limit_sweep<S: Simd, const LO: bool>(
+    s: S,
+    out: &mut Out<S::E>,
+    base: usize,
+    inv_mass: &[S::E],
+    alive: Option<&[S::E]>,
+    lines: &SweepLines<S::E>,
+) {
+    for r in lines.sweep.lines().filter(|&r| (lines.keep)(r)) {
+        let line = lines.sweep.line_at(r, lines.stride);
+        stretch_limit_line::<S, LO>(s, out, base, inv_mass, alive, &line);
     }
 }
 
@@ -201,7 +233,7 @@ impl<E: Real> Sweep<E> {
 /// to the velocity (and to Verlet's `u`). The lanes past `len` reach ghost columns
 /// inside the row's padding (rows are [`BLOCK`] floats longer than their blocks).
 #[inline(always)]
-pub(super) fn stretch_limit_line<S: Simd, const LO: bool>(
+fn stretch_limit_line<S: Simd, const LO: bool>(
     s: S,
     out: &mut Out<S::E>,
     base: usize,
