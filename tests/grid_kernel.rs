@@ -248,3 +248,57 @@ fn every_simd_level_limits_the_stretch_alike() {
         }
     }
 }
+
+/// The divergence check's scan: the largest squared speed and distance from a
+/// centre, as computed here in f64 from the kernel's own arrays (within float32
+/// rounding), in each precision; infinite once a coordinate or a velocity is NaN,
+/// whatever its sign bit, or infinite.
+#[test]
+fn the_runaway_scan_finds_the_largest_speed_and_distance_and_any_nan() {
+    use cloth_sandbox::sim::grid_kernel::Precision;
+    for precision in [Precision::Single, Precision::Double] {
+        let mut spec = GridSpec::peer_bench(16, true);
+        spec.precision = precision;
+        let mut cloth = GridCloth::new(spec);
+        for _ in 0..50 {
+            cloth.step(DT);
+        }
+        let center = DVec3::new(0.3, -0.2, 0.1);
+        let (speed2, dist2) = cloth.extremes(center);
+        let mut x = vec![DVec3::ZERO; cloth.len()];
+        cloth.positions_into(&mut x);
+        let mut v = x.clone();
+        cloth.velocities_into(&mut v);
+        let most = |a: &[f64]| a.iter().copied().fold(0.0, f64::max);
+        let speeds: Vec<f64> = v.iter().map(|v| v.length_squared()).collect();
+        let dists: Vec<f64> = x.iter().map(|x| x.distance_squared(center)).collect();
+        assert!(most(&speeds) > 0.01, "the cloth should be moving");
+        assert!(
+            (speed2 - most(&speeds)).abs() <= 1e-5 * most(&speeds),
+            "{precision:?}"
+        );
+        assert!(
+            (dist2 - most(&dists)).abs() <= 1e-5 * most(&dists),
+            "{precision:?}"
+        );
+        let broken = |i: usize, position: DVec3, velocity: DVec3| {
+            let mut cloth = GridCloth::new(GridSpec {
+                precision,
+                ..GridSpec::peer_bench(16, true)
+            });
+            cloth.set_particle(i, position, velocity);
+            cloth.extremes(center)
+        };
+        let inf = f64::INFINITY;
+        for nan in [f64::NAN, -f64::NAN] {
+            let at = DVec3::new(0.5, 0.5, 0.0);
+            assert_eq!(broken(37, at, DVec3::new(0.0, nan, 0.0)), (inf, inf));
+            assert_eq!(
+                broken(200, DVec3::new(nan, 0.5, 0.0), DVec3::ZERO),
+                (inf, inf)
+            );
+        }
+        assert_eq!(broken(37, DVec3::ZERO, DVec3::new(0.0, inf, 0.0)).0, inf);
+        assert_eq!(broken(200, DVec3::new(0.0, -inf, 0.0), DVec3::ZERO).1, inf);
+    }
+}

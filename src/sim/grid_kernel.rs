@@ -377,9 +377,13 @@ trait Real:
     const EPS2: Self;
     /// `|v_rel|² |2A|²` (m⁶/s²) under which a triangle gives no drag.
     const TINY: Self;
+    /// The float's bits as an unsigned integer.
+    type Bits: Copy + Ord;
     fn of(x: f64) -> Self;
     fn f64(self) -> f64;
     fn sqrt(self) -> Self;
+    fn bits(self) -> Self::Bits;
+    fn from_bits(bits: Self::Bits) -> Self;
     /// `self * a + b`, fused where the build target has FMA (aarch64 always does).
     fn mul_add(self, a: Self, b: Self) -> Self;
     /// Runs one band of a step, with the best code this CPU has for this type.
@@ -399,7 +403,7 @@ trait Real:
 
 /// `Real` for a float type: its constants and the row functions of each SIMD level.
 macro_rules! real {
-    ($t:ident, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
+    ($t:ident, bits: $bits:ty, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
      lattice: $lattice512:ident, $lattice2:ident, stretch: $stretch512:ident, $stretch2:ident) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
@@ -407,6 +411,7 @@ macro_rules! real {
             const LOWEST: Self = $t::MIN;
             const EPS2: Self = $eps2;
             const TINY: Self = $tiny;
+            type Bits = $bits;
             fn of(x: f64) -> Self {
                 x as $t
             }
@@ -415,6 +420,13 @@ macro_rules! real {
             }
             fn sqrt(self) -> Self {
                 $t::sqrt(self)
+            }
+            #[inline(always)]
+            fn bits(self) -> $bits {
+                self.to_bits()
+            }
+            fn from_bits(bits: $bits) -> Self {
+                $t::from_bits(bits)
             }
             #[inline(always)]
             fn mul_add(self, a: Self, b: Self) -> Self {
@@ -507,10 +519,10 @@ macro_rules! real {
 
 // Float32: the intrinsics of `x86`. Float64: the portable lanes compiled for each
 // level's features.
-real!(f32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
+real!(f32, bits: u32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
       lattice: lattice_band_avx512, lattice_band_avx2,
       stretch: stretch_limit_sweep_avx512, stretch_limit_sweep_avx2);
-real!(f64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
+real!(f64, bits: u64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
       lattice: lattice_band_avx512_f64, lattice_band_avx2_f64,
       stretch: stretch_limit_sweep_avx512_f64, stretch_limit_sweep_avx2_f64);
 
@@ -1544,23 +1556,25 @@ impl<E: Real> Kernel<E> {
         let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
         let [vx, vy, vz] = self.cur.v.each_ref().map(Buf::as_slice);
         let [cx, cy, cz] = center.to_array().map(E::of);
-        let (mut speed2, mut dist2) = (E::ZERO, E::ZERO);
-        for i in 0..x.len() {
+        let n = x.len();
+        let (y, z, vx, vy, vz) = (&y[..n], &z[..n], &vx[..n], &vy[..n], &vz[..n]);
+        // A square is at least 0 or NaN, and the bits of floats with the sign bit
+        // clear order as their values do, a NaN's above infinity's (a NaN with
+        // the sign bit set above all): integer maxima, which the compiler
+        // vectorises, give the largest squares and whether any is NaN at once.
+        let (mut speed2, mut dist2) = (E::ZERO.bits(), E::ZERO.bits());
+        for i in 0..n {
             let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
             let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
             let d2 = dx * dx + dy * dy + dz * dz;
-            // NaN fails every comparison: test for it, or the maximum would drop it.
-            if v2.partial_cmp(&v2).is_none() || d2.partial_cmp(&d2).is_none() {
-                return (f64::INFINITY, f64::INFINITY);
-            }
-            if v2 > speed2 {
-                speed2 = v2;
-            }
-            if d2 > dist2 {
-                dist2 = d2;
-            }
+            speed2 = speed2.max(v2.bits());
+            dist2 = dist2.max(d2.bits());
         }
-        (speed2.f64(), dist2.f64())
+        let infinity = E::of(f64::INFINITY).bits();
+        if speed2 > infinity || dist2 > infinity {
+            return (f64::INFINITY, f64::INFINITY);
+        }
+        (E::from_bits(speed2).f64(), E::from_bits(dist2).f64())
     }
 
     fn read_into(&self, arrays: &[Buf<E>; 3], out: &mut [DVec3]) {
