@@ -1553,28 +1553,8 @@ impl<E: Real> Kernel<E> {
     }
 
     fn extremes(&self, center: DVec3) -> (f64, f64) {
-        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
-        let [vx, vy, vz] = self.cur.v.each_ref().map(Buf::as_slice);
-        let [cx, cy, cz] = center.to_array().map(E::of);
-        let n = x.len();
-        let (y, z, vx, vy, vz) = (&y[..n], &z[..n], &vx[..n], &vy[..n], &vz[..n]);
-        // A square is at least 0 or NaN, and the bits of floats with the sign bit
-        // clear order as their values do, a NaN's above infinity's (a NaN with
-        // the sign bit set above all): integer maxima, which the compiler
-        // vectorises, give the largest squares and whether any is NaN at once.
-        let (mut speed2, mut dist2) = (E::ZERO.bits(), E::ZERO.bits());
-        for i in 0..n {
-            let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-            let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            speed2 = speed2.max(v2.bits());
-            dist2 = dist2.max(d2.bits());
-        }
-        let infinity = E::of(f64::INFINITY).bits();
-        if speed2 > infinity || dist2 > infinity {
-            return (f64::INFINITY, f64::INFINITY);
-        }
-        (E::from_bits(speed2).f64(), E::from_bits(dist2).f64())
+        let x = self.cur.x.each_ref().map(Buf::as_slice);
+        runaway_scan(x, self.cur.v.each_ref().map(Buf::as_slice), center)
     }
 
     fn read_into(&self, arrays: &[Buf<E>; 3], out: &mut [DVec3]) {
@@ -2548,6 +2528,41 @@ mod x86 {
             }
         }
     }
+}
+
+/// The largest squared speed (m²/s²) and squared distance from `center` (m²) of
+/// the particles at `x` with velocities `v`, infinite when any is NaN: every fast
+/// engine's cheap scan for the divergence check. A square is at least 0 or NaN,
+/// and the bits of floats with the sign bit clear order as their values do, a
+/// NaN's above infinity's (a NaN with the sign bit set above all): integer maxima,
+/// which the compiler vectorises, give the largest squares and whether any is NaN
+/// at once.
+fn runaway_scan<E: Real>(
+    [x, y, z]: [&[E]; 3],
+    [vx, vy, vz]: [&[E]; 3],
+    center: DVec3,
+) -> (f64, f64) {
+    let [cx, cy, cz] = center.to_array().map(E::of);
+    let n = x.len();
+    let (y, z, vx, vy, vz) = (&y[..n], &z[..n], &vx[..n], &vy[..n], &vz[..n]);
+    let (mut speed2, mut dist2) = (E::ZERO.bits(), E::ZERO.bits());
+    for i in 0..n {
+        let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
+        let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
+        let d2 = dx * dx + dy * dy + dz * dz;
+        speed2 = speed2.max(v2.bits());
+        dist2 = dist2.max(d2.bits());
+    }
+    let infinity = E::of(f64::INFINITY).bits();
+    if speed2 > infinity || dist2 > infinity {
+        return (f64::INFINITY, f64::INFINITY);
+    }
+    (E::from_bits(speed2).f64(), E::from_bits(dist2).f64())
+}
+
+/// [`runaway_scan`] of the mesh engine's float64 arrays.
+pub(crate) fn runaway_scan_f64(x: [&[f64]; 3], v: [&[f64]; 3], center: DVec3) -> (f64, f64) {
+    runaway_scan(x, v, center)
 }
 
 /// Whether any spring from `a .. a + len` to `b .. b + len` (array indices in

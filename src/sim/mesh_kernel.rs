@@ -737,18 +737,10 @@ impl MeshKernel {
     /// The largest squared speed and squared distance from `center`, or infinities
     /// when a value is not finite (for a cheap divergence scan).
     pub fn extremes(&self, center: DVec3) -> (f64, f64) {
-        let (mut speed2, mut dist2) = (0.0f64, 0.0f64);
-        for i in 0..self.len() {
-            let v = DVec3::new(self.v[0][i], self.v[1][i], self.v[2][i]);
-            let d = DVec3::new(self.x[0][i], self.x[1][i], self.x[2][i]) - center;
-            let (v2, d2) = (v.length_squared(), d.length_squared());
-            if v2.is_nan() || d2.is_nan() {
-                return (f64::INFINITY, f64::INFINITY);
-            }
-            speed2 = speed2.max(v2);
-            dist2 = dist2.max(d2);
-        }
-        (speed2, dist2)
+        let n = self.len();
+        let x = self.x.each_ref().map(|a| &a[..n]);
+        let v = self.v.each_ref().map(|a| &a[..n]);
+        super::grid_kernel::runaway_scan_f64(x, v, center)
     }
 
     /// Advances by `n` steps of the parameters' `dt`. On several threads the pool is

@@ -49,7 +49,8 @@ use glam::DVec3;
 
 use super::{
     BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
-    SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere, spring,
+    SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
+    runaway_scan, spring,
 };
 use crate::sim::constraints::Contact;
 use crate::sim::duo::{Duo, run_in_pool};
@@ -666,26 +667,10 @@ impl<E: Real> Lattice<E> {
     /// The largest squared speed and squared distance from `center` of any
     /// particle (infinite if any is NaN).
     fn extremes(&self, center: DVec3) -> (f64, f64) {
-        let [x, y, z] = self.cur.x.each_ref().map(Buf::as_slice);
-        let [vx, vy, vz] = self.cur.v.each_ref().map(Buf::as_slice);
-        let [cx, cy, cz] = center.to_array().map(E::of);
-        let (mut speed2, mut dist2) = (E::ZERO, E::ZERO);
-        for i in 0..self.geometry.blocks {
-            let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-            let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            // NaN fails every comparison: test for it, or the maximum would drop it.
-            if v2.partial_cmp(&v2).is_none() || d2.partial_cmp(&d2).is_none() {
-                return (f64::INFINITY, f64::INFINITY);
-            }
-            if v2 > speed2 {
-                speed2 = v2;
-            }
-            if d2 > dist2 {
-                dist2 = d2;
-            }
-        }
-        (speed2.f64(), dist2.f64())
+        let blocks = self.geometry.blocks;
+        let x = self.cur.x.each_ref().map(|a| &a.as_slice()[..blocks]);
+        let v = self.cur.v.each_ref().map(|a| &a.as_slice()[..blocks]);
+        runaway_scan(x, v, center)
     }
 
     /// Advances `n` steps of `dt` seconds (inside the thread pool once).
