@@ -221,10 +221,11 @@ pub(super) fn stretch_limit_sweep<S: Simd, const LO: bool>(
 }
 
 /// Corrects the springs of `line` that are longer than `line.longest` as
-/// [`crate::sim::constraints::length_correction`] does, in `out` (the state's arrays from array
-/// index `base` on), in blocks of `S::LANES` springs, four blocks' lengths at a
-/// time (with double-float positions, from the high parts first, and from both
-/// parts only when those come near the limit: [`StretchLine::near2`]), then for
+/// [`crate::sim::constraints::length_correction`] does, in `out` (the state's
+/// arrays from array index `base` on), in blocks of `S::LANES` springs, four
+/// blocks' lengths at a time (with double-float positions, from the high parts
+/// first, and from both parts only when those come near the limit:
+/// [`StretchLine::near2`]), then for
 /// each block with a spring over the limit its corrections and at once the moves
 /// of its first ends and of its second ends. Each particle has at most one spring
 /// in a class, so the moves do not interact: a lane out of the class (or past the
