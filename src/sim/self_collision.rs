@@ -10,8 +10,10 @@
 //!   the threads). They come from a spatial hash (cells of `reach`, filled by a
 //!   counting sort, after Müller's dense hash of Ten Minute Physics) whose three
 //!   cells `a - 1, a, a + 1` along the first axis fall in consecutive buckets, so
-//!   that a particle reads its 27 neighbouring cells as 9 contiguous runs of a
-//!   sorted copy of the positions.
+//!   that a particle reads its own cell and the 13 neighbouring cells ahead of it
+//!   (one of each opposite pair) as 6 contiguous runs of a sorted copy of the
+//!   positions: each pair is found once, from one of its particles, not from
+//!   both (1.1-1.2x faster drape and fold than reading all 27 cells).
 //! * The list is rebuilt only when some particle has moved more than `margin`
 //!   since the last rebuild, a move common to the cloth taken off, so a pair
 //!   missing from it cannot have come within `h_c`: each of its particles moved
@@ -98,6 +100,12 @@ const BLOCK: usize = 1024;
 /// rebuild on.
 const PAIRS_PER_PARTICLE: usize = 8;
 
+/// The rows of cells ahead of a cell along the second and third axes, `(db, dc)`:
+/// with the cell `a + 1` of its own row, half of the 26 neighbours, one of each
+/// opposite pair, so that a pair of particles in neighbouring cells is found from
+/// one of them.
+const FORWARD_ROWS: [(i32, i32); 4] = [(0, 1), (1, -1), (1, 0), (1, 1)];
+
 /// The hash's multipliers of the second and third cell coordinates; the first is
 /// added, so that the cells `a - 1, a, a + 1` of a row fall in consecutive buckets.
 const HASH: [u32; 2] = [689_287_499, 283_923_481];
@@ -116,6 +124,9 @@ pub struct SelfCollision {
     /// particles `i` ([`BLOCK`]); in order of `i` then `j` when read block after
     /// block.
     found: Vec<Vec<[u32; 2]>>,
+    /// The pairs each block's particles found at the last rebuild, before they go
+    /// to `found`.
+    found_by_searcher: Vec<Vec<[u32; 2]>>,
     /// Positions at the last rebuild.
     anchor: Vec<DVec3>,
     /// Each block's smallest and largest moves along each axis since the last
@@ -297,10 +308,14 @@ impl SelfCollision {
     /// Cells of about `reach` are hashed to buckets so that the three cells of a
     /// row along the first axis, `a - 1, a, a + 1`, fall in consecutive buckets; a
     /// counting sort puts the particles, with their positions and cells, in bucket
-    /// order. Each particle then reads its 27 neighbouring cells as 9 runs of three
-    /// buckets, contiguous in the sorted copy, and keeps the partners after it. The
-    /// particles are searched by block ([`BLOCK`]), each block's pairs in its own
-    /// list, on the pool's threads with `parallel`.
+    /// order. Each particle then reads the partners after it in its own bucket,
+    /// and the 13 cells ahead of its cell ([`FORWARD_ROWS`] and the next cell of
+    /// its row) as 5 runs of buckets, contiguous in the sorted copy: a pair in
+    /// neighbouring cells is found from the particle whose cell the other's lies
+    /// ahead of. The particles are searched by block ([`BLOCK`]), each block's
+    /// finds in its own list, on the pool's threads with `parallel`; then each pair
+    /// goes to the list of its first particle's block, sorted and found once (the
+    /// same lists whichever block found them).
     fn rebuild(
         &mut self,
         x: &[DVec3],
@@ -369,6 +384,18 @@ impl SelfCollision {
         }
         let (cells, sorted, starts) = (&self.cells, &self.sorted, &self.cell_start);
         let reach2 = reach * reach;
+        // The entries of buckets `from .. from + len`, in one or two runs of the
+        // sorted copy (two where they wrap past the last bucket).
+        let entries = |from: u32, len: usize| {
+            let (lo, hi) = (from as usize, from as usize + len);
+            let (first, second) = if hi <= buckets {
+                ((lo, hi), (0, 0))
+            } else {
+                ((lo, buckets), (0, hi - buckets))
+            };
+            let run = |(a, b): (usize, usize)| &sorted[starts[a] as usize..starts[b] as usize];
+            run(first).iter().chain(run(second))
+        };
         let search = |(k, out): (usize, &mut Vec<[u32; 2]>)| {
             out.clear();
             let range = k * BLOCK..((k + 1) * BLOCK).min(n);
@@ -377,52 +404,67 @@ impl SelfCollision {
             // that.
             out.reserve(PAIRS_PER_PARTICLE * range.len());
             for i in range {
-                let ([a, b, c], _) = cells[i];
-                let p = x[i];
-                let first = out.len();
-                for (db, dc) in [-1, 0, 1]
-                    .into_iter()
-                    .flat_map(|db| [(db, -1), (db, 0), (db, 1)])
-                {
-                    let lo = bucket([a.wrapping_sub(1), b.wrapping_add(db), c.wrapping_add(dc)]);
-                    let (lo, hi) = (lo as usize, lo as usize + 3);
-                    // The run wraps past the last bucket: read it in two.
-                    let runs = if hi <= buckets {
-                        [(lo, hi), (0, 0)]
-                    } else {
-                        [(lo, buckets), (0, hi - buckets)]
-                    };
-                    for (from, to) in runs {
-                        let entries = &sorted[starts[from] as usize..starts[to] as usize];
-                        for e in entries {
-                            // Particles of other cells that share the buckets are
-                            // farther than `reach`; no branch until the rare hit.
-                            let near = (e.index > i as u32) & (p.distance_squared(e.x) < reach2);
-                            if near && !joined(i, e.index as usize) {
-                                out.push([i as u32, e.index]);
-                            }
+                let ([a, b, c], own) = cells[i];
+                let (p, me) = (x[i], i as u32);
+                let mut keep = |e: &Entry| {
+                    if !joined(i, e.index as usize) {
+                        out.push([me.min(e.index), me.max(e.index)]);
+                    }
+                };
+                // Its own bucket: the partners after it (each pair of a cell once).
+                for e in entries(own, 1) {
+                    if (e.index > me) & (p.distance_squared(e.x) < reach2) {
+                        keep(e);
+                    }
+                }
+                // The cells ahead of it: `a + 1` in its own row, and the rows
+                // `a - 1 ..= a + 1` of the cells ahead along the other two axes.
+                let ahead = std::iter::once((bucket([a.wrapping_add(1), b, c]), 1)).chain(
+                    FORWARD_ROWS.map(|(db, dc)| {
+                        let cell = [a.wrapping_sub(1), b.wrapping_add(db), c.wrapping_add(dc)];
+                        (bucket(cell), 3)
+                    }),
+                );
+                for (from, len) in ahead {
+                    for e in entries(from, len) {
+                        // Other cells that share these buckets are farther than
+                        // `reach` (or hold this particle itself).
+                        if (e.index != me) & (p.distance_squared(e.x) < reach2) {
+                            keep(e);
                         }
                     }
                 }
-                // In order of partner; a partner whose bucket two runs share (the
-                // hash's collisions) was found twice.
-                let mine = &mut out[first..];
-                mine.sort_unstable();
-                let mut kept = first;
-                for k in first..out.len() {
-                    if k == first || out[k] != out[kept - 1] {
-                        out[kept] = out[k];
-                        kept += 1;
-                    }
-                }
-                out.truncate(kept);
             }
         };
-        self.found.resize_with(blocks, Vec::new);
+        self.found_by_searcher.resize_with(blocks, Vec::new);
         if parallel {
-            self.found.par_iter_mut().enumerate().for_each(search);
+            (self.found_by_searcher.par_iter_mut().enumerate()).for_each(search);
         } else {
-            self.found.iter_mut().enumerate().for_each(search);
+            self.found_by_searcher
+                .iter_mut()
+                .enumerate()
+                .for_each(search);
+        }
+        // Each pair to the block of its first particle, then each block's in order,
+        // once (a pair is found twice where the hash puts two cells that a
+        // particle reads in one bucket).
+        self.found.resize_with(blocks, Vec::new);
+        for list in &mut self.found {
+            // The same room as the searchers' lists.
+            list.clear();
+            list.reserve(PAIRS_PER_PARTICLE * BLOCK);
+        }
+        for &pair in self.found_by_searcher.iter().flatten() {
+            self.found[pair[0] as usize / BLOCK].push(pair);
+        }
+        let order = |list: &mut Vec<[u32; 2]>| {
+            list.sort_unstable();
+            list.dedup();
+        };
+        if parallel {
+            self.found.par_iter_mut().for_each(order);
+        } else {
+            self.found.iter_mut().for_each(order);
         }
     }
 }
@@ -444,6 +486,37 @@ mod tests {
         (0..n)
             .map(|_| DVec3::new(next(), next(), next()) * scale)
             .collect()
+    }
+
+    /// A rebuild lists every pair within reach that no spring joins, each once, in
+    /// order, as a search of every pair does; on threads too. In a dense box many
+    /// particles share a cell; spread over a wide one the cells outnumber the
+    /// buckets (8,192 for 3,000 particles), so that many buckets hold several.
+    #[test]
+    fn a_rebuild_lists_every_pair_within_reach_once_in_order() {
+        let (n, reach) = (3000, 0.1);
+        let joined = |i: usize, j: usize| (i + j).is_multiple_of(5);
+        for (size, fewest) in [
+            (DVec3::new(1.0, 0.5, 0.8), 5 * n),
+            (DVec3::new(6.0, 0.3, 6.0), n / 4),
+        ] {
+            let x = points(n, size, 5);
+            let mut expected = Vec::new();
+            for i in 0..n {
+                for j in i + 1..n {
+                    if x[i].distance_squared(x[j]) < reach * reach && !joined(i, j) {
+                        expected.push([i as u32, j as u32]);
+                    }
+                }
+            }
+            assert!(expected.len() > fewest, "only {} pairs", expected.len());
+            for parallel in [false, true] {
+                let mut pass = SelfCollision::default();
+                pass.rebuild(&x, reach, joined, parallel);
+                let listed: Vec<[u32; 2]> = pass.found.iter().flatten().copied().collect();
+                assert_eq!(listed, expected, "{size}, parallel: {parallel}");
+            }
+        }
     }
 
     /// After any moves of up to the margin each (plus one common to all) the list
