@@ -144,6 +144,15 @@ impl Contact {
     /// leaves pinned particles (`w = 0`) alone.
     #[inline(always)]
     pub(crate) fn resolve_lanes<T: Lanes>(&self, x: V3<T>, v: V3<T>, w: T) -> (V3<T>, V3<T>) {
+        let (x, v) = self.sphere_lanes(x, v);
+        (x, self.ground_friction_lanes(x.y, v, w))
+    }
+
+    /// The sphere's part of [`Contact::resolve_lanes`]: particles inside are
+    /// projected out, with friction. Leaves `x` and `v` as they are, to the bit,
+    /// where no lane is within the sphere's radius.
+    #[inline(always)]
+    fn sphere_lanes<T: Lanes>(&self, x: V3<T>, v: V3<T>) -> (V3<T>, V3<T>) {
         let h = T::splat(self.dt);
         let (mut x, mut v) = (x, v);
         if let Some(sphere) = self.sphere {
@@ -170,15 +179,24 @@ impl Contact {
                 }
             }
         }
-        if let Some(ground) = self.ground.filter(|g| g.friction > 0.0) {
-            let support = ground_support(&ground, x.y, v.y);
-            let on = support.gt(T::splat(0.0));
-            if T::any(on) {
-                let most = T::splat(ground.friction) * h * support * w;
-                v = V3::select(on, coulomb(v, V3::splat(DVec3::Y), most), v);
-            }
-        }
         (x, v)
+    }
+
+    /// The ground's part of [`Contact::resolve_lanes`], after the sphere's: its
+    /// friction on particles at height `y` with velocity `v` and inverse mass `w`,
+    /// which changes only their velocity (the ground's push is its penalty force).
+    #[inline(always)]
+    pub(crate) fn ground_friction_lanes<T: Lanes>(&self, y: T, v: V3<T>, w: T) -> V3<T> {
+        let Some(ground) = self.ground.filter(|g| g.friction > 0.0) else {
+            return v;
+        };
+        let support = ground_support(&ground, y, v.y);
+        let on = support.gt(T::splat(0.0));
+        if !T::any(on) {
+            return v;
+        }
+        let most = T::splat(ground.friction) * T::splat(self.dt) * support * w;
+        V3::select(on, coulomb(v, V3::splat(DVec3::Y), most), v)
     }
 }
 

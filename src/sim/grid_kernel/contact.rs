@@ -116,10 +116,12 @@ impl<E: Real> ContactRows<'_, E> {
                 // arrays' `map` was left a call in this loop.)
                 let w = &self.inv_mass[i..i + N];
                 let (px, py, pz) = (&pos[0][j..j + N], &pos[1][j..j + N], &pos[2][j..j + N]);
-                let mut touch = [false; N];
-                for (l, touch) in touch.iter_mut().enumerate() {
-                    let real = c + l < self.width;
-                    *touch = real & self.reach.may_touch([px[l], py[l], pz[l]], w[l]);
+                let (mut touch, mut sphere) = ([false; N], [false; N]);
+                for l in 0..N {
+                    let real = (c + l < self.width) & (w[l] > E::ZERO);
+                    let at = [px[l], py[l], pz[l]];
+                    sphere[l] = real & self.reach.near_sphere(at);
+                    touch[l] = sphere[l] | (real & self.reach.below_ground(at));
                 }
                 if !touch.contains(&true) {
                     continue;
@@ -133,46 +135,57 @@ impl<E: Real> ContactRows<'_, E> {
                     y: lanes(vel[1]),
                     z: lanes(vel[2]),
                 };
-                let at = V3 {
-                    x: lanes(pos[0]) + lanes(lows[0]),
-                    y: lanes(pos[1]) + lanes(lows[1]),
-                    z: lanes(pos[2]) + lanes(lows[2]),
-                };
                 let mass = F64s::<N>(std::array::from_fn(|l| w[l].f64()));
-                let (to, v_new) = self.contact.resolve_lanes(at, v, mass);
-                // Back into the touching lanes, all lanes at once: a particle
-                // that moved gets its new position (every axis), its velocity the
-                // change. The other lanes are written what they held.
-                let moved: [bool; N] = std::array::from_fn(|l| {
-                    let (x, y, z) = (to.x.0[l], to.y.0[l], to.z.0[l]);
-                    touch[l] & ((x != at.x.0[l]) | (y != at.y.0[l]) | (z != at.z.0[l]))
-                });
-                let axes = [
-                    (to.x, v_new.x, v.x),
-                    (to.y, v_new.y, v.y),
-                    (to.z, v_new.z, v.z),
-                ];
-                for (a, (to, v_new, v)) in axes.into_iter().enumerate() {
-                    let (p, q) = (&mut pos[a][j..j + N], &mut lows[a][j..j + N]);
-                    // Both parts of every lane, with one branch on `compensated`,
-                    // and both arrays read before either is written: with a branch
-                    // in each lane, or `p` and `q` read and written in turn (two
-                    // arrays that may overlap, to the compiler), it wrote lane by
-                    // lane.
-                    let hi: [E; N] = std::array::from_fn(|l| E::of(to.0[l]));
-                    let lo: [E; N] = if self.compensated {
-                        std::array::from_fn(|l| E::of(to.0[l] - hi[l].f64()))
-                    } else {
-                        [E::ZERO; N]
+                let height = || lanes(pos[1]) + lanes(lows[1]);
+                let v_new = if !sphere.contains(&true) {
+                    // None near the sphere: only the ground's friction, which
+                    // leaves the positions as they are (`resolve_lanes` gives the
+                    // same, its sphere part then changing nothing).
+                    self.contact.ground_friction_lanes(height(), v, mass)
+                } else {
+                    let at = V3 {
+                        x: lanes(pos[0]) + lanes(lows[0]),
+                        y: height(),
+                        z: lanes(pos[2]) + lanes(lows[2]),
                     };
-                    let (old_hi, old_lo): ([E; N], [E; N]) =
-                        (std::array::from_fn(|l| p[l]), std::array::from_fn(|l| q[l]));
-                    let hi: [E; N] =
-                        std::array::from_fn(|l| if moved[l] { hi[l] } else { old_hi[l] });
-                    let lo: [E; N] =
-                        std::array::from_fn(|l| if moved[l] { lo[l] } else { old_lo[l] });
-                    p.copy_from_slice(&hi);
-                    q.copy_from_slice(&lo);
+                    let (to, v_new) = self.contact.resolve_lanes(at, v, mass);
+                    // Back into the lanes that moved, all lanes at once: a
+                    // particle that moved gets its new position (every axis). The
+                    // other lanes are written what they held.
+                    let moved: [bool; N] = std::array::from_fn(|l| {
+                        let (x, y, z) = (to.x.0[l], to.y.0[l], to.z.0[l]);
+                        touch[l] & ((x != at.x.0[l]) | (y != at.y.0[l]) | (z != at.z.0[l]))
+                    });
+                    for (a, to) in [to.x, to.y, to.z].into_iter().enumerate() {
+                        let (p, q) = (&mut pos[a][j..j + N], &mut lows[a][j..j + N]);
+                        // Both parts of every lane, with one branch on
+                        // `compensated`, and both arrays read before either is
+                        // written: with a branch in each lane, or `p` and `q` read
+                        // and written in turn (two arrays that may overlap, to the
+                        // compiler), it wrote lane by lane.
+                        let hi: [E; N] = std::array::from_fn(|l| E::of(to.0[l]));
+                        let lo: [E; N] = if self.compensated {
+                            std::array::from_fn(|l| E::of(to.0[l] - hi[l].f64()))
+                        } else {
+                            [E::ZERO; N]
+                        };
+                        let (old_hi, old_lo): ([E; N], [E; N]) =
+                            (std::array::from_fn(|l| p[l]), std::array::from_fn(|l| q[l]));
+                        let hi: [E; N] =
+                            std::array::from_fn(|l| if moved[l] { hi[l] } else { old_hi[l] });
+                        let lo: [E; N] =
+                            std::array::from_fn(|l| if moved[l] { lo[l] } else { old_lo[l] });
+                        p.copy_from_slice(&hi);
+                        q.copy_from_slice(&lo);
+                    }
+                    v_new
+                };
+                // The touching lanes' velocities get the change (and Verlet's
+                // update velocities with them).
+                for (a, (v_new, v)) in [(v_new.x, v.x), (v_new.y, v.y), (v_new.z, v.z)]
+                    .into_iter()
+                    .enumerate()
+                {
                     let dv: [E; N] = std::array::from_fn(|l| E::of(v_new.0[l] - v.0[l]));
                     let speed = &mut vel[a][j..j + N];
                     for l in 0..N {
@@ -228,12 +241,25 @@ impl<E: Real> Reach<E> {
     /// Whether a particle at `[x, y, z]` (high parts) with inverse mass `w` is free
     /// and may touch a collider.
     #[inline(always)]
-    fn may_touch(&self, [x, y, z]: [E; 3], w: E) -> bool {
+    fn may_touch(&self, at: [E; 3], w: E) -> bool {
+        // `&` and `|`, not `&&` and `||`: no branches, for the compiler to vectorise.
+        (w > E::ZERO) & (self.below_ground(at) | self.near_sphere(at))
+    }
+
+    /// Whether a particle at `[x, y, z]` (high parts) may be inside the sphere.
+    #[inline(always)]
+    fn near_sphere(&self, [x, y, z]: [E; 3]) -> bool {
         let [cx, cy, cz] = self.center;
         let (dx, dy, dz) = (x - cx, y - cy, z - cz);
-        let near = dx * dx + dy * dy + dz * dz < self.reach2;
-        // `&` and `|`, not `&&` and `||`: no branches, for the compiler to vectorise.
-        (w > E::ZERO) & ((y < self.ground) | near)
+        dx * dx + dy * dy + dz * dz < self.reach2
+    }
+
+    /// Whether a particle at `[_, y, _]` (high parts) may be below the ground:
+    /// `<=`, since a height just below the ground's may have a high part equal to
+    /// the ground's height in the kernel's precision (and a negative low part).
+    #[inline(always)]
+    fn below_ground(&self, [_, y, _]: [E; 3]) -> bool {
+        y <= self.ground
     }
 }
 
@@ -248,4 +274,45 @@ fn row_may_touch<E: Real>([x, y, z]: [&[E]; 3], w: &[E], reach: &Reach<E>) -> bo
         any |= u8::from(reach.may_touch([x[j], y[j], z[j]], w[j]));
     }
     any != 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{Ground, Sphere};
+    use glam::DVec3;
+
+    /// A particle below the ground or inside the sphere by less than its high
+    /// part's rounding may touch: its double-float height just under the ground's
+    /// (whose float32 rounds to the same float as the ground's height), and a point
+    /// just inside the sphere.
+    #[test]
+    fn particles_just_inside_a_collider_may_touch() {
+        let (height, radius) = (-0.9, 0.5);
+        let contact = constraints::Contact {
+            sphere: Some(Sphere {
+                center: DVec3::new(0.0, 0.3, 0.0),
+                radius,
+            }),
+            ground: Some(Ground {
+                height,
+                stiffness: 200.0,
+                damping: 0.05,
+                friction: 0.5,
+            }),
+            friction: 0.5,
+            dt: 1e-3,
+        };
+        let reach = Reach::<f32>::of(&contact);
+        for below in [1e-12, 1e-10, 1e-9, 1e-7] {
+            let y = height - below;
+            let hi = y as f32;
+            assert!(reach.may_touch([3.0, hi, 3.0], 1.0), "{below} m below");
+            assert!(!reach.may_touch([3.0, hi, 3.0], 0.0), "pinned");
+        }
+        assert!(!reach.may_touch([3.0, (height + 1e-6) as f32, 3.0], 1.0));
+        let inside = (0.3 + radius - 1e-9) as f32;
+        assert!(reach.may_touch([0.0, inside, 0.0], 1.0));
+        assert!(!reach.may_touch([0.0, (0.3 + radius * 1.01) as f32, 0.0], 1.0));
+    }
 }
