@@ -110,6 +110,34 @@ fn the_engines_agree_with_self_collision() {
     assert!(apart < 1e-5, "{apart}");
 }
 
+/// On a topology other than a grid the mesh engine runs the same pass, in the f64
+/// engine's order and arithmetic: the tablecloth (a triangle mesh) draping over
+/// its sphere into folds, bit for bit the f64 engine's positions, velocities and
+/// contacts.
+#[test]
+fn the_mesh_engine_runs_self_collision_as_the_f64_engine() {
+    use cloth_sandbox::sim::Engine;
+    let overrides = ["self_collision=true"];
+    let (mut fast, mut exact) = (
+        build("tablecloth", &overrides),
+        build("tablecloth", &overrides),
+    );
+    fast.set_fast_path(true);
+    assert_eq!(fast.engine(), Engine::Mesh);
+    exact.set_fast_path(false);
+    let mut most = 0;
+    for _ in 0..12 {
+        fast.run(160).unwrap();
+        exact.run(160).unwrap();
+        let contacts = fast.self_collision_contacts();
+        assert_eq!(contacts, exact.self_collision_contacts());
+        assert!(fast.positions() == exact.positions() && fast.velocities() == exact.velocities());
+        most = most.max(contacts);
+    }
+    println!("at most {most} pairs in contact");
+    assert!(most > 5, "{most}");
+}
+
 /// The pass on two threads gives the result of one, bit for bit, on both engines:
 /// the grid kernel on its own pool (`GridCloth::set_threads`), the f64 engine in
 /// `System::run`'s scope on the pool it is run in. Each run ends with pairs in

@@ -134,6 +134,11 @@ impl Contact {
     /// the step (the sphere's push over `h`; the ground's penalty impulse `h N w`),
     /// stopping the particle there when that is more. Returns the new position and
     /// velocity.
+    ///
+    /// Inlined: as a call it took `x` from the stack, where a caller that had just
+    /// assembled it there in three stores stalled on the load (the mesh engine's
+    /// tablecloth ran 1.4x faster on one core once inlined).
+    #[inline(always)]
     pub fn resolve(&self, x: DVec3, v: DVec3, w: f64) -> (DVec3, DVec3) {
         let (x, v) = self.resolve_lanes(V3::from(x), V3::from(v), w);
         (x.into(), v.into())

@@ -388,8 +388,9 @@ impl System {
     /// Pairs of particles the last self-collision pass pushed apart, on whichever
     /// engine ran the last step.
     pub fn self_collision_contacts(&self) -> usize {
-        match (&self.engines.grid, self.engine()) {
-            (Some(fast), Engine::Grid(_)) => fast.kernel.self_collision_contacts(),
+        match (&self.engines.grid, &self.engines.mesh, self.engine()) {
+            (Some(fast), _, Engine::Grid(_)) => fast.kernel.self_collision_contacts(),
+            (_, Some(mesh), Engine::Mesh) => mesh.kernel.self_collision_contacts(),
             _ => self.work.self_collision.contacts(),
         }
     }

@@ -24,9 +24,12 @@
 //! per-spring array, measured 0.7x as fast: twice the square roots and divisions.)
 //!
 //! Constraints follow, on one thread, Gauss-Seidel in the f64 engine's order (bars
-//! `bar_iterations` times, stretch limit, sphere); a particle moved by `δ` gains
-//! `δ/h` in `v` (and in `u` for Verlet). Per-triangle aerodynamic drag is not
-//! modelled: systems with it run on the general engine (see `fast_path`).
+//! `bar_iterations` times, stretch limit, self-collision, the colliders' contact);
+//! a particle moved by `δ` gains `δ/h` in `v` (and in `u` for Verlet).
+//! Self-collision is the shared pass ([`super::self_collision`]) on a copy of the
+//! positions, on the pool's threads from its own size on. Per-triangle aerodynamic
+//! drag is not modelled: systems with it run on the general engine (see
+//! `fast_path`).
 //!
 //! A step allocates nothing.
 
@@ -35,7 +38,8 @@ use glam::DVec3;
 use super::constraints::{Contact, length_correction};
 use super::forces::{ground_force, spring_force};
 use super::integrators::euler_update;
-use super::{Bar, Ground, Integrator, Model, Sphere, Spring};
+use super::springs::Adjacency;
+use super::{Bar, Ground, Integrator, Model, SelfCollision, Sphere, Spring};
 
 /// Models with fewer particles than this run on the calling thread even when
 /// several threads are allowed. Measured on the jelly lattice (about 12 springs a
@@ -77,8 +81,12 @@ pub struct MeshParams {
     pub bar_iterations: u32,
     /// Maximum stretch `tau` of springs, if any.
     pub stretch_limit: Option<f64>,
-    /// Coulomb friction coefficient of the ground and the sphere.
+    /// Coulomb friction coefficient of the ground and the sphere (and of the
+    /// cloth on itself).
     pub friction: f64,
+    /// Self-collision's thickness `h_c` in m, if the particles keep it apart
+    /// ([`super::self_collision`]).
+    pub self_collision: Option<f64>,
 }
 
 impl MeshParams {
@@ -105,7 +113,7 @@ impl MeshParams {
             tear_strain,
             max_speed,
             friction,
-            thickness: _, // already in `ground` and `sphere`
+            thickness,
             self_collision,
             seed: _, // only the gusts use it
         } = model.params;
@@ -117,10 +125,10 @@ impl MeshParams {
             ground: _, // `ground` itself says
             applied,
         } = model.terms;
-        // Self-collision, tearing and the speed limit run on the f64 engine for
-        // topologies other than grids.
+        // Tearing and the speed limit run on the f64 engine for topologies other
+        // than grids.
         let (tears, limited) = (tear_strain.is_some(), max_speed.is_some());
-        if aero || self_collision || tears || limited || !MeshKernel::supports(integrator) {
+        if aero || tears || limited || !MeshKernel::supports(integrator) {
             return None;
         }
         Some(Self {
@@ -134,6 +142,7 @@ impl MeshParams {
             bar_iterations,
             stretch_limit,
             friction,
+            self_collision: self_collision.then_some(thickness),
         })
     }
 }
@@ -170,6 +179,12 @@ pub struct MeshKernel {
     pool: Option<rayon::ThreadPool>,
     /// Whether the passes run their AVX2 builds.
     avx2: bool,
+    /// The model's adjacency, for self-collision to tell the pairs a spring joins.
+    adjacency: Adjacency,
+    /// Self-collision's pass and what it keeps between steps.
+    self_collision: SelfCollision,
+    /// The positions as the self-collision pass reads and moves them.
+    self_collision_x: Vec<DVec3>,
 }
 
 /// Springs as structure of arrays, in the order the spring pass evaluates them:
@@ -556,6 +571,9 @@ impl MeshKernel {
             avx2: std::arch::is_x86_feature_detected!("avx2"),
             #[cfg(not(target_arch = "x86_64"))]
             avx2: false,
+            adjacency: model.adjacency.clone(),
+            self_collision: SelfCollision::default(),
+            self_collision_x: Vec::new(),
         };
         kernel.size_before();
         kernel
@@ -626,6 +644,7 @@ impl MeshKernel {
         let p = &self.params;
         (p.bar_iterations > 0 && !self.bars.is_empty())
             || (p.stretch_limit.is_some() && !self.model_springs.is_empty())
+            || p.self_collision.is_some()
             || self.contact().is_active()
     }
 
@@ -834,6 +853,9 @@ impl MeshKernel {
                 });
             }
         }
+        if let Some(h_c) = p.self_collision {
+            self.self_collision_pass(h_c);
+        }
         let h = p.dt;
         let contact = self.contact();
         let active = contact.is_active();
@@ -854,5 +876,35 @@ impl MeshKernel {
                 store(&mut self.u.each_mut().map(Vec::as_mut_slice), i, u);
             }
         }
+    }
+
+    /// Self-collision ([`super::self_collision`]) at thickness `h_c`, as the f64
+    /// engine runs it after the stretch limit: on a copy of the positions, reading
+    /// those at the start of the step (the other half of the ping-pong pair) and
+    /// the inverse masses for the pairs in contact; the particles it moved are
+    /// written back. On the pool's threads when the engine has them (the same
+    /// result as on one).
+    fn self_collision_pass(&mut self, h_c: f64) {
+        let n = self.len();
+        let mut x = std::mem::take(&mut self.self_collision_x);
+        x.clear();
+        x.extend((0..n).map(|i| load(self.x.each_ref().map(Vec::as_slice), i)));
+        let (start, inv_mass) = (self.x_next.each_ref().map(Vec::as_slice), &self.inv_mass);
+        let particle = |i: usize| (load(start, i), inv_mass[i]);
+        let (adjacency, springs) = (&self.adjacency, &self.model_springs);
+        let joined = |i: usize, j: usize| adjacency.joins(springs, i, j);
+        let (friction, parallel) = (self.params.friction, self.pool.is_some());
+        let pass = &mut self.self_collision;
+        pass.apply(&mut x, particle, h_c, friction, joined, parallel);
+        let mut positions = self.x.each_mut().map(Vec::as_mut_slice);
+        for &i in self.self_collision.moved() {
+            store(&mut positions, i as usize, x[i as usize]);
+        }
+        self.self_collision_x = x;
+    }
+
+    /// Pairs pushed apart by the last self-collision pass.
+    pub fn self_collision_contacts(&self) -> usize {
+        self.self_collision.contacts()
     }
 }
