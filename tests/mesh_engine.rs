@@ -110,6 +110,37 @@ fn the_non_grid_scenes_agree_with_the_f64_engine() {
 }
 
 #[test]
+fn a_speed_limit_runs_on_the_mesh_engine_as_on_the_f64_engine() {
+    // The chain (symplectic Euler) and the rope (Verlet) swing faster than 0.5 m/s
+    // within 400 steps; the limit holds them to it on both engines.
+    for name in ["chain", "rope"] {
+        let limited = ["max_speed=0.5"];
+        let (d, moved) = mesh_and_exact(name, &limited, 400);
+        println!("{name} at most 0.5 m/s: {d:e} m apart after moving {moved:.3e} m");
+        let mut fast = build(name, &limited);
+        fast.set_fast_path(true);
+        fast.run(400).unwrap();
+        let fastest = fast
+            .velocities()
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max);
+        assert!(fastest <= 0.5 * (1.0 + 1e-12), "{name}: {fastest} m/s");
+        let mut free = build(name, &[]);
+        free.run(400).unwrap();
+        let free_fastest = free
+            .velocities()
+            .iter()
+            .map(|v| v.length())
+            .fold(0.0, f64::max);
+        assert!(
+            free_fastest > 0.6,
+            "{name}: the limit never binds ({free_fastest} m/s)"
+        );
+    }
+}
+
+#[test]
 fn a_bigger_jelly_agrees_feature_by_feature() {
     let big = ["width=12", "height=12", "depth=12"];
     // Resting on the ground from the start: its lowest particle 5 cm deep.

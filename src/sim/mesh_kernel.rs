@@ -35,7 +35,7 @@
 
 use glam::DVec3;
 
-use super::constraints::{Contact, length_correction};
+use super::constraints::{Contact, length_correction, speed_limit};
 use super::forces::{ground_force, spring_force};
 use super::integrators::euler_update;
 use super::springs::Adjacency;
@@ -87,6 +87,8 @@ pub struct MeshParams {
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart
     /// ([`super::self_collision`]).
     pub self_collision: Option<f64>,
+    /// Speed limit in m/s, if any ([`super::constraints::speed_limit`]).
+    pub max_speed: Option<f64>,
 }
 
 impl MeshParams {
@@ -125,10 +127,8 @@ impl MeshParams {
             ground: _, // `ground` itself says
             applied,
         } = model.terms;
-        // Tearing and the speed limit run on the f64 engine for topologies other
-        // than grids.
-        let (tears, limited) = (tear_strain.is_some(), max_speed.is_some());
-        if aero || tears || limited || !MeshKernel::supports(integrator) {
+        // Tearing runs on the f64 engine for topologies other than grids.
+        if aero || tear_strain.is_some() || !MeshKernel::supports(integrator) {
             return None;
         }
         Some(Self {
@@ -143,6 +143,7 @@ impl MeshParams {
             stretch_limit,
             friction,
             self_collision: self_collision.then_some(thickness),
+            max_speed,
         })
     }
 }
@@ -822,6 +823,27 @@ impl MeshKernel {
         std::mem::swap(&mut self.v, &mut self.v_next);
         if self.has_constraints() {
             self.constrain();
+        }
+        if let Some(max_speed) = self.params.max_speed {
+            self.limit_speed(max_speed);
+        }
+    }
+
+    /// The speed limit, as the f64 engine applies it after the constraints
+    /// ([`speed_limit`]): a faster particle's velocity (and Verlet's update
+    /// velocity) scaled down to it.
+    fn limit_speed(&mut self, max_speed: f64) {
+        let verlet = !self.u[0].is_empty();
+        for i in 0..self.len() {
+            let factor = speed_limit(load(self.v.each_ref().map(Vec::as_slice), i), max_speed);
+            if factor < 1.0 {
+                for a in 0..3 {
+                    self.v[a][i] *= factor;
+                    if verlet {
+                        self.u[a][i] *= factor;
+                    }
+                }
+            }
         }
     }
 
