@@ -27,21 +27,15 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let p = &model.params;
     let x = &mut state.positions;
     if p.integrator == Integrator::Xpbd {
-        let prev = &work.step_start;
-        for s in model
-            .constraint_order
-            .iter()
-            .map(|&i| &model.springs[i as usize])
-        {
-            let (a, b) = (s.a as usize, s.b as usize);
-            let (wa, wb) = (model.inv_mass[a], model.inv_mass[b]);
-            let spring = (s.rest, s.stiffness, s.damping);
-            if let Some(c) = xpbd_correction([x[a], x[b]], [prev[a], prev[b]], wa, wb, spring, p.dt)
-            {
-                x[a] -= wa * c;
-                x[b] += wb * c;
-            }
-        }
+        let order = &model.constraint_order;
+        xpbd_pass(
+            x,
+            &work.step_start,
+            &model.springs,
+            order,
+            &model.inv_mass,
+            p.dt,
+        );
     }
     if p.bar_iterations > 0 {
         for _ in 0..p.bar_iterations {
@@ -88,6 +82,29 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
             if let Some(prev) = verlet.get_mut(i) {
                 *prev -= h * (*v - v_in) - (*x - x_in);
             }
+        }
+    }
+}
+
+/// XPBD's pass over `springs` in `order` ([`xpbd_correction`] of each, Gauss-Seidel)
+/// on positions `x` that were `prev` at the start of the step `dt`, with inverse
+/// masses `inv_mass`: the f64 and mesh engines' (the grid engine's on its f64
+/// copies).
+pub(crate) fn xpbd_pass(
+    x: &mut [DVec3],
+    prev: &[DVec3],
+    springs: &[super::Spring],
+    order: &[u32],
+    inv_mass: &[f64],
+    dt: f64,
+) {
+    for s in order.iter().map(|&i| &springs[i as usize]) {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let (wa, wb) = (inv_mass[a], inv_mass[b]);
+        let spring = (s.rest, s.stiffness, s.damping);
+        if let Some(c) = xpbd_correction([x[a], x[b]], [prev[a], prev[b]], wa, wb, spring, dt) {
+            x[a] -= wa * c;
+            x[b] += wb * c;
         }
     }
 }

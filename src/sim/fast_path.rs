@@ -8,11 +8,11 @@
 //! so a new one fails to compile until the kernel models it or refuses it. Results
 //! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
 //!
-//! Any other system without aerodynamic drag stepped by symplectic Euler,
-//! explicit Euler or position Verlet (chains, lattices, ropes) goes to the f64 mesh
-//! engine of [`super::mesh_kernel`], which does the general path's arithmetic in
-//! its order: bit for bit its results for the Euler methods, f64 round-off for
-//! Verlet (`tests/mesh_engine.rs`).
+//! Any other system without aerodynamic drag or tearing stepped by symplectic
+//! Euler, explicit Euler, position Verlet or XPBD (chains, lattices, ropes,
+//! meshes) goes to the f64 mesh engine of [`super::mesh_kernel`], which does the
+//! general path's arithmetic in its order: bit for bit its results for the Euler
+//! methods and XPBD, f64 round-off for Verlet (`tests/mesh_engine.rs`).
 //!
 //! The f64 state stays the system's state: it is copied into the engine when
 //! something outside changed it, and back after every chunk of steps (or when a

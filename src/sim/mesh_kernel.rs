@@ -2,7 +2,8 @@
 //! on structure-of-arrays state, each particle gathering its own forces.
 //!
 //! State is `x, y, z, vx, vy, vz` (m, m/s) and, for position Verlet, the velocity of
-//! the last position update `u = (x - x_prev) / h`. A step is two passes:
+//! the last position update `u = (x - x_prev) / h`. A step is two passes (under
+//! XPBD the first is skipped: its springs are constraints, after the step):
 //! 1. each spring's force on its `a` end, `f_a = -(k (l - L) + b (v_a - v_b)·u) u`
 //!    with `u = (x_a - x_b)/l` ([`spring_force`]), into a per-spring array: the
 //!    springs are evaluated in batches of up to [`BATCH`], their ends read as
@@ -35,7 +36,7 @@
 
 use glam::DVec3;
 
-use super::constraints::{Contact, length_correction, speed_limit};
+use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass};
 use super::forces::{ground_force, spring_force};
 use super::integrators::euler_update;
 use super::springs::Adjacency;
@@ -73,7 +74,8 @@ pub struct MeshParams {
     pub ground: Option<Ground>,
     /// Sphere collider, if any.
     pub sphere: Option<Sphere>,
-    /// Symplectic Euler, explicit Euler or position Verlet.
+    /// Symplectic Euler, explicit Euler, position Verlet or XPBD (symplectic Euler
+    /// without the springs' forces, then their constraint pass).
     pub integrator: Integrator,
     /// Time step in s.
     pub dt: f64,
@@ -89,11 +91,14 @@ pub struct MeshParams {
     pub self_collision: Option<f64>,
     /// Speed limit in m/s, if any ([`super::constraints::speed_limit`]).
     pub max_speed: Option<f64>,
+    /// Whether the springs are forces; under XPBD they are constraints instead,
+    /// one Gauss-Seidel pass of [`xpbd_pass`] after the prediction.
+    pub spring_forces: bool,
 }
 
 impl MeshParams {
     /// The parameters of `model`, if the mesh engine models it exactly: no
-    /// aerodynamic drag, and symplectic Euler, explicit Euler or position Verlet.
+    /// aerodynamic drag or tearing, and an integrator it [`MeshKernel::supports`].
     ///
     /// Every parameter and force term is named here (no `..`): a new one fails to
     /// compile until it is either passed to the engine or made a reason to refuse it.
@@ -121,7 +126,7 @@ impl MeshParams {
         } = model.params;
         let super::ForceTerms {
             gravity: gravity_on,
-            springs: _, // the engine always evaluates the springs it holds
+            springs: spring_forces,
             aero,
             air_damping: air_damping_on,
             ground: _, // `ground` itself says
@@ -144,6 +149,7 @@ impl MeshParams {
             friction,
             self_collision: self_collision.then_some(thickness),
             max_speed,
+            spring_forces,
         })
     }
 }
@@ -184,8 +190,11 @@ pub struct MeshKernel {
     adjacency: Adjacency,
     /// Self-collision's pass and what it keeps between steps.
     self_collision: SelfCollision,
-    /// The positions as the self-collision pass reads and moves them.
-    self_collision_x: Vec<DVec3>,
+    /// Copies of the positions, now and at the start of the step, for the passes
+    /// the f64 engine shares (XPBD's springs, self-collision), which work on
+    /// arrays of vectors.
+    copy_x: Vec<DVec3>,
+    copy_start: Vec<DVec3>,
 }
 
 /// Springs as structure of arrays, in the order the spring pass evaluates them:
@@ -430,6 +439,12 @@ fn store(a: &mut [&mut [f64]; 3], i: usize, value: DVec3) {
     a[2][i] = value.z;
 }
 
+/// `out` made a copy of the positions `x` (structure of arrays), one vector each.
+fn copy_positions(out: &mut Vec<DVec3>, x: &[Vec<f64>; 3]) {
+    out.clear();
+    out.extend((x[0].iter().zip(&x[1]).zip(&x[2])).map(|((&x, &y), &z)| DVec3::new(x, y, z)));
+}
+
 /// Forces, accelerations and the integrator's update for the particles of `out`.
 fn advance(ctx: &Ctx, mut out: Out) {
     let p = &ctx.p;
@@ -442,7 +457,12 @@ fn advance(ctx: &Ctx, mut out: Out) {
         let vi = load(ctx.v, i);
         // The f64 engine's gather: `f += sign * f_spring` in spring order.
         let mut f = DVec3::ZERO;
-        for &e in &ctx.links[ctx.offsets[i] as usize..ctx.offsets[i + 1] as usize] {
+        let links = if p.spring_forces {
+            &ctx.links[ctx.offsets[i] as usize..ctx.offsets[i + 1] as usize]
+        } else {
+            &[]
+        };
+        for &e in links {
             let s = (e & !B_END) as usize;
             let sign = if e & B_END == 0 { 1.0 } else { -1.0 };
             f += sign * DVec3::new(sf[0][s], sf[1][s], sf[2][s]);
@@ -574,7 +594,8 @@ impl MeshKernel {
             avx2: false,
             adjacency: model.adjacency.clone(),
             self_collision: SelfCollision::default(),
-            self_collision_x: Vec::new(),
+            copy_x: Vec::new(),
+            copy_start: Vec::new(),
         };
         kernel.size_before();
         kernel
@@ -583,10 +604,11 @@ impl MeshKernel {
     /// Whether the engine steps a system with this integrator.
     pub fn supports(integrator: Integrator) -> bool {
         match integrator {
-            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet => true,
-            Integrator::Rk2 | Integrator::Rk4 | Integrator::ImplicitEuler | Integrator::Xpbd => {
-                false
-            }
+            Integrator::SymplecticEuler
+            | Integrator::ExplicitEuler
+            | Integrator::Verlet
+            | Integrator::Xpbd => true,
+            Integrator::Rk2 | Integrator::Rk4 | Integrator::ImplicitEuler => false,
         }
     }
 
@@ -646,6 +668,7 @@ impl MeshKernel {
         (p.bar_iterations > 0 && !self.bars.is_empty())
             || (p.stretch_limit.is_some() && !self.model_springs.is_empty())
             || p.self_collision.is_some()
+            || (p.integrator == Integrator::Xpbd && !self.model_springs.is_empty())
             || self.contact().is_active()
     }
 
@@ -797,6 +820,7 @@ impl MeshKernel {
         };
         let out = self.spring_f.each_mut().map(Vec::as_mut_slice);
         match leaves {
+            _ if !self.params.spring_forces => {}
             Some((leaf, _)) => spring_pass_parallel(&springs, 0, out, leaf),
             None => spring_pass(&springs, 0, out),
         }
@@ -854,6 +878,9 @@ impl MeshKernel {
         for k in 0..3 {
             self.before[k].copy_from_slice(&self.x[k]);
         }
+        if p.integrator == Integrator::Xpbd {
+            self.xpbd_pass();
+        }
         let x = &mut self.x;
         let inv_mass = &self.inv_mass;
         for _ in 0..p.bar_iterations {
@@ -907,10 +934,8 @@ impl MeshKernel {
     /// written back. On the pool's threads when the engine has them (the same
     /// result as on one).
     fn self_collision_pass(&mut self, h_c: f64) {
-        let n = self.len();
-        let mut x = std::mem::take(&mut self.self_collision_x);
-        x.clear();
-        x.extend((0..n).map(|i| load(self.x.each_ref().map(Vec::as_slice), i)));
+        let mut x = std::mem::take(&mut self.copy_x);
+        copy_positions(&mut x, &self.x);
         let (start, inv_mass) = (self.x_next.each_ref().map(Vec::as_slice), &self.inv_mass);
         let particle = |i: usize| (load(start, i), inv_mass[i]);
         let (adjacency, springs) = (&self.adjacency, &self.model_springs);
@@ -922,7 +947,33 @@ impl MeshKernel {
         for &i in self.self_collision.moved() {
             store(&mut positions, i as usize, x[i as usize]);
         }
-        self.self_collision_x = x;
+        self.copy_x = x;
+    }
+
+    /// XPBD's springs ([`xpbd_pass`], the f64 engine's pass) on copies of the
+    /// positions now and at the start of the step (the other half of the ping-pong
+    /// pair), written back whole.
+    fn xpbd_pass(&mut self) {
+        let (mut x, mut start) = (
+            std::mem::take(&mut self.copy_x),
+            std::mem::take(&mut self.copy_start),
+        );
+        copy_positions(&mut x, &self.x);
+        copy_positions(&mut start, &self.x_next);
+        let (springs, order) = (&self.model_springs, &self.constraint_order);
+        xpbd_pass(
+            &mut x,
+            &start,
+            springs,
+            order,
+            &self.inv_mass,
+            self.params.dt,
+        );
+        let mut positions = self.x.each_mut().map(Vec::as_mut_slice);
+        for (i, &p) in x.iter().enumerate() {
+            store(&mut positions, i, p);
+        }
+        (self.copy_x, self.copy_start) = (x, start);
     }
 
     /// Pairs pushed apart by the last self-collision pass.
