@@ -48,7 +48,7 @@ pub const SLACK: f64 = 4.0;
 /// The margin, in multiples of the scale, of a system in which nothing oscillates
 /// but self-collision may push against its bars (see [`EnergyBudget::new`]):
 /// explicit Euler's drift in free fall, `1/2 M g² h t`, reaches it only after
-/// about `200 D / (g h)` seconds (12 hours for a 2 m rope at 1/960 s).
+/// about `200 D / (g h)` seconds (11 hours for a 2 m rope at 1/960 s).
 pub const UNBOUNDED_SLACK: f64 = 100.0;
 
 /// How much mechanical energy a run may hold before it counts as diverged.
