@@ -151,8 +151,8 @@ fn dragging_a_particle_around_is_not_flagged() {
 fn self_collision_thicker_than_a_ropes_bars_allow_is_caught() {
     // The rope has bars and no springs, so nothing in it oscillates and no step
     // limit bounds its energy. Self-collision 0.5 m thick pushes apart particles
-    // that its 0.1 m bars hold 0.2 m apart (the pass counts only springs as
-    // joining), and each push adds its `δ / h`: the energy grows without bound.
+    // two bars apart, which the 0.1 m bars hold within 0.2 m, and each push adds
+    // its `δ / h`: the energy grows without bound.
     // At 0.05 m, under the bars' length, nothing fights and nothing is flagged.
     for fast in [false, true] {
         let mut fighting = build("rope", &["self_collision=true", "thickness=0.5"]);

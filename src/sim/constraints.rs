@@ -59,7 +59,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
         }
     }
     if p.self_collision {
-        let joined = |i, j| model.adjacency.joins(&model.springs, i, j);
+        let joined = |i, j| model.joins(i, j);
         let (start, w) = (&work.step_start, &model.inv_mass);
         let particle = |i: usize| (start[i], w[i]);
         // On the threads of the spring forces (`System::run`'s scope), with the

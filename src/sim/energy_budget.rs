@@ -99,10 +99,10 @@ impl EnergyBudget {
         // Without springs or ground contact nothing oscillates, so there is no step
         // limit to pass: what the energy does there is the integrator's drift under
         // steady forces (explicit Euler's `1/2 M g² h t` in free fall), not divergence.
-        // Unless self-collision is on: it can push apart particles that only bars
-        // hold, thicker than the bars allow, and each push's `δ / h` pumps energy in
-        // (a rope 0.5 m thick gained 350 kJ in 500 steps); it gets `UNBOUNDED_SLACK`
-        // times the scale, which the drift takes hours to fill.
+        // Unless self-collision is on: thicker than bars allow (a rope's particles
+        // two 0.1 m bars apart kept 0.5 m apart), it pushes against them, and each
+        // push's `δ / h` pumps energy in (350 kJ in 500 steps); it gets
+        // `UNBOUNDED_SLACK` times the scale, which the drift takes hours to fill.
         let allowed = if stability.omega_max > 0.0 {
             (SLACK + swing(p.integrator, stability.margin)) * scale
         } else if p.self_collision && p.thickness > 0.0 {

@@ -39,7 +39,7 @@ use glam::DVec3;
 use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass};
 use super::forces::{ground_force, spring_force};
 use super::integrators::euler_update;
-use super::springs::Adjacency;
+use super::springs::{Adjacency, BarPairs};
 use super::{Bar, Ground, Integrator, Model, SelfCollision, Sphere, Spring};
 
 /// Models with fewer particles than this run on the calling thread even when
@@ -186,8 +186,10 @@ pub struct MeshKernel {
     pool: Option<rayon::ThreadPool>,
     /// Whether the passes run their AVX2 builds.
     avx2: bool,
-    /// The model's adjacency, for self-collision to tell the pairs a spring joins.
+    /// The model's adjacency and bars, for self-collision to tell the pairs a
+    /// spring or a bar joins.
     adjacency: Adjacency,
+    bar_pairs: BarPairs,
     /// Self-collision's pass and what it keeps between steps.
     self_collision: SelfCollision,
     /// Copies of the positions, now and at the start of the step, for the passes
@@ -593,6 +595,7 @@ impl MeshKernel {
             #[cfg(not(target_arch = "x86_64"))]
             avx2: false,
             adjacency: model.adjacency.clone(),
+            bar_pairs: model.bar_pairs.clone(),
             self_collision: SelfCollision::default(),
             copy_x: Vec::new(),
             copy_start: Vec::new(),
@@ -938,8 +941,8 @@ impl MeshKernel {
         copy_positions(&mut x, &self.x);
         let (start, inv_mass) = (self.x_next.each_ref().map(Vec::as_slice), &self.inv_mass);
         let particle = |i: usize| (load(start, i), inv_mass[i]);
-        let (adjacency, springs) = (&self.adjacency, &self.model_springs);
-        let joined = |i: usize, j: usize| adjacency.joins(springs, i, j);
+        let (adjacency, springs, bars) = (&self.adjacency, &self.model_springs, &self.bar_pairs);
+        let joined = |i: usize, j: usize| adjacency.joins(springs, i, j) || bars.join(i, j);
         let (friction, parallel) = (self.params.friction, self.pool.is_some());
         let pass = &mut self.self_collision;
         pass.apply(&mut x, particle, h_c, friction, joined, parallel);

@@ -4,7 +4,7 @@
 use glam::{DVec2, DVec3};
 
 use super::{
-    Adjacency, Bar, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
+    Adjacency, Bar, BarPairs, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
 };
 
 /// A horizontal ground plane `y = height` with penalty contact (seed 002's jelly cube).
@@ -148,6 +148,8 @@ pub struct Model {
     pub broken_springs: usize,
     /// Rigid bars, relaxed after each step.
     pub bars: Vec<Bar>,
+    /// The pairs of particles the bars join.
+    pub bar_pairs: BarPairs,
     /// Surface triangles (empty for scenes without a surface).
     pub triangles: Vec<[u32; 3]>,
     /// Texture coordinates per particle (empty without a surface).
@@ -165,6 +167,12 @@ pub struct Model {
 }
 
 impl Model {
+    /// Whether a spring or a bar joins particles `i` and `j`: self-collision leaves
+    /// such pairs alone (pushing them apart would fight the link).
+    pub fn joins(&self, i: usize, j: usize) -> bool {
+        self.adjacency.joins(&self.springs, i, j) || self.bar_pairs.join(i, j)
+    }
+
     /// Recomputes which force terms run, from the parameters and topology.
     pub fn refresh_terms(&mut self) {
         let p = &self.params;

@@ -1,10 +1,10 @@
-//! Self-collision of a cloth's particles: no two particles that no spring joins
-//! come closer than the contact thickness `h_c`, and the layers that touch rub with
+//! Self-collision of a cloth's particles: no two particles that no spring or bar
+//! joins come closer than the contact thickness `h_c`, and the layers that touch rub with
 //! Coulomb friction. Every engine runs this one pass on f64 positions after the
 //! stretch limit and before the colliders.
 //!
 //! # Method
-//! * Candidate pairs: every pair no spring joins closer than `reach = h_c + 2
+//! * Candidate pairs: every pair no spring or bar joins closer than `reach = h_c + 2
 //!   margin`, with `margin = 3 h_c / 4` ([`MARGIN`]), listed in order of `(i,
 //!   j)`, `i < j` (the same list whatever the hash, the engine's cell round-off or
 //!   the threads). They come from a spatial hash (cells of `reach`, filled by a
@@ -301,7 +301,7 @@ impl SelfCollision {
         }
     }
 
-    /// Rebuilds the candidate pairs: every pair `i < j` no spring joins closer than
+    /// Rebuilds the candidate pairs: every pair `i < j` no spring or bar joins closer than
     /// `reach`, in order of `i` then `j` (the same list whatever the hash, and for
     /// any number of threads).
     ///

@@ -134,6 +134,29 @@ pub struct Adjacency {
 
 const B_END: u32 = 1 << 31;
 
+/// The pairs of particles that rigid bars join, which self-collision leaves alone
+/// as it does the pairs a spring joins.
+#[derive(Clone, Debug, Default)]
+pub struct BarPairs(Vec<(u32, u32)>);
+
+impl BarPairs {
+    /// The pairs `bars` join.
+    pub fn new(bars: &[Bar]) -> Self {
+        let mut pairs: Vec<(u32, u32)> =
+            bars.iter().map(|b| (b.a.min(b.b), b.a.max(b.b))).collect();
+        pairs.sort_unstable();
+        Self(pairs)
+    }
+
+    /// Whether a bar joins particles `i` and `j`.
+    pub fn join(&self, i: usize, j: usize) -> bool {
+        let (Ok(a), Ok(b)) = (u32::try_from(i.min(j)), u32::try_from(i.max(j))) else {
+            return false;
+        };
+        self.0.binary_search(&(a, b)).is_ok()
+    }
+}
+
 impl Adjacency {
     /// Builds the adjacency of `springs` over `particle_count` particles.
     pub fn new(particle_count: usize, springs: &[Spring]) -> Self {

@@ -16,9 +16,9 @@ use glam::{DVec2, DVec3};
 use super::divergence::Runaway;
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
-    Adjacency, Bar, Divergence, Energy, EnergyBudget, ForceTerms, Grab, Integrator, Model, Params,
-    Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path, forces, implicit,
-    integrators, springs, stability,
+    Adjacency, Bar, BarPairs, Divergence, Energy, EnergyBudget, ForceTerms, Grab, Integrator,
+    Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path,
+    forces, implicit, integrators, springs, stability,
 };
 
 /// Scratch space for a step, sized once per model and integrator.
@@ -96,6 +96,7 @@ impl System {
             adjacency,
             constraint_order,
             broken_springs: 0,
+            bar_pairs: BarPairs::new(&bars),
             bars,
             triangles,
             uvs,
