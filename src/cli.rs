@@ -644,7 +644,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
             s.radius
         ));
     }
-    if p.self_collision && p.thickness > 0.0 {
+    if p.self_collides() {
         constraints.push(format!(
             "self-collision (particles {} m apart, friction {})",
             p.thickness, p.friction

@@ -105,7 +105,7 @@ impl EnergyBudget {
         // `UNBOUNDED_SLACK` times the scale, which the drift takes hours to fill.
         let allowed = if stability.omega_max > 0.0 {
             (SLACK + swing(p.integrator, stability.margin)) * scale
-        } else if p.self_collision && p.thickness > 0.0 {
+        } else if p.self_collides() {
             UNBOUNDED_SLACK * scale
         } else {
             f64::INFINITY

@@ -121,8 +121,8 @@ impl MeshParams {
             max_speed,
             friction,
             thickness,
-            self_collision,
-            seed: _, // only the gusts use it
+            self_collision: _, // with `thickness`, in `Params::self_collides`
+            seed: _,           // only the gusts use it
         } = model.params;
         let super::ForceTerms {
             gravity: gravity_on,
@@ -147,7 +147,7 @@ impl MeshParams {
             bar_iterations,
             stretch_limit,
             friction,
-            self_collision: self_collision.then_some(thickness),
+            self_collision: model.params.self_collides().then_some(thickness),
             max_speed,
             spring_forces,
         })

@@ -83,6 +83,13 @@ pub struct Params {
     pub seed: u64,
 }
 
+impl Params {
+    /// Whether self-collision acts: switched on, with a thickness to keep.
+    pub fn self_collides(&self) -> bool {
+        self.self_collision && self.thickness > 0.0
+    }
+}
+
 impl Default for Params {
     fn default() -> Self {
         Self {

@@ -460,7 +460,7 @@ impl System {
             || (p.integrator == Integrator::Xpbd && !self.model.springs.is_empty())
             || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
             || constraints::Contact::of(p).is_active()
-            || (p.self_collision && p.thickness > 0.0)
+            || p.self_collides()
     }
 
     /// Checks for non-finite values and runaways ([`super::divergence`]), then the
