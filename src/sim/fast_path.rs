@@ -8,7 +8,7 @@
 //! so a new one fails to compile until the kernel models it or refuses it. Results
 //! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
 //!
-//! Any other system without aerodynamic drag or tearing stepped by symplectic
+//! Any other system stepped by symplectic
 //! Euler, explicit Euler, position Verlet or XPBD (chains, lattices, ropes,
 //! meshes) goes to the f64 mesh engine of [`super::mesh_kernel`], which does the
 //! general path's arithmetic in its order: bit for bit its results for the Euler
@@ -462,7 +462,7 @@ impl System {
         }
         let result = self.run_in_chunks(n, &mut lattice, settle);
         self.engines.lattice = Some(lattice);
-        Some(result)
+        Some(result.map(|_| ()))
     }
 
     /// The lattice kernel's description of this system, if it models it: a
@@ -535,17 +535,23 @@ impl System {
     }
 
     /// Runs `n` steps on the mesh engine if allowed and it models the system
-    /// exactly; `None` when the general path must run them. Call after
-    /// [`Self::run_on_grid`] and [`Self::run_on_lattice`] declined.
-    pub(super) fn run_on_mesh(&mut self, n: u64, settle: bool) -> Option<Result<(), Divergence>> {
+    /// exactly, or fewer when springs tore (the system broke them: call again for
+    /// the rest, on the springs left): the steps run; `None` when the general path
+    /// must run them. Call after [`Self::run_on_grid`] and [`Self::run_on_lattice`]
+    /// declined.
+    pub(super) fn run_on_mesh(&mut self, n: u64, settle: bool) -> Option<Result<u64, Divergence>> {
         if !self.engines.allowed {
             return None;
         }
         let params = MeshParams::of(&self.model)?;
-        let reused = self.engines.mesh.take().and_then(|mut mesh| {
+        let reused = self.engines.mesh.take().map(|mut mesh| {
             // Coefficients, masses and pins are taken in place; a new topology or
-            // integrator needs a new engine.
-            mesh.kernel.refresh(&self.model, params).then_some(mesh)
+            // integrator needs a new engine (on the same threads).
+            if !mesh.kernel.refresh(&self.model, params) {
+                mesh.kernel.rebuild(&self.model, params);
+                mesh.in_sync = false;
+            }
+            mesh
         });
         let mut mesh = match reused {
             Some(mesh) => mesh,
@@ -695,7 +701,7 @@ impl System {
         }
         let result = self.run_in_chunks(n, &mut fast, settle);
         self.engines.grid = Some(fast);
-        Some(result)
+        Some(result.map(|_| ()))
     }
 
     /// The particles held in place (pinned or grabbed: inverse mass 0) with their
@@ -730,7 +736,7 @@ impl System {
         n: u64,
         engine: &mut E,
         settle: bool,
-    ) -> Result<(), Divergence> {
+    ) -> Result<u64, Divergence> {
         let dt = self.model.params.dt;
         let mut done = 0;
         let mut from = match self.engines.ahead.take() {
@@ -738,8 +744,7 @@ impl System {
             None => (self.state.time, self.state.steps),
         };
         while done < n {
-            let chunk = CHUNK.min(n - done);
-            engine.advance(self, chunk as usize);
+            let chunk = engine.advance(self, CHUNK.min(n - done) as usize) as u64;
             done += chunk;
             self.engines.unchecked += chunk;
             for _ in 0..chunk {
@@ -751,17 +756,29 @@ impl System {
             if !plausible && self.state.steps - from.1 > 1 {
                 self.replay_one_by_one(engine, from);
             }
-            if (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS || !plausible {
-                self.engines.unchecked = 0;
+            // Springs to break: the f64 state takes the engine's and breaks them
+            // (before the check, as the f64 engine tears before its own).
+            let tear = engine.tear_pending();
+            let check =
+                (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS || !plausible;
+            if tear || check {
                 engine.copy_back(self);
-                self.check()?;
                 from = (self.state.time, self.state.steps);
+            }
+            if check {
+                self.engines.unchecked = 0;
+                self.check()?;
+            }
+            if tear {
+                // The engine runs on the springs it was built with: the caller
+                // builds one on those left for the rest of the run.
+                break;
             }
         }
         if from.1 != self.state.steps {
             self.engines.ahead = Some((E::KIND, from.0, from.1));
         }
-        Ok(())
+        Ok(done)
     }
 
     /// Brings the f64 state up to the fast engine's, if the engine ran ahead.
@@ -822,7 +839,9 @@ impl System {
         (self.state.time, self.state.steps) = from;
         engine.load(self);
         while self.state.steps < last {
-            engine.advance(self, 1);
+            if engine.advance(self, 1) == 0 {
+                break;
+            }
             self.state.time += dt;
             self.state.steps += 1;
             let (speed2, dist2) = engine.extremes(self.runaway.center);
@@ -858,8 +877,16 @@ impl System {
 trait FastEngine {
     /// Which engine this is.
     const KIND: Ahead;
-    /// `steps` steps of the system's `dt`, from the system's time.
-    fn advance(&mut self, system: &System, steps: usize);
+    /// `steps` steps of the system's `dt`, from the system's time, or fewer when
+    /// the engine stops for the system to break springs ([`FastEngine::copy_back`]
+    /// then does): the steps taken.
+    fn advance(&mut self, system: &System, steps: usize) -> usize;
+    /// Whether the engine stopped for springs to break, which its
+    /// [`FastEngine::copy_back`] breaks; a new engine must then take the springs
+    /// left.
+    fn tear_pending(&self) -> bool {
+        false
+    }
     /// The largest squared speed and squared distance from `center` (infinite on
     /// NaN).
     fn extremes(&self, center: DVec3) -> (f64, f64);
@@ -872,13 +899,14 @@ trait FastEngine {
 
 impl FastEngine for FastPath {
     const KIND: Ahead = Ahead::Grid;
-    fn advance(&mut self, system: &System, steps: usize) {
+    fn advance(&mut self, system: &System, steps: usize) -> usize {
         let (model, dt) = (&system.model, system.model.params.dt);
         if model.wind.gust != 0.0 && model.terms.aero {
             (self.kernel).steps_in_wind(dt, steps, system.state.time, &model.wind);
         } else {
             self.kernel.steps(dt, steps);
         }
+        steps
     }
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
@@ -909,8 +937,9 @@ impl FastEngine for FastPath {
 
 impl FastEngine for LatticePath {
     const KIND: Ahead = Ahead::Lattice;
-    fn advance(&mut self, system: &System, steps: usize) {
+    fn advance(&mut self, system: &System, steps: usize) -> usize {
         self.kernel.steps(system.model.params.dt, steps);
+        steps
     }
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
@@ -925,14 +954,24 @@ impl FastEngine for LatticePath {
 
 impl FastEngine for MeshPath {
     const KIND: Ahead = Ahead::Mesh;
-    fn advance(&mut self, _: &System, steps: usize) {
-        self.kernel.steps(steps);
+    fn advance(&mut self, system: &System, steps: usize) -> usize {
+        self.kernel.set_time(system.state.time);
+        self.kernel.steps(steps)
+    }
+    fn tear_pending(&self) -> bool {
+        self.kernel.tear_pending()
     }
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
     }
     fn copy_back(&mut self, system: &mut System) {
         copy_state_back(&self.kernel, &[], system);
+        if self.kernel.take_tear()
+            && let Some(tau) = system.model.params.tear_strain
+        {
+            // The f64 engine's tear, on the same positions.
+            system.tear(tau);
+        }
     }
     fn load(&mut self, system: &System) {
         load_state(&mut self.kernel, system);

@@ -15,7 +15,9 @@
 //!   kernel applies the same rule at the same point of its step, with [`overstretched`]
 //!   deciding in f64, and keeps masks of the springs left for its row pass; it
 //!   hands its breaks back to the model after each run of steps
-//!   ([`super::fast_path`]).
+//!   ([`super::fast_path`]). The mesh engine stops after a step that leaves a spring
+//!   past the strain ([`super::mesh_kernel::MeshKernel::steps`]); the system breaks
+//!   it here, on the same positions, and the engine is rebuilt on the springs left.
 
 use glam::DVec3;
 

@@ -11,7 +11,7 @@ use rand::{Rng, SeedableRng, rngs::StdRng};
 const GUST_MODES: usize = 4;
 
 /// Air velocity as a function of time.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Wind {
     /// Mean air velocity in m/s.
     pub base: DVec3,
