@@ -462,7 +462,7 @@ impl System {
         }
         let result = self.run_in_chunks(n, &mut lattice, settle);
         self.engines.lattice = Some(lattice);
-        Some(result.map(|_| ()))
+        Some(result)
     }
 
     /// The lattice kernel's description of this system, if it models it: a
@@ -535,15 +535,18 @@ impl System {
     }
 
     /// Runs `n` steps on the mesh engine if allowed and it models the system
-    /// exactly, or fewer when springs tore (the system broke them: call again for
-    /// the rest, on the springs left): the steps run; `None` when the general path
-    /// must run them. Call after [`Self::run_on_grid`] and [`Self::run_on_lattice`]
-    /// declined.
-    pub(super) fn run_on_mesh(&mut self, n: u64, settle: bool) -> Option<Result<u64, Divergence>> {
+    /// exactly; `None` when the general path must run them. Call after
+    /// [`Self::run_on_grid`] and [`Self::run_on_lattice`] declined.
+    pub(super) fn run_on_mesh(&mut self, n: u64, settle: bool) -> Option<Result<(), Divergence>> {
         if !self.engines.allowed {
             return None;
         }
         let params = MeshParams::of(&self.model)?;
+        if (self.engines.mesh.as_ref()).is_some_and(|mesh| mesh.kernel.has_torn()) {
+            // The engine ran ahead and tore springs: the model breaks them too
+            // before the two are compared.
+            self.catch_up();
+        }
         let reused = self.engines.mesh.take().map(|mut mesh| {
             // Coefficients, masses and pins are taken in place; a new topology or
             // integrator needs a new engine (on the same threads).
@@ -701,7 +704,7 @@ impl System {
         }
         let result = self.run_in_chunks(n, &mut fast, settle);
         self.engines.grid = Some(fast);
-        Some(result.map(|_| ()))
+        Some(result)
     }
 
     /// The particles held in place (pinned or grabbed: inverse mass 0) with their
@@ -736,7 +739,7 @@ impl System {
         n: u64,
         engine: &mut E,
         settle: bool,
-    ) -> Result<u64, Divergence> {
+    ) -> Result<(), Divergence> {
         let dt = self.model.params.dt;
         let mut done = 0;
         let mut from = match self.engines.ahead.take() {
@@ -744,7 +747,8 @@ impl System {
             None => (self.state.time, self.state.steps),
         };
         while done < n {
-            let chunk = engine.advance(self, CHUNK.min(n - done) as usize) as u64;
+            let chunk = CHUNK.min(n - done);
+            engine.advance(self, chunk as usize);
             done += chunk;
             self.engines.unchecked += chunk;
             for _ in 0..chunk {
@@ -756,29 +760,17 @@ impl System {
             if !plausible && self.state.steps - from.1 > 1 {
                 self.replay_one_by_one(engine, from);
             }
-            // Springs to break: the f64 state takes the engine's and breaks them
-            // (before the check, as the f64 engine tears before its own).
-            let tear = engine.tear_pending();
-            let check =
-                (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS || !plausible;
-            if tear || check {
-                engine.copy_back(self);
-                from = (self.state.time, self.state.steps);
-            }
-            if check {
+            if (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS || !plausible {
                 self.engines.unchecked = 0;
+                engine.copy_back(self);
                 self.check()?;
-            }
-            if tear {
-                // The engine runs on the springs it was built with: the caller
-                // builds one on those left for the rest of the run.
-                break;
+                from = (self.state.time, self.state.steps);
             }
         }
         if from.1 != self.state.steps {
             self.engines.ahead = Some((E::KIND, from.0, from.1));
         }
-        Ok(done)
+        Ok(())
     }
 
     /// Brings the f64 state up to the fast engine's, if the engine ran ahead.
@@ -839,9 +831,7 @@ impl System {
         (self.state.time, self.state.steps) = from;
         engine.load(self);
         while self.state.steps < last {
-            if engine.advance(self, 1) == 0 {
-                break;
-            }
+            engine.advance(self, 1);
             self.state.time += dt;
             self.state.steps += 1;
             let (speed2, dist2) = engine.extremes(self.runaway.center);
@@ -877,16 +867,8 @@ impl System {
 trait FastEngine {
     /// Which engine this is.
     const KIND: Ahead;
-    /// `steps` steps of the system's `dt`, from the system's time, or fewer when
-    /// the engine stops for the system to break springs ([`FastEngine::copy_back`]
-    /// then does): the steps taken.
-    fn advance(&mut self, system: &System, steps: usize) -> usize;
-    /// Whether the engine stopped for springs to break, which its
-    /// [`FastEngine::copy_back`] breaks; a new engine must then take the springs
-    /// left.
-    fn tear_pending(&self) -> bool {
-        false
-    }
+    /// `steps` steps of the system's `dt`, from the system's time.
+    fn advance(&mut self, system: &System, steps: usize);
     /// The largest squared speed and squared distance from `center` (infinite on
     /// NaN).
     fn extremes(&self, center: DVec3) -> (f64, f64);
@@ -899,14 +881,13 @@ trait FastEngine {
 
 impl FastEngine for FastPath {
     const KIND: Ahead = Ahead::Grid;
-    fn advance(&mut self, system: &System, steps: usize) -> usize {
+    fn advance(&mut self, system: &System, steps: usize) {
         let (model, dt) = (&system.model, system.model.params.dt);
         if model.wind.gust != 0.0 && model.terms.aero {
             (self.kernel).steps_in_wind(dt, steps, system.state.time, &model.wind);
         } else {
             self.kernel.steps(dt, steps);
         }
-        steps
     }
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
@@ -937,9 +918,8 @@ impl FastEngine for FastPath {
 
 impl FastEngine for LatticePath {
     const KIND: Ahead = Ahead::Lattice;
-    fn advance(&mut self, system: &System, steps: usize) -> usize {
+    fn advance(&mut self, system: &System, steps: usize) {
         self.kernel.steps(system.model.params.dt, steps);
-        steps
     }
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
@@ -954,24 +934,21 @@ impl FastEngine for LatticePath {
 
 impl FastEngine for MeshPath {
     const KIND: Ahead = Ahead::Mesh;
-    fn advance(&mut self, system: &System, steps: usize) -> usize {
+    fn advance(&mut self, system: &System, steps: usize) {
         self.kernel.set_time(system.state.time);
-        self.kernel.steps(steps)
-    }
-    fn tear_pending(&self) -> bool {
-        self.kernel.tear_pending()
+        self.kernel.steps(steps);
     }
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         self.kernel.extremes(center)
     }
     fn copy_back(&mut self, system: &mut System) {
-        copy_state_back(&self.kernel, &[], system);
-        if self.kernel.take_tear()
-            && let Some(tau) = system.model.params.tear_strain
-        {
-            // The f64 engine's tear, on the same positions.
-            system.tear(tau);
+        let torn = self.kernel.take_torn();
+        if !torn.is_empty() {
+            // The kernel broke them itself, by the same rule at the same steps:
+            // the model breaks them too, and then has the kernel's springs.
+            system.break_springs(|s| torn.binary_search(&(s.a, s.b)).is_ok());
         }
+        copy_state_back(&self.kernel, &[], system);
     }
     fn load(&mut self, system: &System) {
         load_state(&mut self.kernel, system);

@@ -36,9 +36,10 @@
 //! at the step's start time, gusts included) into a per-triangle array, which each
 //! particle adds after its springs, in the order of the triangles.
 //!
-//! With a tear strain the steps stop after one that leaves a spring past it: the
-//! system breaks it ([`super::tearing`]) and rebuilds the engine on the springs
-//! left (the same threads, the springs' order kept without sorting again).
+//! With a tear strain, a step that leaves springs past it breaks them as the f64
+//! engine does ([`super::tearing`]): the engine removes them (and the triangles
+//! along them) from its own copies, rebuilds its adjacency without sorting the
+//! springs again, and hands the breaks to the model with its state.
 //!
 //! A step allocates nothing.
 
@@ -47,9 +48,10 @@ use glam::DVec3;
 use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass};
 use super::forces::{aero_force, ground_force, spring_force};
 use super::integrators::euler_update;
+use super::springs;
 use super::springs::{Adjacency, BarPairs};
-use super::tearing::overstretched;
-use super::{Bar, Ground, Integrator, Model, SelfCollision, Sphere, Spring, Wind};
+use super::tearing::{overstretched, remove_broken};
+use super::{Bar, GridShape, Ground, Integrator, Model, SelfCollision, Sphere, Spring, Wind};
 
 /// Models with fewer particles than this run on the calling thread even when
 /// several threads are allowed. Measured on the jelly lattice (about 12 springs a
@@ -105,8 +107,7 @@ pub struct MeshParams {
     pub spring_forces: bool,
     /// Per-triangle aerodynamic drag, if on.
     pub drag: Option<Drag>,
-    /// Tear strain `tau`, if springs tear ([`super::tearing`]): the steps stop after
-    /// one that leaves a spring past it, for the system to break it.
+    /// Tear strain `tau`, if springs tear ([`super::tearing`]).
     pub tear_strain: Option<f64>,
 }
 
@@ -215,9 +216,11 @@ pub struct MeshKernel {
     triangle_links: Vec<u32>,
     /// Simulated time in s at the start of the next step (the gusts' clock).
     time: f64,
-    /// Set when a step left a spring past the tear strain: the steps stop there
-    /// until the system has broken it ([`Self::take_tear`]).
-    tear_pending: bool,
+    /// The grid's shape, if the particles form one (the order of the constraint
+    /// passes follows it).
+    grid: Option<GridShape>,
+    /// Springs torn since the model last took them ([`Self::take_torn`]).
+    torn: Vec<(u32, u32)>,
     /// The model's springs, canonical (for the stretch limit and to notice edits).
     model_springs: Vec<Spring>,
     /// The order the stretch limit visits `model_springs` in (the model's).
@@ -335,6 +338,19 @@ impl std::fmt::Debug for MeshKernel {
             .field("threads", &self.threads)
             .finish_non_exhaustive()
     }
+}
+
+/// A spring set and surface with what the engine derives from them elsewhere
+/// (the model, or a tear): see [`MeshKernel::set_topology`].
+struct Topology {
+    /// Canonical springs.
+    springs: Vec<Spring>,
+    /// The same springs as the spring pass reads them.
+    arrays: SpringArrays,
+    /// The order the stretch limit and XPBD visit `springs` in.
+    constraint_order: Vec<u32>,
+    adjacency: Adjacency,
+    triangles: Vec<[u32; 3]>,
 }
 
 type Halves<'b> = ([&'b mut [f64]; 3], [&'b mut [f64]; 3]);
@@ -669,49 +685,6 @@ impl MeshKernel {
     /// [`Self::new`] with the springs' arrays given.
     fn with_springs(model: &Model, params: MeshParams, springs: SpringArrays) -> Self {
         let n = model.mass.len();
-        let m = model.springs.len();
-        let mut offsets = vec![0u32; n + 1];
-        for s in &model.springs {
-            offsets[s.a as usize + 1] += 1;
-            offsets[s.b as usize + 1] += 1;
-        }
-        for i in 0..n {
-            offsets[i + 1] += offsets[i];
-        }
-        // Where each of the model's springs is evaluated.
-        let mut slot_of = vec![0u32; m];
-        for (e, &i) in springs.order.iter().enumerate() {
-            slot_of[i as usize] = e as u32;
-        }
-        // Filled in the model's spring order per particle: the f64 engine's gather
-        // order.
-        let mut cursor = offsets.clone();
-        let mut links = vec![0u32; 2 * m];
-        for (index, s) in model.springs.iter().enumerate() {
-            for (end, flag) in [(s.a, 0), (s.b, B_END)] {
-                let slot = &mut cursor[end as usize];
-                links[*slot as usize] = slot_of[index] | flag;
-                *slot += 1;
-            }
-        }
-        // Each particle's triangles, in the model's order: the f64 engine adds
-        // their drag in that order.
-        let mut triangle_offsets = vec![0u32; n + 1];
-        for &vertex in model.triangles.iter().flatten() {
-            triangle_offsets[vertex as usize + 1] += 1;
-        }
-        for i in 0..n {
-            triangle_offsets[i + 1] += triangle_offsets[i];
-        }
-        let mut cursor = triangle_offsets.clone();
-        let mut triangle_links = vec![0u32; 3 * model.triangles.len()];
-        for (index, triangle) in model.triangles.iter().enumerate() {
-            for &vertex in triangle {
-                let slot = &mut cursor[vertex as usize];
-                triangle_links[*slot as usize] = index as u32;
-                *slot += 1;
-            }
-        }
         let zeros = |len| [vec![0.0; len], vec![0.0; len], vec![0.0; len]];
         let verlet = params.integrator == Integrator::Verlet;
         let mut kernel = Self {
@@ -723,18 +696,19 @@ impl MeshKernel {
             v_next: zeros(n),
             before: Default::default(),
             inv_mass: model.inv_mass.clone(),
-            spring_f: zeros(m),
-            offsets,
-            links,
-            springs,
-            triangles: model.triangles.clone(),
-            triangle_f: zeros(model.triangles.len()),
-            triangle_offsets,
-            triangle_links,
+            spring_f: Default::default(),
+            offsets: Vec::new(),
+            links: Vec::new(),
+            springs: SpringArrays::default(),
+            triangles: Vec::new(),
+            triangle_f: Default::default(),
+            triangle_offsets: Vec::new(),
+            triangle_links: Vec::new(),
             time: 0.0,
-            tear_pending: false,
-            model_springs: model.springs.clone(),
-            constraint_order: model.constraint_order.clone(),
+            grid: model.grid,
+            torn: Vec::new(),
+            model_springs: Vec::new(),
+            constraint_order: Vec::new(),
             bars: model.bars.clone(),
             threads: 1,
             pool: None,
@@ -742,14 +716,87 @@ impl MeshKernel {
             avx2: std::arch::is_x86_feature_detected!("avx2"),
             #[cfg(not(target_arch = "x86_64"))]
             avx2: false,
-            adjacency: model.adjacency.clone(),
+            adjacency: Adjacency::default(),
             bar_pairs: model.bar_pairs.clone(),
             self_collision: SelfCollision::default(),
             copy_x: Vec::new(),
             copy_start: Vec::new(),
         };
+        kernel.set_topology(Topology {
+            springs: model.springs.clone(),
+            arrays: springs,
+            constraint_order: model.constraint_order.clone(),
+            adjacency: model.adjacency.clone(),
+            triangles: model.triangles.clone(),
+        });
         kernel.size_before();
         kernel
+    }
+
+    /// Takes a spring set and surface (the model's, or those left after a tear)
+    /// with what follows from them: the particles' links to their springs and
+    /// triangles, and the per-spring and per-triangle force arrays.
+    fn set_topology(&mut self, topology: Topology) {
+        let Topology {
+            springs,
+            arrays,
+            constraint_order,
+            adjacency,
+            triangles,
+        } = topology;
+        let n = self.len();
+        let m = springs.len();
+        let mut offsets = vec![0u32; n + 1];
+        for s in &springs {
+            offsets[s.a as usize + 1] += 1;
+            offsets[s.b as usize + 1] += 1;
+        }
+        for i in 0..n {
+            offsets[i + 1] += offsets[i];
+        }
+        // Where each of the model's springs is evaluated.
+        let mut slot_of = vec![0u32; m];
+        for (e, &i) in arrays.order.iter().enumerate() {
+            slot_of[i as usize] = e as u32;
+        }
+        // Filled in the model's spring order per particle: the f64 engine's gather
+        // order.
+        let mut cursor = offsets.clone();
+        let mut links = vec![0u32; 2 * m];
+        for (index, s) in springs.iter().enumerate() {
+            for (end, flag) in [(s.a, 0), (s.b, B_END)] {
+                let slot = &mut cursor[end as usize];
+                links[*slot as usize] = slot_of[index] | flag;
+                *slot += 1;
+            }
+        }
+        // Each particle's triangles, in the model's order: the f64 engine adds
+        // their drag in that order.
+        let mut triangle_offsets = vec![0u32; n + 1];
+        for &vertex in triangles.iter().flatten() {
+            triangle_offsets[vertex as usize + 1] += 1;
+        }
+        for i in 0..n {
+            triangle_offsets[i + 1] += triangle_offsets[i];
+        }
+        let mut cursor = triangle_offsets.clone();
+        let mut triangle_links = vec![0u32; 3 * triangles.len()];
+        for (index, triangle) in triangles.iter().enumerate() {
+            for &vertex in triangle {
+                let slot = &mut cursor[vertex as usize];
+                triangle_links[*slot as usize] = index as u32;
+                *slot += 1;
+            }
+        }
+        // Written whole by each step's passes before they are read.
+        let sized =
+            |arrays: &mut [Vec<f64>; 3], len| arrays.iter_mut().for_each(|a| a.resize(len, 0.0));
+        sized(&mut self.spring_f, m);
+        sized(&mut self.triangle_f, triangles.len());
+        (self.offsets, self.links, self.springs) = (offsets, links, arrays);
+        (self.triangle_offsets, self.triangle_links) = (triangle_offsets, triangle_links);
+        (self.model_springs, self.triangles) = (springs, triangles);
+        (self.constraint_order, self.adjacency) = (constraint_order, adjacency);
     }
 
     /// Whether the engine steps a system with this integrator.
@@ -815,7 +862,7 @@ impl MeshKernel {
     }
 
     /// Builds the engine anew for `model` and `params` ([`Self::new`]) when
-    /// [`Self::refresh`] cannot take them (springs torn, a new integrator), keeping
+    /// [`Self::refresh`] cannot take them (springs cut, a new integrator), keeping
     /// its threads when the particle count is the same. The state must be set again.
     pub fn rebuild(&mut self, model: &Model, params: MeshParams) {
         let (threads, pool) = (self.threads, self.pool.take());
@@ -894,8 +941,6 @@ impl MeshKernel {
     /// equal to the velocities (call [`Self::set_update_velocities`] after this to
     /// give them their own values).
     pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
-        // A tear found on the state this replaces no longer stands.
-        self.tear_pending = false;
         for (i, (p, v)) in positions
             .iter()
             .zip(velocities)
@@ -962,17 +1007,9 @@ impl MeshKernel {
         self.time = time;
     }
 
-    /// Advances by `n` steps of the parameters' `dt`, or fewer with a tear strain:
-    /// up to and including the first step that leaves a spring past it (the system
-    /// then breaks it, [`Self::take_tear`], and builds a new engine on the springs
-    /// left, as the f64 engine tears after its step). Returns the steps taken. On
-    /// several threads the pool is entered once for all of them.
-    pub fn steps(&mut self, n: usize) -> usize {
-        if self.tear_pending {
-            return 0;
-        }
-        let tear_strain = self.params.tear_strain;
-        let mut taken = 0;
+    /// Advances by `n` steps of the parameters' `dt`. On several threads the pool is
+    /// entered once for all `n` steps.
+    pub fn steps(&mut self, n: usize) {
         match self.pool.take() {
             Some(pool) => {
                 let per_task = |len: usize| (len / (4 * self.threads)).max(MIN_LEAF);
@@ -982,27 +1019,47 @@ impl MeshKernel {
                     particles: per_task(self.len()),
                 };
                 pool.install(|| {
-                    while taken < n && !self.tear_pending {
+                    for _ in 0..n {
                         self.one_step(Some(leaves));
-                        taken += 1;
-                        if let Some(tau) = tear_strain {
-                            self.tear_pending = self.overstretched(tau, Some(leaves.springs));
-                        }
                     }
                 });
                 self.pool = Some(pool);
             }
             None => {
-                while taken < n && !self.tear_pending {
+                for _ in 0..n {
                     self.one_step(None);
-                    taken += 1;
-                    if let Some(tau) = tear_strain {
-                        self.tear_pending = self.overstretched(tau, None);
-                    }
                 }
             }
         }
-        taken
+    }
+
+    /// The step's last phase with a tear strain `tau`, as the f64 engine's
+    /// ([`super::tearing`]): breaks the springs past it, in this engine's copies
+    /// (kept for the model in [`Self::take_torn`]). Allocates, but only when
+    /// something breaks.
+    fn tear(&mut self, tau: f64, leaf: Option<usize>) {
+        if !self.overstretched(tau, leaf) {
+            return;
+        }
+        let (mut springs, mut triangles) = (
+            self.model_springs.clone(),
+            std::mem::take(&mut self.triangles),
+        );
+        let x = self.x.each_ref().map(Vec::as_slice);
+        let pairs = remove_broken(&mut springs, &mut triangles, |s| {
+            overstretched(load(x, s.a as usize), load(x, s.b as usize), s.rest, tau)
+        });
+        let arrays = (self.springs.kept(&self.model_springs, &springs))
+            .unwrap_or_else(|| SpringArrays::new(&springs));
+        let topology = Topology {
+            constraint_order: springs::constraint_order(&springs, self.grid),
+            adjacency: Adjacency::new(self.len(), &springs),
+            springs,
+            arrays,
+            triangles,
+        };
+        self.set_topology(topology);
+        self.torn.extend(pairs);
     }
 
     /// Whether a spring is past the tear strain `tau` ([`overstretched`], the f64
@@ -1021,16 +1078,17 @@ impl MeshKernel {
         }
     }
 
-    /// Whether the last step left a spring past the tear strain.
-    pub fn tear_pending(&self) -> bool {
-        self.tear_pending
+    /// Whether springs tore since the model last took them.
+    pub fn has_torn(&self) -> bool {
+        !self.torn.is_empty()
     }
 
-    /// Whether the last step left a spring past the tear strain, clearing it: the
-    /// caller breaks the springs (the engine's state having been copied out) and
-    /// builds a new engine on those left.
-    pub fn take_tear(&mut self) -> bool {
-        std::mem::take(&mut self.tear_pending)
+    /// The ends of the springs torn since the last call, sorted: the model breaks
+    /// them too ([`super::System`]'s `break_springs`) as it takes the state.
+    pub fn take_torn(&mut self) -> Vec<(u32, u32)> {
+        let mut torn = std::mem::take(&mut self.torn);
+        torn.sort_unstable();
+        torn
     }
 
     /// One step; `leaves` when on the pool.
@@ -1094,6 +1152,9 @@ impl MeshKernel {
         }
         if let Some(max_speed) = self.params.max_speed {
             self.limit_speed(max_speed);
+        }
+        if let Some(tau) = self.params.tear_strain {
+            self.tear(tau, leaves.map(|l| l.springs));
         }
         // As the f64 engine's clock: one `dt` added per step.
         self.time += self.params.dt;

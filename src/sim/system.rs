@@ -429,14 +429,8 @@ impl System {
         if let Some(result) = self.run_on_lattice(n, settle) {
             return result;
         }
-        let mut n = n;
-        while let Some(result) = self.run_on_mesh(n, settle) {
-            // Fewer steps than asked when springs tore: the rest on the springs left.
-            match result? {
-                0 => break,
-                done if done == n => return Ok(()),
-                done => n -= done,
-            }
+        if let Some(result) = self.run_on_mesh(n, settle) {
+            return result;
         }
         self.mark_changed();
         let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());

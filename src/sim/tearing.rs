@@ -15,9 +15,8 @@
 //!   kernel applies the same rule at the same point of its step, with [`overstretched`]
 //!   deciding in f64, and keeps masks of the springs left for its row pass; it
 //!   hands its breaks back to the model after each run of steps
-//!   ([`super::fast_path`]). The mesh engine stops after a step that leaves a spring
-//!   past the strain ([`super::mesh_kernel::MeshKernel::steps`]); the system breaks
-//!   it here, on the same positions, and the engine is rebuilt on the springs left.
+//!   ([`super::fast_path`]). The mesh engine does the same on its own copy of the
+//!   springs and triangles ([`remove_broken`], shared with the model).
 
 use glam::DVec3;
 
@@ -70,24 +69,10 @@ impl System {
     /// Allocates, but only when something breaks.
     pub(super) fn break_springs(&mut self, broken: impl Fn(&Spring) -> bool) -> usize {
         let model = &mut self.model;
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        model.springs.retain(|s| {
-            let b = broken(s);
-            if b {
-                pairs.push((s.a, s.b));
-            }
-            !b
-        });
+        let pairs = remove_broken(&mut model.springs, &mut model.triangles, broken);
         if pairs.is_empty() {
             return 0;
         }
-        // Canonical springs are sorted by their ends, so `pairs` is too.
-        let along_break = |&[a, b, c]: &[u32; 3]| {
-            [(a, b), (b, c), (c, a)]
-                .iter()
-                .any(|&(i, j)| pairs.binary_search(&(i.min(j), i.max(j))).is_ok())
-        };
-        model.triangles.retain(|t| !along_break(t));
         let n = model.mass.len();
         model.adjacency = Adjacency::new(n, &model.springs);
         model.constraint_order = springs::constraint_order(&model.springs, model.grid);
@@ -102,4 +87,34 @@ impl System {
         self.engines.springs_changed();
         pairs.len()
     }
+}
+
+/// Removes from `springs` (canonical: sorted by their ends) those for which
+/// `broken` holds, and from `triangles` those with a removed spring along an edge;
+/// returns the removed springs' ends, sorted. What breaking does to a spring list,
+/// for the model and for the mesh engine's own copy alike.
+pub(crate) fn remove_broken(
+    springs: &mut Vec<Spring>,
+    triangles: &mut Vec<[u32; 3]>,
+    broken: impl Fn(&Spring) -> bool,
+) -> Vec<(u32, u32)> {
+    let mut pairs: Vec<(u32, u32)> = Vec::new();
+    springs.retain(|s| {
+        let b = broken(s);
+        if b {
+            pairs.push((s.a, s.b));
+        }
+        !b
+    });
+    if pairs.is_empty() {
+        return pairs;
+    }
+    // Canonical springs are sorted by their ends, so `pairs` is too.
+    let along_break = |&[a, b, c]: &[u32; 3]| {
+        [(a, b), (b, c), (c, a)]
+            .iter()
+            .any(|&(i, j)| pairs.binary_search(&(i.min(j), i.max(j))).is_ok())
+    };
+    triangles.retain(|t| !along_break(t));
+    pairs
 }
