@@ -207,6 +207,27 @@ fn springs_tear_on_the_mesh_engine_as_on_the_f64_engine() {
 }
 
 #[test]
+fn a_cut_between_runs_reaches_the_mesh_engine() {
+    // The user's cut (Ctrl + drag) breaks springs in the model between runs: the
+    // mesh engine is rebuilt on the springs left (its springs' order filtered, not
+    // sorted again) and goes on as the f64 engine does.
+    let mut fast = build("tablecloth", &[]);
+    fast.set_fast_path(true);
+    let mut exact = build("tablecloth", &[]);
+    let cut: Vec<(usize, usize)> = (exact.springs().iter().step_by(7))
+        .map(|s| (s.a as usize, s.b as usize))
+        .collect();
+    for system in [&mut fast, &mut exact] {
+        system.run(200).unwrap();
+        assert!(system.cut(&cut) > 1000);
+        system.run(200).unwrap();
+    }
+    assert_eq!(fast.engine(), Engine::Mesh);
+    assert!(fast.springs() == exact.springs());
+    assert!(fast.positions() == exact.positions() && fast.velocities() == exact.velocities());
+}
+
+#[test]
 fn a_speed_limit_runs_on_the_mesh_engine_as_on_the_f64_engine() {
     // The chain (symplectic Euler) and the rope (Verlet) swing faster than 0.5 m/s
     // within 400 steps; the limit holds them to it on both engines.
