@@ -155,11 +155,10 @@ impl Model {
 
     fn add_aero_forces(&self, x: &[DVec3], v: &[DVec3], t: f64, out: &mut [DVec3]) {
         let wind = self.wind.at(t);
-        let half_rho_cd = 0.5 * self.params.air_density * self.params.drag_coefficient;
+        let half_rho_cd = self.params.half_rho_cd();
         for tri in &self.triangles {
             let [a, b, c] = tri.map(|i| i as usize);
-            let v_rel = (v[a] + v[b] + v[c]) / 3.0 - wind;
-            let f = aero_force(x[a], x[b], x[c], v_rel, half_rho_cd) / 3.0;
+            let f = triangle_drag([x[a], x[b], x[c]], [v[a], v[b], v[c]], wind, half_rho_cd);
             out[a] += f;
             out[b] += f;
             out[c] += f;
@@ -201,6 +200,15 @@ pub fn spring_force(d: DVec3, dv: DVec3, rest: f64, k: f64, b: f64) -> DVec3 {
     }
     let u = d / l;
     -(k * (l - rest) + b * dv.dot(u)) * u
+}
+
+/// The drag on each vertex of a triangle with corners `x` moving at `v` in a
+/// `wind`: a third of [`aero_force`], with `v_rel` the mean vertex velocity less
+/// the wind (every engine's per-triangle drag).
+#[inline]
+pub fn triangle_drag(x: [DVec3; 3], v: [DVec3; 3], wind: DVec3, half_rho_cd: f64) -> DVec3 {
+    let v_rel = (v[0] + v[1] + v[2]) / 3.0 - wind;
+    aero_force(x[0], x[1], x[2], v_rel, half_rho_cd) / 3.0
 }
 
 /// Aerodynamic drag on a triangle `(a, b, c)` moving at `v_rel` relative to the air:

@@ -32,7 +32,7 @@
 //! positions, on the pool's threads from its own size on.
 //!
 //! Per-triangle aerodynamic drag is a third pass before the particles' one, as
-//! the f64 engine computes it: each triangle's third of [`aero_force`] (the wind
+//! the f64 engine computes it: each triangle's [`triangle_drag`] (the wind
 //! at the step's start time, gusts included) into a per-triangle array, which each
 //! particle adds after its springs, in the order of the triangles.
 //!
@@ -46,7 +46,7 @@
 use glam::DVec3;
 
 use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass};
-use super::forces::{aero_force, ground_force, spring_force};
+use super::forces::{ground_force, spring_force, triangle_drag};
 use super::integrators::euler_update;
 use super::springs;
 use super::springs::{Adjacency, BarPairs};
@@ -111,7 +111,7 @@ pub struct MeshParams {
     pub tear_strain: Option<f64>,
 }
 
-/// Per-triangle aerodynamic drag ([`aero_force`]).
+/// Per-triangle aerodynamic drag ([`triangle_drag`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Drag {
     /// `ρ C_d / 2` in kg/m³.
@@ -132,8 +132,8 @@ impl MeshParams {
             force,
             wind: _, // in `model.wind`, with the gusts
             gust: _,
-            air_density,
-            drag_coefficient,
+            air_density: _,      // in `Params::half_rho_cd`
+            drag_coefficient: _, // likewise
             air_damping,
             ground,
             sphere,
@@ -174,7 +174,7 @@ impl MeshParams {
             max_speed,
             spring_forces,
             drag: aero.then_some(Drag {
-                half_rho_cd: 0.5 * air_density * drag_coefficient,
+                half_rho_cd: model.params.half_rho_cd(),
                 wind: model.wind,
             }),
             tear_strain,
@@ -340,9 +340,10 @@ impl std::fmt::Debug for MeshKernel {
     }
 }
 
-/// A spring set and surface with what the engine derives from them elsewhere
-/// (the model, or a tear): see [`MeshKernel::set_topology`].
-struct Topology {
+/// The springs and surface triangles the engine runs on (the model's, or those
+/// left after a tear), with their constraint order and adjacency, which the
+/// model or the tear computes: see [`MeshKernel::set_springs`].
+struct SpringSet {
     /// Canonical springs.
     springs: Vec<Spring>,
     /// The same springs as the spring pass reads them.
@@ -487,18 +488,19 @@ struct TriangleCtx<'a> {
     half_rho_cd: f64,
 }
 
-/// Each triangle's drag on each of its vertices (a third of [`aero_force`], with
-/// the mean vertex velocity against the wind), for triangles `start..start +
-/// out[0].len()`: the f64 engine's arithmetic. (Gathered in batches for an AVX2
+/// Each triangle's drag on each of its vertices ([`triangle_drag`], the f64
+/// engine's), for triangles `start..start + out[0].len()`. (Gathered in batches for an AVX2
 /// build that vectorizes the forces, it measured no faster on the tablecloth:
 /// 10.2 M particle-steps/s on one core either way.)
 fn triangle_pass(ctx: &TriangleCtx, start: usize, out: [&mut [f64]; 3]) {
     let [fx, fy, fz] = out;
     for (e, tri) in ctx.triangles[start..start + fx.len()].iter().enumerate() {
-        let [a, b, c] = tri.map(|i| i as usize);
-        let v_rel = (load(ctx.v, a) + load(ctx.v, b) + load(ctx.v, c)) / 3.0 - ctx.wind;
-        let (xa, xb, xc) = (load(ctx.x, a), load(ctx.x, b), load(ctx.x, c));
-        let f = aero_force(xa, xb, xc, v_rel, ctx.half_rho_cd) / 3.0;
+        let corners = tri.map(|i| i as usize);
+        let (x, v) = (
+            corners.map(|i| load(ctx.x, i)),
+            corners.map(|i| load(ctx.v, i)),
+        );
+        let f = triangle_drag(x, v, ctx.wind, ctx.half_rho_cd);
         (fx[e], fy[e], fz[e]) = (f.x, f.y, f.z);
     }
 }
@@ -722,7 +724,7 @@ impl MeshKernel {
             copy_x: Vec::new(),
             copy_start: Vec::new(),
         };
-        kernel.set_topology(Topology {
+        kernel.set_springs(SpringSet {
             springs: model.springs.clone(),
             arrays: springs,
             constraint_order: model.constraint_order.clone(),
@@ -736,14 +738,14 @@ impl MeshKernel {
     /// Takes a spring set and surface (the model's, or those left after a tear)
     /// with what follows from them: the particles' links to their springs and
     /// triangles, and the per-spring and per-triangle force arrays.
-    fn set_topology(&mut self, topology: Topology) {
-        let Topology {
+    fn set_springs(&mut self, set: SpringSet) {
+        let SpringSet {
             springs,
             arrays,
             constraint_order,
             adjacency,
             triangles,
-        } = topology;
+        } = set;
         let n = self.len();
         let m = springs.len();
         let mut offsets = vec![0u32; n + 1];
@@ -1051,14 +1053,14 @@ impl MeshKernel {
         });
         let arrays = (self.springs.kept(&self.model_springs, &springs))
             .unwrap_or_else(|| SpringArrays::new(&springs));
-        let topology = Topology {
+        let set = SpringSet {
             constraint_order: springs::constraint_order(&springs, self.grid),
             adjacency: Adjacency::new(self.len(), &springs),
             springs,
             arrays,
             triangles,
         };
-        self.set_topology(topology);
+        self.set_springs(set);
         self.torn.extend(pairs);
     }
 

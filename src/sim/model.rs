@@ -88,6 +88,11 @@ impl Params {
     pub fn self_collides(&self) -> bool {
         self.self_collision && self.thickness > 0.0
     }
+
+    /// `ρ C_d / 2` (kg/m³), the aerodynamic drag's factor ([`super::forces::aero_force`]).
+    pub fn half_rho_cd(&self) -> f64 {
+        0.5 * self.air_density * self.drag_coefficient
+    }
 }
 
 impl Default for Params {
