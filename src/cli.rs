@@ -537,7 +537,7 @@ impl Summary {
             max,
             max_speed,
             engine,
-            threads: rayon::current_num_threads(),
+            threads: system.engine_threads(),
             solver_iterations: (system.params().integrator == Integrator::ImplicitEuler)
                 .then(|| system.solver_iterations()),
         }
@@ -599,11 +599,11 @@ impl Summary {
             self.min.x, self.min.y, self.min.z, self.max.x, self.max.y, self.max.z
         );
         println!("max speed       {:.4} m/s", self.max_speed);
-        println!(
-            "engine          {} ({} threads)",
-            self.engine.name(),
-            self.threads
-        );
+        let threads = match self.threads {
+            1 => "1 thread".to_string(),
+            n => format!("{n} threads"),
+        };
+        println!("engine          {} ({threads})", self.engine.name());
         if let Some(n) = self.solver_iterations {
             println!("cg iterations   {n} (last step)");
         }

@@ -49,6 +49,39 @@ fn run_json_is_one_object_with_the_fields() {
     }
 }
 
+/// `threads` is what the engine stepped on, and `RAYON_NUM_THREADS` sets it for
+/// every engine: a cloth too small to split runs on one whatever is allowed; a
+/// 64 x 64 cloth (4,096 particles, 23,938 springs) on as many as allowed, on the
+/// grid kernel and on the general engine alike.
+#[test]
+fn run_reports_the_threads_the_engine_stepped_on() {
+    let run = |size: &str, threads: &str, exact: bool| -> serde_json::Value {
+        let (width, height) = (format!("width={size}"), format!("height={size}"));
+        let mut args = vec!["run", "--scene", "bench", "--steps", "4", "--json"];
+        args.extend(["--set", &width, "--set", &height]);
+        if exact {
+            args.push("--exact");
+        }
+        let o = Command::new(env!("CARGO_BIN_EXE_cloth"))
+            .args(&args)
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .expect("runs");
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        serde_json::from_str(stdout(&o).trim()).expect("one JSON object")
+    };
+    for exact in [false, true] {
+        let engine = if exact { "general-f64" } else { "grid-f32" };
+        let small = run("8", "3", exact);
+        assert_eq!((&small["engine"], &small["threads"]), (&engine.into(), &1.into()));
+        for threads in [1, 2, 3] {
+            let large = run("64", &threads.to_string(), exact);
+            assert_eq!(large["engine"], engine);
+            assert_eq!(large["threads"], threads, "RAYON_NUM_THREADS={threads}, {engine}");
+        }
+    }
+}
+
 #[test]
 fn dump_with_zero_steps_writes_the_initial_state() {
     let path = std::env::temp_dir().join(format!("cloth-dump-{}.csv", std::process::id()));

@@ -395,6 +395,21 @@ impl System {
         }
     }
 
+    /// Threads the engine [`Self::engine`] names steps on: its pool's
+    /// ([`pool_threads`]) when the system is large enough to split (a fast engine's
+    /// own threshold, or the general engine's spring count:
+    /// [`super::forces::uses_threads`]), else one.
+    pub fn engine_threads(&self) -> usize {
+        let engines = &self.engines;
+        let parallel = match self.engine() {
+            Engine::Grid(_) => engines.grid.as_ref().is_some_and(|f| f.kernel.is_parallel()),
+            Engine::Lattice(_) => (engines.lattice.as_ref()).is_some_and(|l| l.kernel.is_parallel()),
+            Engine::Mesh => engines.mesh.as_ref().is_some_and(|m| m.kernel.is_parallel()),
+            Engine::General => super::forces::uses_threads(&self.model),
+        };
+        if parallel { pool_threads() } else { 1 }
+    }
+
     /// The engine [`System::run`] would use now.
     pub fn engine(&self) -> Engine {
         if !self.engines.allowed {
@@ -447,7 +462,7 @@ impl System {
             None => {
                 self.engines.builds += 1;
                 let mut kernel = LatticeKernel::new(spec);
-                kernel.set_threads(engine_threads());
+                kernel.set_threads(pool_threads());
                 LatticePath {
                     kernel,
                     in_sync: false,
@@ -560,7 +575,7 @@ impl System {
             Some(mesh) => mesh,
             None => {
                 let mut kernel = MeshKernel::new(&self.model, params);
-                kernel.set_threads(engine_threads());
+                kernel.set_threads(pool_threads());
                 MeshPath {
                     kernel,
                     in_sync: false,
@@ -683,7 +698,7 @@ impl System {
             None => {
                 self.engines.builds += 1;
                 let mut kernel = GridCloth::new(spec.clone());
-                kernel.set_threads(engine_threads());
+                kernel.set_threads(pool_threads());
                 FastPath {
                     kernel,
                     spec,
@@ -1014,7 +1029,8 @@ fn copy_state_back(kernel: &impl KernelState, held: &[(usize, DVec3)], system: &
     system.set_verlet_history(|u| kernel.update_velocities_into(u));
 }
 
-/// Threads a fast engine steps on: one per core.
-fn engine_threads() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
+/// Threads a fast engine's pool has: rayon's global setting, one per core unless
+/// `RAYON_NUM_THREADS` says otherwise (the general engine's threads follow it too).
+fn pool_threads() -> usize {
+    rayon::current_num_threads()
 }
