@@ -400,11 +400,16 @@ impl System {
     /// own threshold, or the general engine's spring count:
     /// [`super::forces::uses_threads`]), else one.
     pub fn engine_threads(&self) -> usize {
-        let engines = &self.engines;
+        let Engines {
+            grid,
+            lattice,
+            mesh,
+            ..
+        } = &self.engines;
         let parallel = match self.engine() {
-            Engine::Grid(_) => engines.grid.as_ref().is_some_and(|f| f.kernel.is_parallel()),
-            Engine::Lattice(_) => (engines.lattice.as_ref()).is_some_and(|l| l.kernel.is_parallel()),
-            Engine::Mesh => engines.mesh.as_ref().is_some_and(|m| m.kernel.is_parallel()),
+            Engine::Grid(_) => grid.as_ref().is_some_and(|f| f.kernel.is_parallel()),
+            Engine::Lattice(_) => lattice.as_ref().is_some_and(|l| l.kernel.is_parallel()),
+            Engine::Mesh => mesh.as_ref().is_some_and(|m| m.kernel.is_parallel()),
             Engine::General => super::forces::uses_threads(&self.model),
         };
         if parallel { pool_threads() } else { 1 }
