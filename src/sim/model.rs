@@ -124,7 +124,7 @@ impl Default for Params {
 /// What connects the particles: springs, bars and the surface.
 #[derive(Clone, Debug, Default)]
 pub struct Topology {
-    /// Damped springs (any order; [`System::new`] makes them canonical).
+    /// Damped springs (any order; [`super::System::new`] makes them canonical).
     pub springs: Vec<Spring>,
     /// Rigid bars.
     pub bars: Vec<Bar>,
@@ -149,7 +149,7 @@ pub struct Model {
     pub inv_mass: Vec<f64>,
     /// Which particles the scene or the user pinned.
     pub pinned: Vec<bool>,
-    /// Damped springs, canonical (see [`springs::canonicalize`]).
+    /// Damped springs, canonical (see [`super::springs::canonicalize`]).
     pub springs: Vec<Spring>,
     /// For each particle, the springs touching it.
     pub adjacency: Adjacency,

@@ -75,7 +75,7 @@ impl<E: Real> ContactRows<'_, E> {
     /// those that may touch are resolved together
     /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
     /// `resolve` gives it alone). A row's last block reads past its last column:
-    /// the grid's ghost columns (its rows are [`BLOCK`] floats longer than their
+    /// the grid's ghost columns (its rows are [`super::BLOCK`] floats longer than their
     /// blocks), or the next row of a lattice (whose arrays end in ghosts); lanes
     /// that do not touch are written back what they held.
     pub(super) fn resolve(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {

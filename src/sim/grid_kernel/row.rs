@@ -1,0 +1,682 @@
+//! The fused row pass: each row's springs and drag triangles evaluated once, the
+//! forces carried to the rows below and the lanes beside, and each particle
+//! integrated as soon as its force is complete (see the module doc of
+//! [`super`]).
+
+use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, SimdLevel};
+
+/// Read-only inputs of a step.
+pub(super) struct Ctx<'a, E> {
+    pub(super) grid: Grid,
+    pub(super) p: Params<E>,
+    pub(super) x: [&'a [E]; 3],
+    pub(super) xl: [&'a [E]; 3],
+    pub(super) v: [&'a [E]; 3],
+    /// Verlet's update velocities (empty for the Euler methods).
+    pub(super) u: [&'a [E]; 3],
+    pub(super) inv_mass: &'a [E],
+    pub(super) col_mask: &'a [E],
+    /// With springs missing, the masks of the springs a block evaluates and of its
+    /// triangles (see [`block`]).
+    pub(super) torn: Option<[&'a [E]; 8]>,
+    pub(super) drag: bool,
+    pub(super) simd: SimdLevel,
+}
+
+/// Run the bands, splitting the output rows among them; in parallel with
+/// `rayon::join` (inside the caller's pool) when `parallel`.
+pub(super) fn run_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, parallel: bool) {
+    if bands.len() == 1 {
+        E::band_dispatch(ctx, &mut bands[0], out);
+        return;
+    }
+    let mid = bands.len() / 2;
+    let at = (bands[mid].r0 - bands[0].r0) * ctx.grid.stride;
+    let (lo, hi) = bands.split_at_mut(mid);
+    let (out_lo, out_hi) = out.split_at(at);
+    if parallel {
+        rayon::join(
+            || run_bands(ctx, lo, out_lo, true),
+            || run_bands(ctx, hi, out_hi, true),
+        );
+    } else {
+        run_bands(ctx, lo, out_lo, false);
+        run_bands(ctx, hi, out_hi, false);
+    }
+}
+
+/// The two bands of `bands`, the second handed to the thread serving `duo`.
+pub(super) fn run_two_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, duo: &Duo) {
+    let at = (bands[1].r0 - bands[0].r0) * ctx.grid.stride;
+    let (first, second) = bands.split_at_mut(1);
+    let (out_first, out_second) = out.split_at(at);
+    duo.fork_once(
+        || E::band_dispatch(ctx, &mut second[0], out_second),
+        || E::band_dispatch(ctx, &mut first[0], out_first),
+    );
+}
+
+/// One row of the fused pass in one mode ([`row_step`]'s constants: drag, whether
+/// the row is integrated, plain, low parts), for one SIMD level and precision.
+/// Each level compiles each mode as a function of its own: in one function
+/// holding all twelve, how each came out moved with unrelated changes (the plain
+/// cloth's step once ran 1.3x slower after code moved between files).
+pub(super) trait RowMode<E> {
+    /// [`row_step`] in this mode.
+    fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+        self,
+        ctx: &Ctx<E>,
+        band: &mut Band<E>,
+        row: usize,
+        out: &mut Out<E>,
+        lo: usize,
+    );
+}
+
+/// [`RowMode`] with the portable lanes.
+#[derive(Clone, Copy)]
+struct PortableRows;
+
+impl<E: Real> RowMode<E> for PortableRows {
+    #[inline(never)]
+    fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+        self,
+        ctx: &Ctx<E>,
+        band: &mut Band<E>,
+        row: usize,
+        out: &mut Out<E>,
+        lo: usize,
+    ) {
+        row_step::<_, DRAG, OWN, PLAIN, LO>(Portable::<E>::default(), ctx, band, row, out, lo);
+    }
+}
+
+/// One row with the portable lanes.
+pub(super) fn row_portable<E: Real>(
+    ctx: &Ctx<E>,
+    band: &mut Band<E>,
+    row: usize,
+    out: &mut Out<E>,
+    lo: usize,
+    own: bool,
+) {
+    row_variant(PortableRows, ctx, band, row, out, lo, own);
+}
+
+/// [`row_step`] in the mode for the scene (drag, plain, low parts), integrating
+/// the row if `own`.
+#[inline(always)]
+pub(super) fn row_variant<E: Real>(
+    mode: impl RowMode<E>,
+    ctx: &Ctx<E>,
+    band: &mut Band<E>,
+    row: usize,
+    out: &mut Out<E>,
+    lo: usize,
+    own: bool,
+) {
+    // A plain cloth (symplectic Euler, no air damping, ground or sphere) gets a
+    // version of the step without them.
+    let plain = ctx.p.is_plain();
+    macro_rules! modes {
+        ($lo:literal) => {
+            match (ctx.drag, own, plain) {
+                (true, true, true) => mode.row::<true, true, true, $lo>(ctx, band, row, out, lo),
+                (true, true, false) => mode.row::<true, true, false, $lo>(ctx, band, row, out, lo),
+                (false, true, true) => mode.row::<false, true, true, $lo>(ctx, band, row, out, lo),
+                (false, true, false) => {
+                    mode.row::<false, true, false, $lo>(ctx, band, row, out, lo)
+                }
+                (true, false, _) => mode.row::<true, false, true, $lo>(ctx, band, row, out, lo),
+                (false, false, _) => mode.row::<false, false, true, $lo>(ctx, band, row, out, lo),
+            }
+        };
+    }
+    if ctx.p.compensated {
+        modes!(true)
+    } else {
+        modes!(false)
+    }
+}
+
+/// The rows of one band: prime the accumulator ring with the two rows above the
+/// band, then compute and integrate the band's rows one by one. Each row is one
+/// call of `row`, compiled for the chosen SIMD level.
+pub(super) fn band_rows<E: Real>(
+    ctx: &Ctx<E>,
+    band: &mut Band<E>,
+    mut out: Out<E>,
+    row: impl Fn(&Ctx<E>, &mut Band<E>, usize, &mut Out<E>, usize, bool),
+) {
+    // Rows 0 and 1 get nothing from rows above the cloth.
+    if band.r0 < 2 {
+        band.acc.as_mut_slice().fill(E::ZERO);
+    }
+    for r in band.r0.saturating_sub(2)..band.r0 {
+        row(ctx, band, r, &mut out, 0, false);
+    }
+    let st = ctx.grid.stride;
+    for r in band.r0..band.r1 {
+        row(ctx, band, r, &mut out, (r - band.r0) * st, true);
+    }
+}
+
+/// A particle's position (high and low parts) and velocity, one per lane.
+pub(super) type Particle<'a, V> = (&'a [V; 3], &'a [V; 3], &'a [V; 3]);
+
+/// Forces on the first ends of springs `i`-`j`, one per lane, times `mask` (if
+/// any): `f = (k L / l - k - b (d·dv) / l²) d = ((-b (d·dv) / l + k L) / l - k) d`
+/// with `d = x_i - x_j` (high parts and low parts subtracted separately, so that `d`
+/// is accurate to its own size, not to that of the positions), `dv = v_i - v_j`.
+/// `kind` is `[-k, k L, -b]`.
+#[inline(always)]
+pub(super) fn spring<S: Simd, const LO: bool>(
+    s: S,
+    (xi, xli, vi): Particle<S::V>,
+    (xj, xlj, vj): Particle<S::V>,
+    [nk, kl, nb]: [S::V; 3],
+    mask: Option<S::V>,
+) -> [S::V; 3] {
+    let d: [S::V; 3] = std::array::from_fn(|a| {
+        if LO {
+            s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a]))
+        } else {
+            s.sub(xi[a], xj[a])
+        }
+    });
+    let u = [
+        s.sub(vi[0], vj[0]),
+        s.sub(vi[1], vj[1]),
+        s.sub(vi[2], vj[2]),
+    ];
+    let l2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
+    let dd = s.mul_add(d[2], u[2], s.mul_add(d[1], u[1], s.mul(d[0], u[0])));
+    let inv = s.rsqrt_or_zero(l2, S::E::EPS2);
+    let a = s.mul_add(s.mul_add(s.mul(nb, dd), inv, kl), inv, nk);
+    let a = match mask {
+        Some(m) => s.mul(a, m),
+        None => a,
+    };
+    [s.mul(a, d[0]), s.mul(a, d[1]), s.mul(a, d[2])]
+}
+
+/// Drag on each vertex of triangle `(p, q, d)` with relative air velocity `vr`, times
+/// `mask`: `-(ρ C_d / 12) |v_rel| (v_rel·m) m / |m|` with `m = (q - p) × (d - p)`,
+/// `|m| = 2A`; `|v_rel| / |m|` is computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`.
+#[inline(always)]
+fn triangle<S: Simd>(
+    s: S,
+    [p, q, d]: [&[S::V; 3]; 3],
+    vr: &[S::V; 3],
+    neg_drag: S::V,
+    mask: Option<S::V>,
+) -> [S::V; 3] {
+    let e1 = [s.sub(q[0], p[0]), s.sub(q[1], p[1]), s.sub(q[2], p[2])];
+    let e2 = [s.sub(d[0], p[0]), s.sub(d[1], p[1]), s.sub(d[2], p[2])];
+    let m = [
+        s.mul_sub(e1[1], e2[2], s.mul(e1[2], e2[1])),
+        s.mul_sub(e1[2], e2[0], s.mul(e1[0], e2[2])),
+        s.mul_sub(e1[0], e2[1], s.mul(e1[1], e2[0])),
+    ];
+    let m2 = s.mul_add(m[2], m[2], s.mul_add(m[1], m[1], s.mul(m[0], m[0])));
+    let vr2 = s.mul_add(vr[2], vr[2], s.mul_add(vr[1], vr[1], s.mul(vr[0], vr[0])));
+    let vm = s.mul_add(vr[2], m[2], s.mul_add(vr[1], m[1], s.mul(vr[0], m[0])));
+    let ratio = s.mul(vr2, s.rsqrt_or_zero(s.mul(vr2, m2), S::E::TINY));
+    let a = s.mul(s.mul(neg_drag, vm), ratio);
+    let a = match mask {
+        Some(m) => s.mul(a, m),
+        None => a,
+    };
+    [s.mul(a, m[0]), s.mul(a, m[1]), s.mul(a, m[2])]
+}
+
+/// Splatted constants and raw pointers of one row, shared by its blocks.
+struct RowKernel<S: Simd> {
+    s: S,
+    /// What integrating a particle needs.
+    step: StepLanes<S>,
+    kinds: [[S::V; 3]; 3],
+    neg_wind: [S::V; 3],
+    third: S::V,
+    neg_drag: S::V,
+    down: S::V,
+    down2: S::V,
+    x: [*const S::E; 3],
+    xl: [*const S::E; 3],
+    v: [*const S::E; 3],
+    inv_mass: *const S::E,
+    col_mask: *const S::E,
+    /// [`Ctx::torn`]'s masks.
+    torn: Option<[*const S::E; 8]>,
+    acc: *mut S::E,
+    /// Array offsets of the rows `row`, `row + 1`, `row + 2`.
+    b: [usize; 3],
+    /// Accumulator offsets of the rows `row`, `row + 1`, `row + 2`.
+    a: [usize; 3],
+    nv: usize,
+    stride: usize,
+    lo: usize,
+}
+
+/// Splatted constants and raw pointers for [`integrate`] and
+/// [`project_out_of_sphere`]: the step of a particle under its force, shared by the
+/// grid's rows and the lattice's blocks ([`super::lattice`]).
+pub(super) struct StepLanes<S: Simd> {
+    pub(super) s: S,
+    pub(super) gravity: [S::V; 3],
+    pub(super) dt: S::V,
+    pub(super) zero: S::V,
+    pub(super) one: S::V,
+    /// `-c` (air damping), ground height, `k_c`, damping, `explicit`, `h/2` (Verlet).
+    pub(super) neg_air: S::V,
+    pub(super) ground: [S::V; 3],
+    pub(super) explicit: S::V,
+    pub(super) verlet_half_dt: S::V,
+    pub(super) inv_dt: S::V,
+    /// Sphere centre, radius and squared radius (when the step projects onto it).
+    pub(super) sphere: Option<SphereLanes<S::V>>,
+    pub(super) verlet: bool,
+    /// Verlet's update velocities (the velocities for the other methods).
+    pub(super) u: [*const S::E; 3],
+    /// [`Out`]'s twelve arrays.
+    pub(super) out: [*mut S::E; 12],
+}
+
+impl<S: Simd> StepLanes<S> {
+    /// The lanes of `p`, reading Verlet's `u` from `u` (else from `v`) and writing
+    /// to `out`. (Inlined: called once a row, it cost the drape 3% as a call.)
+    #[inline(always)]
+    pub(super) fn new(
+        s: S,
+        p: &Params<S::E>,
+        u: [&[S::E]; 3],
+        v: [&[S::E]; 3],
+        out: &mut Out<S::E>,
+    ) -> Self {
+        StepLanes {
+            s,
+            gravity: p.gravity.map(|w| s.splat(w)),
+            dt: s.splat(p.dt),
+            zero: s.splat(S::E::ZERO),
+            one: s.splat(S::E::ONE),
+            neg_air: s.splat(p.neg_air),
+            ground: p.ground.map(|g| s.splat(g)),
+            explicit: s.splat(p.explicit),
+            verlet_half_dt: s.splat(p.verlet_half_dt),
+            inv_dt: s.splat(S::E::ONE / p.dt),
+            sphere: p
+                .sphere
+                .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
+            verlet: p.verlet,
+            // Without Verlet's own array the update velocity is the velocity.
+            u: if p.verlet { u } else { v }.map(<[S::E]>::as_ptr),
+            out: out.0.each_mut().map(|o| o.as_mut_ptr()),
+        }
+    }
+}
+
+/// A sphere collider's centre, radius and squared radius, splatted.
+type SphereLanes<V> = ([V; 3], V, V);
+
+/// One row `row` of the cloth, in SIMD blocks of columns: evaluate the six springs
+/// that start on each particle of the row, `(row, c)` to `(row, c+1)`, `(row, c+2)`,
+/// `(row+1, c)`, `(row+1, c+1)`, `(row+2, c)`, and `(row, c+1)` to `(row+1, c)`,
+/// and (with `DRAG`) the two triangles of cell `(row, c)`. Forces on the particles
+/// of rows `row+1` and `row+2` are added to their accumulators in the ring; the
+/// force on a particle of `row` is its accumulator (from the two rows above) plus
+/// the forces just computed, and with `OWN` the particle is integrated at once:
+/// `v' = v + dt (f / m + g)` (0 when pinned), `x' = x + dt v'`, written to `out`
+/// at `lo + c`. Forces between columns of the same row reach the neighbouring
+/// lanes through `shift1`/`shift2`, carried from block to block. Blocks that touch
+/// the last two columns, and the last two rows, mask the springs and triangles
+/// that reach ghost particles.
+#[inline(always)]
+pub(super) fn row_step<
+    S: Simd,
+    const DRAG: bool,
+    const OWN: bool,
+    const PLAIN: bool,
+    const LO: bool,
+>(
+    s: S,
+    ctx: &Ctx<S::E>,
+    band: &mut Band<S::E>,
+    row: usize,
+    out: &mut Out<S::E>,
+    lo: usize,
+) {
+    let g = ctx.grid;
+    let nv = g.nv;
+    let acc = band.acc.as_mut_slice();
+    let b = [row * g.stride, (row + 1) * g.stride, (row + 2) * g.stride];
+    // Everything read or written by `block` lies inside these bounds.
+    assert!(S::LANES <= BLOCK && nv.is_multiple_of(S::LANES) && acc.len() == SLOTS * 3 * nv);
+    assert!(b[2] + nv + 2 <= g.len() && ctx.inv_mass.len() == g.len());
+    assert!(ctx.col_mask.len() >= g.stride + nv);
+    for mask in ctx.torn.iter().flatten() {
+        // Read up to one past the row's last block (the other diagonal's).
+        assert!(mask.len() > b[0] + nv);
+    }
+    for a in ctx.x.iter().chain(&ctx.xl).chain(&ctx.v) {
+        assert_eq!(a.len(), g.len());
+    }
+    let verlet = ctx.p.verlet;
+    if verlet {
+        for a in &ctx.u {
+            assert_eq!(a.len(), g.len());
+        }
+    }
+    if OWN {
+        for o in &out.0[..if verlet { 12 } else { 9 }] {
+            assert!(lo + nv <= o.len());
+        }
+    }
+    let slot = |r: usize| (r % SLOTS) * 3 * nv;
+    let p = &ctx.p;
+    let kind = |i: usize| [s.splat(-p.ks[i]), s.splat(p.kls[i]), s.splat(-p.bs[i])];
+    let k = RowKernel {
+        s,
+        step: StepLanes::new(s, p, ctx.u, ctx.v, out),
+        kinds: [kind(0), kind(1), kind(2)],
+        neg_wind: p.wind.map(|w| s.splat(-w)),
+        third: s.splat(S::E::of(1.0 / 3.0)),
+        neg_drag: s.splat(-p.drag),
+        down: s.splat(if row + 1 < g.h { S::E::ONE } else { S::E::ZERO }),
+        down2: s.splat(if row + 2 < g.h { S::E::ONE } else { S::E::ZERO }),
+        x: ctx.x.map(<[S::E]>::as_ptr),
+        xl: ctx.xl.map(<[S::E]>::as_ptr),
+        v: ctx.v.map(<[S::E]>::as_ptr),
+        inv_mass: ctx.inv_mass.as_ptr(),
+        col_mask: ctx.col_mask.as_ptr(),
+        torn: ctx.torn.map(|t| t.map(<[S::E]>::as_ptr)),
+        acc: acc.as_mut_ptr(),
+        b,
+        a: [slot(row), slot(row + 1), slot(row + 2)],
+        nv,
+        stride: g.stride,
+        lo,
+    };
+    // Blocks from `c_mask` on hold a column >= w - 2; near the bottom all blocks
+    // reach ghost rows; with springs missing every block is masked.
+    let c_mask = if row + 2 < g.h && ctx.torn.is_none() {
+        (g.w.saturating_sub(2) / S::LANES) * S::LANES
+    } else {
+        0
+    };
+    let mut carry = [[k.step.zero; 3]; 3];
+    let mut c = 0;
+    while c < c_mask {
+        // SAFETY: c < nv, a multiple of LANES; bounds asserted above.
+        unsafe { block::<S, DRAG, OWN, false, PLAIN, LO>(&k, c, &mut carry) };
+        c += S::LANES;
+    }
+    while c < nv {
+        // SAFETY: as above.
+        unsafe { block::<S, DRAG, OWN, true, PLAIN, LO>(&k, c, &mut carry) };
+        c += S::LANES;
+    }
+}
+
+/// Columns `c .. c + LANES` of a row (see [`row_step`]).
+///
+/// # Safety
+/// `c + LANES <= nv`, and the pointers and offsets of `k` are valid as asserted in
+/// [`row_step`].
+#[inline(always)]
+unsafe fn block<
+    S: Simd,
+    const DRAG: bool,
+    const OWN: bool,
+    const MASK: bool,
+    const PLAIN: bool,
+    const LO: bool,
+>(
+    k: &RowKernel<S>,
+    c: usize,
+    carry: &mut [[S::V; 3]; 3],
+) {
+    let s = k.s;
+    let zero = k.step.zero;
+    // SAFETY: offsets are inside the arrays (caller's contract).
+    let ld = |ptr: [*const S::E; 3], i: usize| unsafe {
+        [
+            s.load(ptr[0].add(i)),
+            s.load(ptr[1].add(i)),
+            s.load(ptr[2].add(i)),
+        ]
+    };
+    let [b0, b1, b2] = k.b;
+    // The positions' low parts, or zeros without them.
+    let ldl = |i: usize| if LO { ld(k.xl, i) } else { [zero; 3] };
+    let p00 = (&ld(k.x, b0 + c), &ldl(b0 + c), &ld(k.v, b0 + c));
+    let p01 = (&ld(k.x, b0 + c + 1), &ldl(b0 + c + 1), &ld(k.v, b0 + c + 1));
+    let p02 = (&ld(k.x, b0 + c + 2), &ldl(b0 + c + 2), &ld(k.v, b0 + c + 2));
+    let p10 = (&ld(k.x, b1 + c), &ldl(b1 + c), &ld(k.v, b1 + c));
+    let p11 = (&ld(k.x, b1 + c + 1), &ldl(b1 + c + 1), &ld(k.v, b1 + c + 1));
+    let p20 = (&ld(k.x, b2 + c), &ldl(b2 + c), &ld(k.v, b2 + c));
+    // Masks of the springs right, two right, down, down-right, the other diagonal,
+    // two down, and of the two triangles.
+    let masks: Option<[S::V; 8]> = if MASK {
+        Some(match k.torn {
+            // SAFETY: as above (the other diagonal's mask is read one column on).
+            Some(t) => unsafe {
+                std::array::from_fn(|m| s.load(t[m].add(b0 + c + usize::from(m == 4))))
+            },
+            None => {
+                // SAFETY: as above.
+                let (m1, m2) = unsafe {
+                    (
+                        s.load(k.col_mask.add(c)),
+                        s.load(k.col_mask.add(k.stride + c)),
+                    )
+                };
+                let m1d = s.mul(m1, k.down);
+                [m1, m2, k.down, m1d, m1d, k.down2, m1d, m1d]
+            }
+        })
+    } else {
+        None
+    };
+    let mask = |m: usize| masks.map(|masks| masks[m]);
+    let [structural, bend, shear] = k.kinds;
+    let right = spring::<S, LO>(s, p00, p01, structural, mask(0));
+    let right2 = spring::<S, LO>(s, p00, p02, bend, mask(1));
+    let d = spring::<S, LO>(s, p00, p10, structural, mask(2));
+    let dr = spring::<S, LO>(s, p00, p11, shear, mask(3));
+    let anti = spring::<S, LO>(s, p01, p10, shear, mask(4));
+    let d2 = spring::<S, LO>(s, p00, p20, bend, mask(5));
+    let (t1, t2) = if DRAG {
+        // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
+        let (va, vb, vd, ve) = (p00.2, p01.2, p10.2, p11.2);
+        let bd: [S::V; 3] = std::array::from_fn(|i| s.add(vb[i], vd[i]));
+        let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
+        let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
+        (
+            triangle(s, [p00.0, p01.0, p10.0], &vr1, k.neg_drag, mask(6)),
+            triangle(s, [p01.0, p11.0, p10.0], &vr2, k.neg_drag, mask(7)),
+        )
+    } else {
+        ([zero; 3], [zero; 3])
+    };
+    let nv = k.nv;
+    // SAFETY: as above.
+    let w = if OWN {
+        unsafe { s.load(k.inv_mass.add(b0 + c)) }
+    } else {
+        zero
+    };
+    for i in 0..3 {
+        // Terms for the lane to the right (column c+1), two to the right (c+2) and,
+        // on the next row, one to the right.
+        let mut l = s.sub(anti[i], right[i]);
+        let q = s.sub(zero, right2[i]);
+        let mut m = s.sub(zero, dr[i]);
+        let mut in1 = s.sub(zero, s.add(d[i], anti[i]));
+        if DRAG {
+            let t = s.add(t1[i], t2[i]);
+            l = s.add(l, t);
+            m = s.add(m, t2[i]);
+            in1 = s.add(in1, t);
+        }
+        let in1 = s.add(in1, s.shift1(carry[2][i], m));
+        // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
+        unsafe {
+            let pa1 = k.acc.add(k.a[1] + i * nv + c);
+            s.store(pa1, s.add(s.load(pa1), in1));
+            s.store(k.acc.add(k.a[2] + i * nv + c), s.sub(zero, d2[i]));
+        }
+        if OWN {
+            let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
+            own = s.add(own, d2[i]);
+            if DRAG {
+                own = s.add(own, t1[i]);
+            }
+            own = s.add(
+                own,
+                s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
+            );
+            // SAFETY: as above; outputs hold `lo + nv` floats.
+            unsafe {
+                let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
+                integrate::<S, PLAIN, LO>(&k.step, k.b[0] + c, k.lo + c, i, w, p00, force);
+            }
+        }
+        carry[0][i] = l;
+        carry[1][i] = q;
+        carry[2][i] = m;
+    }
+    if OWN && !PLAIN && k.step.sphere.is_some() {
+        // SAFETY: as above.
+        unsafe { project_out_of_sphere::<S, LO>(&k.step, k.lo + c, w) };
+    }
+}
+
+/// Integrates component `i` of the `LANES` particles at array index `at` (inverse
+/// masses `w`) under `force` (springs and drag): adds air damping and, for `y`, the
+/// ground penalty, then steps them (symplectic Euler, explicit Euler or position
+/// Verlet) and writes the new state to the outputs at index `o`.
+///
+/// # Safety
+/// As for [`block`], with `OWN`.
+///
+/// `PLAIN`: symplectic Euler with no air damping or ground (see `Params::is_plain`).
+#[inline(always)]
+pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
+    k: &StepLanes<S>,
+    at: usize,
+    o: usize,
+    i: usize,
+    w: S::V,
+    (x, xl, v): Particle<S::V>,
+    force: S::V,
+) {
+    let s = k.s;
+    if PLAIN {
+        let a = s.mul_add(force, w, k.gravity[i]);
+        let vn = s.keep_if_positive(w, s.mul_add(k.dt, a, v[i]));
+        // SAFETY: outputs hold `lo + nv` floats.
+        unsafe {
+            if LO {
+                let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, vn));
+                s.store(k.out[i].add(o), xn);
+                s.store(k.out[3 + i].add(o), xnl);
+            } else {
+                s.store(k.out[i].add(o), s.mul_add(k.dt, vn, x[i]));
+            }
+            s.store(k.out[6 + i].add(o), vn);
+        }
+        return;
+    }
+    // SAFETY: inside the arrays (caller's contract).
+    let u = if k.verlet {
+        unsafe { s.load(k.u[i].add(at)) }
+    } else {
+        v[i]
+    };
+    let mut force = s.mul_add(k.neg_air, v[i], force);
+    if i == 1 {
+        // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
+        let [height, kc, cg] = k.ground;
+        let depth = s.sub(height, x[1]);
+        let push = s.mul_sub(kc, depth, s.mul(cg, v[1]));
+        force = s.add(force, s.keep_if_positive(depth, push));
+    }
+    let a = s.mul_add(force, w, k.gravity[i]);
+    let un = s.keep_if_positive(w, s.mul_add(k.dt, a, u));
+    // Explicit Euler moves with the old velocity, the others with the new one.
+    let moving = s.mul_add(k.explicit, s.sub(u, un), un);
+    let (xn, xnl) = if LO {
+        add_double(s, (x[i], xl[i]), s.mul(k.dt, moving))
+    } else {
+        (s.mul_add(k.dt, moving, x[i]), k.zero)
+    };
+    let vn = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un));
+    // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
+    unsafe {
+        s.store(k.out[i].add(o), xn);
+        if LO {
+            s.store(k.out[3 + i].add(o), xnl);
+        }
+        s.store(k.out[6 + i].add(o), vn);
+        if k.verlet {
+            s.store(k.out[9 + i].add(o), un);
+        }
+    }
+}
+
+/// Projects the just integrated particles at output index `o` that are inside
+/// the sphere (and free) onto its surface, `center + radius d / |d|`; the move `δ`
+/// also changes their velocities by `δ / h`.
+///
+/// # Safety
+/// As for [`integrate`], after it ran for all three components.
+#[inline(always)]
+pub(super) unsafe fn project_out_of_sphere<S: Simd, const LO: bool>(
+    k: &StepLanes<S>,
+    o: usize,
+    w: S::V,
+) {
+    let s = k.s;
+    let Some((center, radius, radius2)) = k.sphere else {
+        return;
+    };
+    // SAFETY: the outputs just written (caller's contract).
+    let out = |j: usize| unsafe { s.load(k.out[j].add(o)) };
+    let xn: [S::V; 3] = std::array::from_fn(out);
+    let d: [S::V; 3] = std::array::from_fn(|i| s.sub(xn[i], center[i]));
+    let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
+    let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
+    let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
+    for i in 0..3 {
+        let onto = s.mul_add(d[i], scale, center[i]);
+        let dx = s.mul(inside, s.sub(onto, xn[i]));
+        let xnl = if LO { out(3 + i) } else { k.zero };
+        let dl = s.mul(inside, xnl);
+        let dv = s.mul(s.sub(dx, dl), k.inv_dt);
+        // SAFETY: as above.
+        unsafe {
+            s.store(k.out[i].add(o), s.add(xn[i], dx));
+            if LO {
+                s.store(k.out[3 + i].add(o), s.sub(xnl, dl));
+            }
+            s.store(k.out[6 + i].add(o), s.add(out(6 + i), dv));
+            if k.verlet {
+                s.store(k.out[9 + i].add(o), s.add(out(9 + i), dv));
+            }
+        }
+    }
+}
+
+/// `(hi, lo) + t` as a new double-float `(hi', lo')` with `|lo'| <= ulp(hi') / 2`:
+/// Dekker's fast two-sum of `hi + t` (exact when `|t| <= |hi|`, a step's move
+/// against a position; otherwise `hi` is within a step of the origin and float
+/// round-off there is already below `ulp(t)`), its error added to `lo`, then
+/// renormalised.
+#[inline(always)]
+pub(super) fn add_double<S: Simd>(s: S, (hi, lo): (S::V, S::V), t: S::V) -> (S::V, S::V) {
+    let sum = s.add(hi, t);
+    let error = s.sub(t, s.sub(sum, hi));
+    let lo = s.add(lo, error);
+    let hi = s.add(sum, lo);
+    (hi, s.sub(lo, s.sub(hi, sum)))
+}

@@ -1,0 +1,361 @@
+//! AVX2 and AVX-512 versions of [`Simd`], and the entry points compiled for them.
+
+use std::arch::x86_64::*;
+
+use super::row::{RowMode, row_step};
+use super::{
+    Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines, largest_magnitude_bits,
+    lattice, row_may_tear, row_variant, stretch_limit_sweep,
+};
+
+/// Token for AVX2 + FMA; only built inside `band_avx2`.
+#[derive(Clone, Copy)]
+pub(super) struct Avx2(());
+
+/// Token for AVX-512F/VL + FMA; only built inside `band_avx512`.
+#[derive(Clone, Copy)]
+pub(super) struct Avx512(());
+
+/// The row pass's entry points for a SIMD level and precision: `name` runs one
+/// row (see `row_step`) in the scene's mode, each mode compiled as a function of
+/// its own with the level's features ([`super::row::RowMode`]):
+/// `name, modes: target features, float type, lanes`.
+macro_rules! row_entries {
+    ($($name:ident, $modes:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
+        /// `row_step` in one mode with these lanes and target features.
+        ///
+        /// # Safety
+        /// The CPU must have the target features.
+        #[target_feature(enable = $features)]
+        #[inline(never)]
+        unsafe fn $modes<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+            ctx: &Ctx<$t>,
+            band: &mut Band<$t>,
+            row: usize,
+            out: &mut Out<$t>,
+            lo: usize,
+        ) {
+            row_step::<_, DRAG, OWN, PLAIN, LO>($lanes, ctx, band, row, out, lo);
+        }
+
+        /// One row with these lanes and target features, in the scene's mode.
+        ///
+        /// # Safety
+        /// The CPU must have the target features.
+        pub(super) unsafe fn $name(
+            ctx: &Ctx<$t>,
+            band: &mut Band<$t>,
+            row: usize,
+            out: &mut Out<$t>,
+            lo: usize,
+            own: bool,
+        ) {
+            /// Proof that the CPU has the features, for `RowMode`'s safe method.
+            #[derive(Clone, Copy)]
+            struct Rows(());
+            impl RowMode<$t> for Rows {
+                #[inline(always)]
+                fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+                    self,
+                    ctx: &Ctx<$t>,
+                    band: &mut Band<$t>,
+                    row: usize,
+                    out: &mut Out<$t>,
+                    lo: usize,
+                ) {
+                    // SAFETY: a `Rows` exists only inside `$name`, whose caller
+                    // promises the features.
+                    unsafe { $modes::<DRAG, OWN, PLAIN, LO>(ctx, band, row, out, lo) }
+                }
+            }
+            row_variant(Rows(()), ctx, band, row, out, lo, own);
+        }
+    )*};
+}
+row_entries! {
+    row_avx512, row_modes_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+    row_avx512_f64, row_modes_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
+    row_avx2, row_modes_avx2: "avx2,fma", f32, Avx2(());
+    row_avx2_f64, row_modes_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
+}
+
+/// One band of a lattice (see `lattice::band_steps`) compiled for a SIMD level,
+/// in each precision: `name: target features, float type, lanes`.
+macro_rules! lattice_bands {
+    ($($name:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
+        /// `lattice::band_modes` with these lanes and target features.
+        ///
+        /// # Safety
+        /// The CPU must have the target features.
+        #[target_feature(enable = $features)]
+        #[inline(never)]
+        pub(super) unsafe fn $name(
+            ctx: &lattice::Ctx<$t>,
+            band: &mut lattice::Band<$t>,
+            out: Out<$t>,
+        ) {
+            lattice::band_modes($lanes, ctx, band, out);
+        }
+    )*};
+}
+lattice_bands! {
+    lattice_band_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+    lattice_band_avx2: "avx2,fma", f32, Avx2(());
+    lattice_band_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
+    lattice_band_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
+}
+
+/// The tear scan's `row_may_tear`, compiled for AVX2 and FMA.
+///
+/// # Safety
+/// As for `row_avx2`.
+#[target_feature(enable = "avx2,fma")]
+pub(super) unsafe fn row_may_tear_avx2<E: Real>(
+    state: &State<E>,
+    ends: (usize, usize, usize),
+    alive: Option<&[E]>,
+    scan2: E,
+) -> bool {
+    row_may_tear(state, ends, alive, scan2)
+}
+
+/// `largest_magnitude_bits`, compiled for AVX2.
+///
+/// # Safety
+/// As for `row_avx2`.
+#[target_feature(enable = "avx2,fma")]
+pub(super) unsafe fn largest_magnitude_bits_avx2(bits: &[u32]) -> u32 {
+    largest_magnitude_bits(bits)
+}
+
+/// Contact with friction (`ContactRows::resolve`), compiled for AVX2 and FMA.
+///
+/// # Safety
+/// As for `row_avx2`.
+#[target_feature(enable = "avx2,fma")]
+#[inline(never)]
+pub(super) unsafe fn contact_rows_avx2<E: Real>(
+    ctx: &ContactRows<E>,
+    out: &mut Out<E>,
+    first: usize,
+    rows: std::ops::Range<usize>,
+) {
+    ctx.resolve_rows(out, first, rows)
+}
+
+/// Contact with friction (`ContactRows::resolve`), compiled for AVX-512.
+///
+/// # Safety
+/// As for `row_avx512`.
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+#[inline(never)]
+pub(super) unsafe fn contact_rows_avx512<E: Real>(
+    ctx: &ContactRows<E>,
+    out: &mut Out<E>,
+    first: usize,
+    rows: std::ops::Range<usize>,
+) {
+    ctx.resolve_rows(out, first, rows)
+}
+
+/// The stretch limit's `stretch_limit_sweep` compiled for a SIMD level, in each
+/// precision: `name: target features, float type, lanes`.
+macro_rules! stretch_limit_sweeps {
+    ($($name:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
+        /// `stretch_limit_sweep` with these lanes and target features.
+        ///
+        /// # Safety
+        /// The CPU must have the target features.
+        #[target_feature(enable = $features)]
+        #[inline(never)]
+        pub(super) unsafe fn $name<const LO: bool>(
+            out: &mut Out<$t>,
+            base: usize,
+            inv_mass: &[$t],
+            alive: Option<&[$t]>,
+            lines: &SweepLines<$t>,
+        ) {
+            stretch_limit_sweep::<_, LO>($lanes, out, base, inv_mass, alive, lines)
+        }
+    )*};
+}
+stretch_limit_sweeps! {
+    stretch_limit_sweep_avx2: "avx2,fma", f32, Avx2(());
+    stretch_limit_sweep_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
+    stretch_limit_sweep_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+    stretch_limit_sweep_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
+}
+
+// SAFETY (all intrinsics below): an `Avx512` / `Avx2` value exists only inside
+// the entry points above, which run only on CPUs with those features.
+impl Simd for Avx512 {
+    type E = f32;
+    type V = __m512;
+    const LANES: usize = 16;
+    #[inline(always)]
+    fn splat(self, a: f32) -> __m512 {
+        unsafe { _mm512_set1_ps(a) }
+    }
+    #[inline(always)]
+    unsafe fn load(self, p: *const f32) -> __m512 {
+        unsafe { _mm512_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn store(self, p: *mut f32, v: __m512) {
+        unsafe { _mm512_storeu_ps(p, v) }
+    }
+    #[inline(always)]
+    fn add(self, a: __m512, b: __m512) -> __m512 {
+        unsafe { _mm512_add_ps(a, b) }
+    }
+    #[inline(always)]
+    fn sub(self, a: __m512, b: __m512) -> __m512 {
+        unsafe { _mm512_sub_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul(self, a: __m512, b: __m512) -> __m512 {
+        unsafe { _mm512_mul_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul_add(self, a: __m512, b: __m512, c: __m512) -> __m512 {
+        unsafe { _mm512_fmadd_ps(a, b, c) }
+    }
+    #[inline(always)]
+    fn mul_sub(self, a: __m512, b: __m512, c: __m512) -> __m512 {
+        unsafe { _mm512_fmsub_ps(a, b, c) }
+    }
+    #[inline(always)]
+    fn rsqrt_or_zero(self, x: __m512, eps: f32) -> __m512 {
+        unsafe {
+            // 14-bit estimate, then one Newton step: y (1.5 - 0.5 x y²).
+            let y = _mm512_rsqrt14_ps(x);
+            let hx = _mm512_mul_ps(x, _mm512_set1_ps(0.5));
+            let t = _mm512_fnmadd_ps(_mm512_mul_ps(hx, y), y, _mm512_set1_ps(1.5));
+            let y = _mm512_mul_ps(y, t);
+            let ok = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(x, _mm512_set1_ps(eps));
+            _mm512_maskz_mov_ps(ok, y)
+        }
+    }
+    #[inline(always)]
+    fn keep_if_positive(self, m: __m512, a: __m512) -> __m512 {
+        unsafe {
+            let ok = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(m, _mm512_setzero_ps());
+            _mm512_maskz_mov_ps(ok, a)
+        }
+    }
+    #[inline(always)]
+    fn div(self, a: __m512, b: __m512) -> __m512 {
+        unsafe { _mm512_div_ps(a, b) }
+    }
+    #[inline(always)]
+    fn any_positive(self, m: __m512) -> bool {
+        unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(m, _mm512_setzero_ps()) != 0 }
+    }
+    #[inline(always)]
+    fn shift1(self, prev: __m512, cur: __m512) -> __m512 {
+        unsafe {
+            _mm512_castsi512_ps(_mm512_alignr_epi32::<15>(
+                _mm512_castps_si512(cur),
+                _mm512_castps_si512(prev),
+            ))
+        }
+    }
+    #[inline(always)]
+    fn shift2(self, prev: __m512, cur: __m512) -> __m512 {
+        unsafe {
+            _mm512_castsi512_ps(_mm512_alignr_epi32::<14>(
+                _mm512_castps_si512(cur),
+                _mm512_castps_si512(prev),
+            ))
+        }
+    }
+}
+
+impl Simd for Avx2 {
+    type E = f32;
+    type V = __m256;
+    const LANES: usize = 8;
+    #[inline(always)]
+    fn splat(self, a: f32) -> __m256 {
+        unsafe { _mm256_set1_ps(a) }
+    }
+    #[inline(always)]
+    unsafe fn load(self, p: *const f32) -> __m256 {
+        unsafe { _mm256_loadu_ps(p) }
+    }
+    #[inline(always)]
+    unsafe fn store(self, p: *mut f32, v: __m256) {
+        unsafe { _mm256_storeu_ps(p, v) }
+    }
+    #[inline(always)]
+    fn add(self, a: __m256, b: __m256) -> __m256 {
+        unsafe { _mm256_add_ps(a, b) }
+    }
+    #[inline(always)]
+    fn sub(self, a: __m256, b: __m256) -> __m256 {
+        unsafe { _mm256_sub_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul(self, a: __m256, b: __m256) -> __m256 {
+        unsafe { _mm256_mul_ps(a, b) }
+    }
+    #[inline(always)]
+    fn mul_add(self, a: __m256, b: __m256, c: __m256) -> __m256 {
+        unsafe { _mm256_fmadd_ps(a, b, c) }
+    }
+    #[inline(always)]
+    fn mul_sub(self, a: __m256, b: __m256, c: __m256) -> __m256 {
+        unsafe { _mm256_fmsub_ps(a, b, c) }
+    }
+    #[inline(always)]
+    fn rsqrt_or_zero(self, x: __m256, eps: f32) -> __m256 {
+        unsafe {
+            // 12-bit estimate, then one Newton step: y (1.5 - 0.5 x y²).
+            let y = _mm256_rsqrt_ps(x);
+            let hx = _mm256_mul_ps(x, _mm256_set1_ps(0.5));
+            let t = _mm256_fnmadd_ps(_mm256_mul_ps(hx, y), y, _mm256_set1_ps(1.5));
+            let y = _mm256_mul_ps(y, t);
+            let ok = _mm256_cmp_ps::<_CMP_GT_OQ>(x, _mm256_set1_ps(eps));
+            _mm256_and_ps(ok, y)
+        }
+    }
+    #[inline(always)]
+    fn keep_if_positive(self, m: __m256, a: __m256) -> __m256 {
+        unsafe {
+            let ok = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_setzero_ps());
+            _mm256_and_ps(ok, a)
+        }
+    }
+    #[inline(always)]
+    fn div(self, a: __m256, b: __m256) -> __m256 {
+        unsafe { _mm256_div_ps(a, b) }
+    }
+    #[inline(always)]
+    fn any_positive(self, m: __m256) -> bool {
+        unsafe {
+            let ok = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_setzero_ps());
+            _mm256_movemask_ps(ok) != 0
+        }
+    }
+    #[inline(always)]
+    fn shift1(self, prev: __m256, cur: __m256) -> __m256 {
+        unsafe {
+            // [prev 4..8, cur 0..4], then per 128-bit half take 3 floats up.
+            let t = _mm256_permute2f128_ps::<0x21>(prev, cur);
+            _mm256_castsi256_ps(_mm256_alignr_epi8::<12>(
+                _mm256_castps_si256(cur),
+                _mm256_castps_si256(t),
+            ))
+        }
+    }
+    #[inline(always)]
+    fn shift2(self, prev: __m256, cur: __m256) -> __m256 {
+        unsafe {
+            let t = _mm256_permute2f128_ps::<0x21>(prev, cur);
+            _mm256_castsi256_ps(_mm256_alignr_epi8::<8>(
+                _mm256_castps_si256(cur),
+                _mm256_castps_si256(t),
+            ))
+        }
+    }
+}
