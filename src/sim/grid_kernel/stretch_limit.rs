@@ -1,7 +1,10 @@
 //! Provot's stretch limit on the grid: one Gauss-Seidel pass over the springs in
 //! twelve sweeps (six stencil directions, two colour classes each), a class's
 //! springs of one row corrected together in SIMD blocks ([`stretch_limit_line`]),
-//! and most rows on two threads in one hand-over ([`Kernel::stretch_limit_pass`]).
+//! in bands of rows that stay in the core's cache, and most rows on two threads in
+//! one hand-over ([`Kernel::stretch_limit_pass`]).
+
+use std::ops::Range;
 
 use super::super::duo::Duo;
 #[cfg(target_arch = "x86_64")]
@@ -66,50 +69,74 @@ impl<E: Real> Kernel<E> {
         });
         let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
         let torn = self.torn.as_ref();
-        // The lines of every sweep that `keep` keeps, in the sweeps' order, in `out`
-        // (the state's arrays from row `first` on).
+        // `skew[k]`: the rows sweep k's lines reach below their first, and those
+        // of the sweeps before it: `dr` summed over sweeps 0 to k.
+        let mut skew = [0; 12];
+        let mut reach = 0;
+        for (k, sweep) in sweeps.iter().enumerate() {
+            reach += sweep.as_ref().map_or(0, |s| s.dr);
+            skew[k] = reach;
+        }
+        // Lines run in bands of rows, each band's sweeps in order, then the next
+        // band's. Sweep k's lines from row `cut(k, t)` on belong to the bands from
+        // boundary `t` on: a band's boundary moves up by the `dr` of each sweep
+        // before. That keeps the sweeps' order wherever it matters: a line of
+        // sweep k that runs before a line of an earlier sweep k' from a later band
+        // (boundary `t`) ends above row `t - skew[k - 1]` (it starts above
+        // `t - skew[k]`), and the other starts at or below `t - skew[k']`, no
+        // higher: they share no particle. (Lines of one sweep share none.)
+        let cut = |k: usize, t: usize| t.saturating_sub(skew[k]);
+        // Bands of about 192 KiB of the state's arrays, with the rows that the skew
+        // adds: each band's sweeps then find its rows in the core's cache (at 256
+        // columns the twelve sweeps over the whole cloth each went to memory).
+        let row_bytes = self.cur.x.len() * 4 * st * std::mem::size_of::<E>();
+        let band = (192 * 1024 / row_bytes.max(1)).max(8);
+        // The lines of every sweep in `rows(k)`, band by band from row `from`,
+        // in `out` (the state's arrays from row `first` on).
         let run =
-            |out: &mut Out<E>, first: usize, keep: &dyn Fn(usize, &Sweep<E>, usize) -> bool| {
-                for (k, sweep) in sweeps.iter().enumerate() {
-                    let Some(sweep) = sweep else { continue };
-                    let alive = torn.map(|t| t.springs[sweep.direction].as_slice());
-                    let keep = |r: usize| keep(k, sweep, r);
-                    let lines = SweepLines {
-                        sweep,
-                        stride: st,
-                        keep: &keep,
-                    };
-                    E::stretch_sweep(simd, out, first * st, inv_mass, alive, &lines);
+            |out: &mut Out<E>, first: usize, from: usize, rows: &dyn Fn(usize) -> Range<usize>| {
+                let mut t = from;
+                while t < h + reach {
+                    let next = t + band;
+                    for (k, sweep) in sweeps.iter().enumerate() {
+                        let Some(sweep) = sweep else { continue };
+                        let all = rows(k);
+                        let start = all.start.max(if t == from { 0 } else { cut(k, t) });
+                        let end = all.end.min(cut(k, next)).min(sweep.rows);
+                        if start >= end {
+                            continue;
+                        }
+                        let alive = torn.map(|t| t.springs[sweep.direction].as_slice());
+                        let lines = SweepLines {
+                            sweep,
+                            stride: st,
+                            rows: start..end,
+                        };
+                        E::stretch_sweep(simd, out, first * st, inv_mass, alive, &lines);
+                    }
+                    t = next;
                 }
             };
         if !parallel {
-            run(&mut self.cur.rows(), 0, &|_, _, _| true);
+            run(&mut self.cur.rows(), 0, 0, &|_| 0..h);
             return;
         }
         // Two threads and one hand-over (a hand-over per sweep cost more than the
-        // sweep's half on this 2-core machine). Lines of different sweeps that
-        // share a row must run in the sweeps' order (lines of one sweep share no
-        // particle). The top thread runs sweep k's lines wholly above row
-        // `above[k]`, the bottom thread its lines from row `below[k]` on, each in
-        // its own rows; then this thread runs the lines left, in order. The bounds
-        // start at the middle row and move apart by each sweep's `dr`, so a line
-        // left over from sweep k (rows r to r + dr, with r + dr >= above[k] and
-        // r < below[k]) shares no row with any later sweep's line that the threads
-        // ran before it, nor with any line of theirs that should have seen it.
+        // sweep's half on this 2-core machine). The top thread runs sweep k's
+        // lines wholly above row `split - skew[k - 1]`, the bottom thread its
+        // lines from row `split + skew[k - 1]` on, each in its own rows and in
+        // bands as above; then this thread runs the lines left, in order. A line
+        // left over from sweep k shares no row with any later sweep's line that
+        // the threads ran before it, nor with any line of theirs that should have
+        // seen it: the bounds move apart by each sweep's `dr`.
         let split = h / 2;
-        let mut above = [split; 12];
-        let mut below = [split; 12];
-        for k in 1..12 {
-            let dr = sweeps[k - 1].as_ref().map_or(0, |s| s.dr);
-            above[k] = above[k - 1].saturating_sub(dr);
-            below[k] = below[k - 1] + dr;
-        }
-        let in_top = |k: usize, sweep: &Sweep<E>, r: usize| r + sweep.dr < above[k];
-        let in_bottom = |k: usize, _: &Sweep<E>, r: usize| r >= below[k];
+        let below = |k: usize| split + if k == 0 { 0 } else { skew[k - 1] };
+        let top = |k: usize| 0..cut(k, split);
+        let bottom = |k: usize| below(k)..h;
         {
-            let (mut top, mut bottom) = self.cur.rows().split_at(split * st);
-            let mut second = || run(&mut bottom, split, &in_bottom);
-            let first = || run(&mut top, 0, &in_top);
+            let (mut upper, mut lower) = self.cur.rows().split_at(split * st);
+            let mut second = || run(&mut lower, split, split, &bottom);
+            let first = || run(&mut upper, 0, 0, &top);
             match duo {
                 Some(duo) => duo.fork(&mut second, first),
                 None => {
@@ -117,9 +144,8 @@ impl<E: Real> Kernel<E> {
                 }
             }
         }
-        let rest =
-            |k: usize, sweep: &Sweep<E>, r: usize| !in_top(k, sweep, r) && !in_bottom(k, sweep, r);
-        run(&mut self.cur.rows(), 0, &rest);
+        let rest = |k: usize| cut(k, split)..below(k);
+        run(&mut self.cur.rows(), 0, 0, &rest);
     }
 }
 
@@ -175,10 +201,11 @@ pub(super) struct Sweep<E> {
 }
 
 impl<E: Real> Sweep<E> {
-    /// The rows whose springs are in the class: every row along rows (the class
-    /// is a pattern of columns), else rows `2 dr m + dr colour + j`, `j < dr`.
-    fn lines(&self) -> impl Iterator<Item = usize> + '_ {
-        (0..self.rows).filter(|r| self.dr == 0 || (r / self.dr) % 2 == self.colour)
+    /// The rows of `rows` whose springs are in the class: every row along rows
+    /// (the class is a pattern of columns), else rows `2 dr m + dr colour + j`,
+    /// `j < dr`.
+    fn lines(&self, rows: Range<usize>) -> impl Iterator<Item = usize> + '_ {
+        rows.filter(|r| self.dr == 0 || (r / self.dr) % 2 == self.colour)
     }
 
     /// Whether positions have low parts.
@@ -196,11 +223,11 @@ impl<E: Real> Sweep<E> {
     }
 }
 
-/// The lines of a [`Sweep`] that `keep` keeps (by row), rows `stride` floats apart.
+/// The lines of a [`Sweep`] starting on `rows`, rows `stride` floats apart.
 pub(super) struct SweepLines<'a, E> {
     pub(super) sweep: &'a Sweep<E>,
     pub(super) stride: usize,
-    pub(super) keep: &'a dyn Fn(usize) -> bool,
+    pub(super) rows: Range<usize>,
 }
 
 /// [`stretch_limit_line`] on each line of `lines`, in order of rows (one call for
@@ -214,7 +241,7 @@ pub(super) fn stretch_limit_sweep<S: Simd, const LO: bool>(
     alive: Option<&[S::E]>,
     lines: &SweepLines<S::E>,
 ) {
-    for r in lines.sweep.lines().filter(|&r| (lines.keep)(r)) {
+    for r in lines.sweep.lines(lines.rows.clone()) {
         let line = lines.sweep.line_at(r, lines.stride);
         stretch_limit_line::<S, LO>(s, out, base, inv_mass, alive, &line);
     }
