@@ -599,11 +599,7 @@ impl Summary {
             self.min.x, self.min.y, self.min.z, self.max.x, self.max.y, self.max.z
         );
         println!("max speed       {:.4} m/s", self.max_speed);
-        let threads = match self.threads {
-            1 => "1 thread".to_string(),
-            n => format!("{n} threads"),
-        };
-        println!("engine          {} ({threads})", self.engine.name());
+        println!("engine          {}", self.engine.label(self.threads));
         if let Some(n) = self.solver_iterations {
             println!("cg iterations   {n} (last step)");
         }

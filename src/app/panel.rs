@@ -876,7 +876,8 @@ fn contents(
                     system.self_collision_contacts()
                 ));
             }
-            ui.label(format!("engine {}", system.engine().name()));
+            let engine = system.engine().label(system.engine_threads());
+            ui.label(format!("engine {engine}"));
             ui.label(RichText::new(format!("adapter: {adapter}")).small());
         });
     // Display.

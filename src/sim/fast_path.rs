@@ -63,6 +63,15 @@ impl Engine {
         }
     }
 
+    /// The engine on `threads` threads, as the command line and the panel show
+    /// it: `grid-f32 (2 threads)`.
+    pub fn label(self, threads: usize) -> String {
+        match threads {
+            1 => format!("{} (1 thread)", self.name()),
+            n => format!("{} ({n} threads)", self.name()),
+        }
+    }
+
     /// Whether this is one of the fast engines (grid, lattice or mesh).
     pub fn is_fast(self) -> bool {
         matches!(self, Self::Grid(_) | Self::Lattice(_) | Self::Mesh)
