@@ -1248,20 +1248,37 @@ impl<E: Real> Kernel<E> {
     fn limit_speed(&mut self, max_speed: f64) {
         let limit2 = E::of(max_speed * max_speed);
         let verlet = self.params.verlet;
-        for p in 0..self.grid.w * self.grid.h {
-            let i = self.grid.index(p);
-            let [vx, vy, vz] = self.cur.v.each_ref().map(|a| a.as_slice()[i]);
-            if vx * vx + vy * vy + vz * vz <= limit2 {
+        let (w, st) = (self.grid.w, self.grid.stride);
+        let over = |v: [E; 3]| faster(v, limit2);
+        for r in 0..self.grid.h {
+            let row = r * st..r * st + w;
+            let [vx, vy, vz] = self.cur.v.each_ref().map(|a| &a.as_slice()[row.clone()]);
+            // A vectorised scan of the row, then the particles over the limit one
+            // by one: the same test either way.
+            let any = match self.simd {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2.
+                SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
+                    x86::any_faster_avx2([vx, vy, vz], limit2)
+                },
+                _ => any_faster([vx, vy, vz], limit2),
+            };
+            if !any {
                 continue;
             }
-            let v = DVec3::new(vx.f64(), vy.f64(), vz.f64());
-            let factor = constraints::speed_limit(v, max_speed);
-            for a in 0..3 {
-                let v = &mut self.cur.v[a].as_mut_slice()[i];
-                *v = E::of(v.f64() * factor);
-                if verlet {
-                    let u = &mut self.cur.u[a].as_mut_slice()[i];
-                    *u = E::of(u.f64() * factor);
+            for i in row {
+                let v = self.cur.v.each_ref().map(|a| a.as_slice()[i]);
+                if !over(v) {
+                    continue;
+                }
+                let factor = constraints::speed_limit(DVec3::from(v.map(E::f64)), max_speed);
+                for a in 0..3 {
+                    let v = &mut self.cur.v[a].as_mut_slice()[i];
+                    *v = E::of(v.f64() * factor);
+                    if verlet {
+                        let u = &mut self.cur.u[a].as_mut_slice()[i];
+                        *u = E::of(u.f64() * factor);
+                    }
                 }
             }
         }
@@ -1935,6 +1952,26 @@ impl GridCloth {
         /// stencil direction).
         fn take_torn(&mut self) -> Vec<(usize, usize)>
     );
+}
+
+/// Whether a particle moving at `[vx, vy, vz]` is faster than `sqrt(limit2)`, in
+/// the kernel's precision (the speed limit's cheap test).
+#[inline(always)]
+fn faster<E: Real>([vx, vy, vz]: [E; 3], limit2: E) -> bool {
+    vx * vx + vy * vy + vz * vz > limit2
+}
+
+/// Whether any of the particles with velocities `[vx, vy, vz]` is [`faster`] than
+/// `sqrt(limit2)`: a plain loop for the compiler to vectorise, the verdict an
+/// integer OR.
+#[inline(always)]
+fn any_faster<E: Real>([vx, vy, vz]: [&[E]; 3], limit2: E) -> bool {
+    let (vy, vz) = (&vy[..vx.len()], &vz[..vx.len()]);
+    let mut any = 0u8;
+    for c in 0..vx.len() {
+        any |= u8::from(faster([vx[c], vy[c], vz[c]], limit2));
+    }
+    any != 0
 }
 
 /// The largest squared speed (m²/s²) and squared distance from `center` (m²) of

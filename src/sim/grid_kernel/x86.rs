@@ -4,8 +4,8 @@ use std::arch::x86_64::*;
 
 use super::row::{RowMode, row_step};
 use super::{
-    Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines, largest_magnitude_bits,
-    lattice, row_may_tear, row_variant, stretch_limit_sweep,
+    Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines, any_faster,
+    largest_magnitude_bits, lattice, row_may_tear, row_variant, stretch_limit_sweep,
 };
 
 /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -126,6 +126,15 @@ pub(super) unsafe fn row_may_tear_avx2<E: Real>(
 #[target_feature(enable = "avx2,fma")]
 pub(super) unsafe fn largest_magnitude_bits_avx2(bits: &[u32]) -> u32 {
     largest_magnitude_bits(bits)
+}
+
+/// `any_faster`, compiled for AVX2.
+///
+/// # Safety
+/// As for `row_avx2`.
+#[target_feature(enable = "avx2,fma")]
+pub(super) unsafe fn any_faster_avx2<E: Real>(v: [&[E]; 3], limit2: E) -> bool {
+    any_faster(v, limit2)
 }
 
 /// Contact with friction (`ContactRows::resolve`), compiled for AVX2 and FMA.
