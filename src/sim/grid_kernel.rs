@@ -1323,6 +1323,7 @@ impl<E: Real> Kernel<E> {
         flags.resize(6 * h, false);
         {
             let (cur, torn, simd) = (&self.cur, self.torn.as_ref(), self.simd);
+            let compensated = self.params.compensated;
             // Row by row, all six directions of a row together: the rows they
             // read stay in cache.
             let scan = |k: usize, flag: &mut bool| {
@@ -1334,7 +1335,7 @@ impl<E: Real> Kernel<E> {
                 let (dr, dc) = STENCIL_DIRECTIONS[d];
                 let (a, b) = (r * st + c0, ((r + dr) * st + c0).wrapping_add_signed(dc));
                 let alive = torn.map(|t| &t.springs[d].as_slice()[a..a + len]);
-                *flag = row_may_tear_dispatch(simd, cur, (a, b, len), alive, scan2);
+                *flag = row_may_tear_dispatch(simd, cur, compensated, (a, b, len), alive, scan2);
             };
             if parallel && w * h >= PARALLEL_MIN_PARTICLES {
                 use rayon::prelude::*;
@@ -2011,10 +2012,10 @@ pub(crate) fn runaway_scan_f64(x: [&[f64]; 3], v: [&[f64]; 3], center: DVec3) ->
 
 /// Whether any spring from `a .. a + len` to `b .. b + len` (array indices in
 /// `state`) that `alive` keeps (all without a mask) is longer than `sqrt(scan2)`,
-/// in the state's precision. Written as a plain loop over slices for the compiler
-/// to vectorise.
+/// in the state's precision, with (`LO`) or without the positions' low parts.
+/// Written as a plain loop over slices for the compiler to vectorise.
 #[inline(always)]
-fn row_may_tear<E: Real>(
+fn row_may_tear<E: Real, const LO: bool>(
     state: &State<E>,
     (a, b, len): (usize, usize, usize),
     alive: Option<&[E]>,
@@ -2026,8 +2027,11 @@ fn row_may_tear<E: Real>(
     }
     let ends = |p| ends(p, a, b, len);
     let [(xa, xb), (ya, yb), (za, zb)] = state.x.each_ref().map(ends);
-    // The low parts are zeros when the positions have none.
-    let [(la, lb), (ma, mb), (na, nb)] = state.xl.each_ref().map(ends);
+    let [(la, lb), (ma, mb), (na, nb)] = if LO {
+        state.xl.each_ref().map(ends)
+    } else {
+        [(xa, xb), (ya, yb), (za, zb)]
+    };
     // Every slice `len` long, in the compiler's sight, so the loops below carry no
     // bounds checks and vectorise; the verdict is an integer OR. (A macro, not a
     // closure: a closure is not inlined into the AVX2 entry point.)
@@ -2036,9 +2040,14 @@ fn row_may_tear<E: Real>(
     macro_rules! l2 {
         ($j:expr) => {{
             let j = $j;
-            let dx = (xa[j] - xb[j]) + (la[j] - lb[j]);
-            let dy = (ya[j] - yb[j]) + (ma[j] - mb[j]);
-            let dz = (za[j] - zb[j]) + (na[j] - nb[j]);
+            let (mut dx, mut dy, mut dz) = (xa[j] - xb[j], ya[j] - yb[j], za[j] - zb[j]);
+            if LO {
+                (dx, dy, dz) = (
+                    dx + (la[j] - lb[j]),
+                    dy + (ma[j] - mb[j]),
+                    dz + (na[j] - nb[j]),
+                );
+            }
             dx * dx + dy * dy + dz * dz
         }};
     }
@@ -2089,17 +2098,33 @@ fn row_to_f64<E: Real>(out: &mut [DVec3], hi: &[Buf<E>; 3], lo: &[Buf<E>; 3], st
 fn row_may_tear_dispatch<E: Real>(
     simd: SimdLevel,
     state: &State<E>,
+    compensated: bool,
     ends: (usize, usize, usize),
     alive: Option<&[E]>,
     scan2: E,
 ) -> bool {
-    match simd {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2 and FMA.
-        SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe {
-            x86::row_may_tear_avx2(state, ends, alive, scan2)
-        },
-        _ => row_may_tear(state, ends, alive, scan2),
+    macro_rules! scan {
+        ($lo:literal) => {
+            match simd {
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2
+                // and FMA.
+                SimdLevel::Avx512 => unsafe {
+                    x86::row_may_tear_avx512::<E, $lo>(state, ends, alive, scan2)
+                },
+                #[cfg(target_arch = "x86_64")]
+                // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
+                SimdLevel::Avx2 => unsafe {
+                    x86::row_may_tear_avx2::<E, $lo>(state, ends, alive, scan2)
+                },
+                _ => row_may_tear::<E, $lo>(state, ends, alive, scan2),
+            }
+        };
+    }
+    if compensated {
+        scan!(true)
+    } else {
+        scan!(false)
     }
 }
 

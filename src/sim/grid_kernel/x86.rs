@@ -110,13 +110,27 @@ lattice_bands! {
 /// # Safety
 /// As for `row_avx2`.
 #[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn row_may_tear_avx2<E: Real>(
+pub(super) unsafe fn row_may_tear_avx2<E: Real, const LO: bool>(
     state: &State<E>,
     ends: (usize, usize, usize),
     alive: Option<&[E]>,
     scan2: E,
 ) -> bool {
-    row_may_tear(state, ends, alive, scan2)
+    row_may_tear::<E, LO>(state, ends, alive, scan2)
+}
+
+/// The tear scan's `row_may_tear`, compiled for AVX-512.
+///
+/// # Safety
+/// As for `row_avx512`.
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+pub(super) unsafe fn row_may_tear_avx512<E: Real, const LO: bool>(
+    state: &State<E>,
+    ends: (usize, usize, usize),
+    alive: Option<&[E]>,
+    scan2: E,
+) -> bool {
+    row_may_tear::<E, LO>(state, ends, alive, scan2)
 }
 
 /// `largest_magnitude_bits`, compiled for AVX2.
