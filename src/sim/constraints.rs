@@ -101,8 +101,10 @@ pub(crate) fn xpbd_pass(
     for s in order.iter().map(|&i| &springs[i as usize]) {
         let (a, b) = (s.a as usize, s.b as usize);
         let (wa, wb) = (inv_mass[a], inv_mass[b]);
-        let spring = (s.rest, s.stiffness, s.damping);
-        if let Some(c) = xpbd_correction([x[a], x[b]], [prev[a], prev[b]], wa, wb, spring, dt) {
+        let Some(spring) = XpbdSpring::new(s.rest, s.stiffness, s.damping, dt) else {
+            continue;
+        };
+        if let Some(c) = xpbd_correction([x[a], x[b]], [prev[a], prev[b]], wa, wb, &spring) {
             x[a] -= wa * c;
             x[b] += wb * c;
         }
@@ -288,25 +290,45 @@ pub(crate) fn length_correction(
     Some((l - goal) / (l * w) * d)
 }
 
-/// XPBD's correction of a spring `(rest, k, b)` between particles now at `x = [xa,
-/// xb]` that were at `prev` at the start of the step `h`, with inverse masses `wa`,
-/// `wb`: `xa -= wa c`, `xb += wb c`, as [`length_correction`].
+/// A spring as XPBD's pass sees it at step `h`: its rest length and its
+/// coefficients ([`xpbd_coefficients`]), worked out once for every spring that
+/// shares them (the grid engine's springs of one kind).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct XpbdSpring {
+    rest: f64,
+    alpha: f64,
+    gamma: f64,
+}
+
+impl XpbdSpring {
+    /// The spring `(rest, k, b)` at step `h`; `None` for `k <= 0`, which
+    /// constrains nothing.
+    #[inline]
+    pub(crate) fn new(rest: f64, k: f64, b: f64, h: f64) -> Option<Self> {
+        let (alpha, gamma) = xpbd_coefficients(k, b, h);
+        (k > 0.0).then_some(Self { rest, alpha, gamma })
+    }
+}
+
+/// XPBD's correction of a `spring` between particles now at `x = [xa, xb]` that
+/// were at `prev` at the start of the step, with inverse masses `wa`, `wb`: `xa -=
+/// wa c`, `xb += wb c`, as [`length_correction`].
 ///
-/// The spring is the constraint `C = l - L` with compliance `α = 1/k` (the same k,
-/// the same material), `α̃ = α / h²`, and the XPBD paper's damping `γ = α̃ β̃ / h`
-/// with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration from `λ = 0`:
+/// The spring `(rest, k, b)` is the constraint `C = l - L` with compliance `α = 1/k`
+/// (the same k, the same material), `α̃ = α / h²`, and the XPBD paper's damping
+/// `γ = α̃ β̃ / h` with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration from `λ = 0`:
 /// `Δλ = -(C + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
-/// with `n = (xa - xb) / l`. A spring with `k <= 0` constrains nothing.
+/// with `n = (xa - xb) / l`.
+#[inline]
 pub(crate) fn xpbd_correction(
     x: [DVec3; 2],
     prev: [DVec3; 2],
     wa: f64,
     wb: f64,
-    (rest, k, b): (f64, f64, f64),
-    h: f64,
+    spring: &XpbdSpring,
 ) -> Option<DVec3> {
     let w = wa + wb;
-    if w == 0.0 || k <= 0.0 {
+    if w == 0.0 {
         return None;
     }
     let d = x[0] - x[1];
@@ -315,9 +337,9 @@ pub(crate) fn xpbd_correction(
         return None;
     }
     let n = d * (1.0 / l);
-    let (alpha, gamma) = xpbd_coefficients(k, b, h);
     let moved = n.dot((x[0] - prev[0]) - (x[1] - prev[1]));
-    Some(-xpbd_multiplier(l - rest, moved, w, alpha, gamma) * n)
+    let (alpha, gamma) = (spring.alpha, spring.gamma);
+    Some(-xpbd_multiplier(l - spring.rest, moved, w, alpha, gamma) * n)
 }
 
 /// XPBD's `(α̃, γ) = (1 / (k h²), b / (k h))` for a spring `(k, b)` at step `h`.

@@ -1410,15 +1410,15 @@ impl<E: Real> Kernel<E> {
         let mut s = self.f64_copies();
         let bits = self.torn.as_ref().map(|t| t.bits.as_slice());
         for (d, ((dr, dc), rest, present, kind)) in self.stencil().into_iter().enumerate() {
-            if !present || kind.k <= 0.0 {
+            let spring = constraints::XpbdSpring::new(rest, kind.k, kind.b, dt);
+            let Some(spring) = spring.filter(|_| present) else {
                 continue;
-            }
+            };
             let class = XpbdClass {
                 width: w,
                 dr,
                 dc,
-                spring: (rest, kind.k, kind.b),
-                dt,
+                spring,
                 left: bits.map(|bits| (bits, 1 << d)),
             };
             for colour in 0..2 {
@@ -2129,14 +2129,14 @@ fn row_may_tear_dispatch<E: Real>(
 }
 
 /// One colour class of XPBD's springs on a grid: the stencil direction `(dr, dc)`
-/// and the spring `(rest length, k, b)` at step `dt`.
+/// and its spring at the step.
 #[derive(Clone, Copy, Debug)]
 struct XpbdClass<'a> {
     width: usize,
     dr: usize,
     dc: isize,
-    spring: (f64, f64, f64),
-    dt: f64,
+    /// The kind's spring at the step's `dt`.
+    spring: constraints::XpbdSpring,
     /// With springs missing, which are left ([`Torn::bits`]) and this direction's bit.
     left: Option<(&'a [u8], u8)>,
 }
@@ -2155,21 +2155,16 @@ impl XpbdClass<'_> {
             (-self.dc).max(0) as usize,
             width.saturating_sub(self.dc.max(0) as usize),
         );
+        let spring = &self.spring;
         let mut correct = |a: usize, b: usize| {
             if let Some((bits, bit)) = self.left
                 && bits[first + a] & bit == 0
             {
                 return;
             }
-            let (rest, k, damping) = self.spring;
-            if let Some(c) = constraints::xpbd_correction(
-                [x[a], x[b]],
-                [x0[a], x0[b]],
-                w[a],
-                w[b],
-                (rest, k, damping),
-                self.dt,
-            ) {
+            if let Some(c) =
+                constraints::xpbd_correction([x[a], x[b]], [x0[a], x0[b]], w[a], w[b], spring)
+            {
                 x[a] -= w[a] * c;
                 x[b] += w[b] * c;
             }
