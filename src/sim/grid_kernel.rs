@@ -1304,26 +1304,38 @@ impl<E: Real> Kernel<E> {
     /// a fixed order, so the breaks do not depend on the threads.
     fn tear_pass(&mut self, tau: f64, parallel: bool) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        // Per direction: first column, columns, rows, rest length, scan bound.
+        let compensated = self.params.compensated;
+        // With double-float positions, how far the high parts' difference may be
+        // from a spring's vector, with room to spare (as the stretch limit's
+        // `StretchLine::near2`): a row whose high parts alone show every spring
+        // shorter than the scan bound less this needs no look at its low parts.
+        let slack = if compensated {
+            16.0 * stretch_limit::largest_magnitude(self.simd, &self.cur.x) * f32::EPSILON as f64
+        } else {
+            0.0
+        };
+        // Per direction: first column, columns, rows, rest length, scan bounds
+        // (with both parts; with the high parts alone).
         let lines = self.stencil().map(|((dr, dc), rest, present, _)| {
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
             let longest = (1.0 + tau) * rest;
             // f32 lengths are good to about 1e-6 of themselves: the scan's margin.
             let scan2 = E::of(longest * longest * (1.0 - 1e-4));
+            let near = (longest - slack).max(0.0);
+            let near2 = E::of(near * near * (1.0 - 1e-4));
             let rows = if present && len > 0 {
                 h.saturating_sub(dr)
             } else {
                 0
             };
-            (c0, len, rows, rest, scan2)
+            (c0, len, rows, rest, (scan2, near2))
         });
         let mut flags = std::mem::take(&mut self.tear_rows);
         flags.clear();
         flags.resize(6 * h, false);
         {
             let (cur, torn, simd) = (&self.cur, self.torn.as_ref(), self.simd);
-            let compensated = self.params.compensated;
             // Row by row, all six directions of a row together: the rows they
             // read stay in cache.
             let scan = |k: usize, flag: &mut bool| {
@@ -1335,13 +1347,20 @@ impl<E: Real> Kernel<E> {
                 let (dr, dc) = STENCIL_DIRECTIONS[d];
                 let (a, b) = (r * st + c0, ((r + dr) * st + c0).wrapping_add_signed(dc));
                 let alive = torn.map(|t| &t.springs[d].as_slice()[a..a + len]);
-                *flag = row_may_tear_dispatch(simd, cur, compensated, (a, b, len), alive, scan2);
+                let ends = (a, b, len);
+                // The high parts first; with double-float positions, both parts
+                // only where the high parts come near the bound.
+                *flag = row_may_tear_dispatch(simd, cur, false, ends, alive, scan2.1)
+                    && (!compensated
+                        || row_may_tear_dispatch(simd, cur, true, ends, alive, scan2.0));
             };
             if parallel && w * h >= PARALLEL_MIN_PARTICLES {
                 use rayon::prelude::*;
+                // Whole rows of 16 at a time: a task per row cost more than its scan.
                 flags
                     .par_iter_mut()
                     .enumerate()
+                    .with_min_len(6 * 16)
                     .for_each(|(k, f)| scan(k, f));
             } else {
                 flags.iter_mut().enumerate().for_each(|(k, f)| scan(k, f));

@@ -414,7 +414,7 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
 
 /// The largest magnitude of the coordinates in `arrays` (infinite when one is not
 /// finite, and for float64 arrays, which have no low parts to bound).
-fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
+pub(super) fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
     let mut bits = 0;
     for a in arrays {
         let Ok(a) = bytemuck::try_cast_slice::<E, u32>(a.as_slice()) else {
