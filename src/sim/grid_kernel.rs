@@ -1149,12 +1149,10 @@ impl<E: Real> Kernel<E> {
     }
 
     /// Whether a pass after the step splits its work with rayon's parallel
-    /// iterators (XPBD's springs, self-collision, tearing), which need the pool's
-    /// other thread free.
+    /// iterators (XPBD's springs, self-collision), which need the pool's other
+    /// thread free.
     fn has_pooled_constraints(&self) -> bool {
-        self.spec.integrator == Integrator::Xpbd
-            || self.spec.self_collision.is_some()
-            || self.spec.tear_strain.is_some()
+        self.spec.integrator == Integrator::Xpbd || self.spec.self_collision.is_some()
     }
 
     fn one_step(&mut self, parallel: bool, duo: Option<&Duo>) {
@@ -1238,7 +1236,7 @@ impl<E: Real> Kernel<E> {
             self.limit_speed(max_speed);
         }
         if let Some(tau) = self.spec.tear_strain {
-            self.tear_pass(tau, parallel);
+            self.tear_pass(tau, parallel, duo);
         }
     }
 
@@ -1299,10 +1297,11 @@ impl<E: Real> Kernel<E> {
     /// Tearing, the step's last phase ([`super::tearing`]): breaks every spring
     /// past the tear strain `tau`. A scan of each row of each stencil direction in
     /// the kernel's precision (vectorised, its rows split over the pool's threads
-    /// when `parallel`) finds the rows that may hold one, with a margin; there
+    /// when `parallel`, or handed half to the spinning server with `duo`) finds
+    /// the rows that may hold one, with a margin; there
     /// [`super::tearing::overstretched`] decides in f64, as in the f64 engine, in
     /// a fixed order, so the breaks do not depend on the threads.
-    fn tear_pass(&mut self, tau: f64, parallel: bool) {
+    fn tear_pass(&mut self, tau: f64, parallel: bool, duo: Option<&Duo>) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let compensated = self.params.compensated;
         // With double-float positions, how far the high parts' difference may be
@@ -1354,16 +1353,27 @@ impl<E: Real> Kernel<E> {
                     && (!compensated
                         || row_may_tear_dispatch(simd, cur, true, ends, alive, scan2.0));
             };
-            if parallel && w * h >= PARALLEL_MIN_PARTICLES {
-                use rayon::prelude::*;
-                // Whole rows of 16 at a time: a task per row cost more than its scan.
-                flags
-                    .par_iter_mut()
-                    .enumerate()
-                    .with_min_len(6 * 16)
-                    .for_each(|(k, f)| scan(k, f));
-            } else {
-                flags.iter_mut().enumerate().for_each(|(k, f)| scan(k, f));
+            let large = w * h >= PARALLEL_MIN_PARTICLES;
+            let scan_all = |from: usize, flags: &mut [bool]| {
+                (flags.iter_mut().enumerate()).for_each(|(k, f)| scan(from + k, f));
+            };
+            match duo {
+                // The rows in two halves, the second handed over by spinning.
+                Some(duo) if large => {
+                    let half = 6 * (h / 2);
+                    let (first, second) = flags.split_at_mut(half);
+                    duo.fork_once(|| scan_all(half, second), || scan_all(0, first));
+                }
+                _ if parallel && large => {
+                    use rayon::prelude::*;
+                    // Whole rows of 16 at a time: a task per row cost more than its scan.
+                    flags
+                        .par_iter_mut()
+                        .enumerate()
+                        .with_min_len(6 * 16)
+                        .for_each(|(k, f)| scan(k, f));
+                }
+                _ => scan_all(0, &mut flags),
             }
         }
         let mut broke = false;
