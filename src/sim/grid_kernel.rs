@@ -1247,7 +1247,6 @@ impl<E: Real> Kernel<E> {
         let limit2 = E::of(max_speed * max_speed);
         let verlet = self.params.verlet;
         let (w, st) = (self.grid.w, self.grid.stride);
-        let over = |v: [E; 3]| faster(v, limit2);
         for r in 0..self.grid.h {
             let row = r * st..r * st + w;
             let [vx, vy, vz] = self.cur.v.each_ref().map(|a| &a.as_slice()[row.clone()]);
@@ -1266,7 +1265,7 @@ impl<E: Real> Kernel<E> {
             }
             for i in row {
                 let v = self.cur.v.each_ref().map(|a| a.as_slice()[i]);
-                if !over(v) {
+                if !faster(v, limit2) {
                     continue;
                 }
                 let factor = constraints::speed_limit(DVec3::from(v.map(E::f64)), max_speed);
@@ -1304,15 +1303,9 @@ impl<E: Real> Kernel<E> {
     fn tear_pass(&mut self, tau: f64, parallel: bool, duo: Option<&Duo>) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let compensated = self.params.compensated;
-        // With double-float positions, how far the high parts' difference may be
-        // from a spring's vector, with room to spare (as the stretch limit's
-        // `StretchLine::near2`): a row whose high parts alone show every spring
-        // shorter than the scan bound less this needs no look at its low parts.
-        let slack = if compensated {
-            16.0 * stretch_limit::largest_magnitude(self.simd, &self.cur.x) * f32::EPSILON as f64
-        } else {
-            0.0
-        };
+        // A row whose high parts alone show every spring shorter than the scan
+        // bound less this needs no look at its low parts.
+        let slack = self.high_parts_slack();
         // Per direction: first column, columns, rows, rest length, scan bounds
         // (with both parts; with the high parts alone).
         let lines = self.stencil().map(|((dr, dc), rest, present, _)| {
@@ -1339,7 +1332,7 @@ impl<E: Real> Kernel<E> {
             // read stay in cache.
             let scan = |k: usize, flag: &mut bool| {
                 let (d, r) = (k % 6, k / 6);
-                let (c0, len, rows, _, scan2) = lines[d];
+                let (c0, len, rows, _, (scan2, near2)) = lines[d];
                 if r >= rows {
                     return;
                 }
@@ -1349,9 +1342,8 @@ impl<E: Real> Kernel<E> {
                 let ends = (a, b, len);
                 // The high parts first; with double-float positions, both parts
                 // only where the high parts come near the bound.
-                *flag = row_may_tear_dispatch(simd, cur, false, ends, alive, scan2.1)
-                    && (!compensated
-                        || row_may_tear_dispatch(simd, cur, true, ends, alive, scan2.0));
+                *flag = row_may_tear_dispatch(simd, cur, false, ends, alive, near2)
+                    && (!compensated || row_may_tear_dispatch(simd, cur, true, ends, alive, scan2));
             };
             let large = w * h >= PARALLEL_MIN_PARTICLES;
             let scan_all = |from: usize, flags: &mut [bool]| {
@@ -2056,6 +2048,7 @@ fn row_may_tear<E: Real, const LO: bool>(
     }
     let ends = |p| ends(p, a, b, len);
     let [(xa, xb), (ya, yb), (za, zb)] = state.x.each_ref().map(ends);
+    // Without low parts these are the high parts again, never read.
     let [(la, lb), (ma, mb), (na, nb)] = if LO {
         state.xl.each_ref().map(ends)
     } else {

@@ -12,6 +12,22 @@ use super::x86;
 use super::{BLOCK, Buf, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SimdLevel, add_double};
 
 impl<E: Real> Kernel<E> {
+    /// With double-float positions, how far (m) the high parts' difference may be
+    /// from a spring's vector, with room to spare: a low part is at most half an
+    /// ulp of its high part, so for coordinates up to `R` the two ends' low parts
+    /// and the high parts' subtraction put it at most `4 R 2^-24` per coordinate
+    /// away; this is `16 R 2^-23`. A spring whose high parts alone show it
+    /// shorter than a bound less this is shorter than the bound (the stretch
+    /// limit's `StretchLine::near2`, the tear scan's first look). 0 without low
+    /// parts; infinite when a coordinate is not finite.
+    pub(super) fn high_parts_slack(&self) -> f64 {
+        if self.params.compensated {
+            16.0 * largest_magnitude(self.simd, &self.cur.x) * f32::EPSILON as f64
+        } else {
+            0.0
+        }
+    }
+
     /// Provot's stretch limit `tau` (see [`Self::constrain`]): one Gauss-Seidel pass
     /// over the colour classes of [`crate::sim::springs::constraint_order`], the f64
     /// engine's order, each spring corrected as [`crate::sim::constraints::length_correction`]
@@ -29,13 +45,7 @@ impl<E: Real> Kernel<E> {
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
         let inv_dt = E::of(1.0 / dt);
         let compensated = self.params.compensated;
-        // With double-float positions, how far the high parts' difference may be
-        // from a spring's length, with room to spare: see `StretchLine::near2`.
-        let slack = if compensated {
-            16.0 * largest_magnitude(self.simd, &self.cur.x) * f32::EPSILON as f64
-        } else {
-            0.0
-        };
+        let slack = self.high_parts_slack();
         // The sweeps in their order: each direction's two colour classes.
         let stencil = self.stencil();
         let sweeps: [Option<Sweep<E>>; 12] = std::array::from_fn(|k| {
@@ -414,7 +424,7 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
 
 /// The largest magnitude of the coordinates in `arrays` (infinite when one is not
 /// finite, and for float64 arrays, which have no low parts to bound).
-pub(super) fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
+fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
     let mut bits = 0;
     for a in arrays {
         let Ok(a) = bytemuck::try_cast_slice::<E, u32>(a.as_slice()) else {
