@@ -218,16 +218,30 @@ fn threads_give_bit_identical_results_with_every_feature() {
 /// measured with AVX2 on 2026-11-24). Bound: 1e-5 m. A lane given the wrong spring
 /// moves particles by millimetres (8.6e-3 m when the AVX-512 lanes ignored the
 /// colour classes along rows).
+/// The passes along the springs after the step, Provot's stretch limit (with
+/// Verlet) and XPBD's springs, give the same cloth on every SIMD level within
+/// float32 round-off, in each precision; and each precision's cloth is the float64
+/// one's within what float32 rounds off over the run. Double-float positions are
+/// checked 300 m from the origin, where they are needed: their low parts' arithmetic
+/// in both passes is what keeps the cloth there.
 #[test]
-fn every_simd_level_limits_the_stretch_alike() {
+fn every_simd_level_runs_the_spring_passes_alike() {
     use cloth_sandbox::sim::Integrator;
     use cloth_sandbox::sim::grid_kernel::Precision;
-    for precision in [Precision::Single, Precision::Mixed, Precision::Double] {
-        let state = |level: SimdLevel| {
-            let mut spec = GridSpec::peer_bench(45, true);
+    type Setting = fn(&mut GridSpec);
+    let passes: [(&str, Setting); 2] = [
+        ("stretch limit", |spec| {
             spec.integrator = Integrator::Verlet;
             spec.stretch_limit = Some(0.1);
+        }),
+        ("XPBD", |spec| spec.integrator = Integrator::Xpbd),
+    ];
+    for (pass, set) in passes {
+        let state = |precision: Precision, x0: f64, level: SimdLevel| {
+            let mut spec = GridSpec::peer_bench(45, false);
+            set(&mut spec);
             spec.precision = precision;
+            spec.origin[0] = x0;
             let mut cloth = GridCloth::new(spec);
             cloth.set_simd_level(level);
             cloth.steps(DT, 240);
@@ -235,16 +249,32 @@ fn every_simd_level_limits_the_stretch_alike() {
             cloth.positions_into(&mut x);
             (x, cloth.simd_level())
         };
-        let (portable, _) = state(SimdLevel::Baseline);
-        for level in [SimdLevel::Avx2, SimdLevel::Avx512] {
-            let (x, ran) = state(level);
-            let apart = x
-                .iter()
-                .zip(&portable)
-                .map(|(a, b)| a.distance(*b))
-                .fold(0.0, f64::max);
-            println!("{precision:?} {ran:?}: {apart:e} m from the portable lanes");
-            assert!(apart < 1e-5, "{precision:?} {ran:?}: {apart:e} m");
+        let apart = |x: &[DVec3], y: &[DVec3]| {
+            let d = x.iter().zip(y).map(|(a, b)| a.distance(*b));
+            d.fold(0.0, f64::max)
+        };
+        // Float32 positions round each move to 2^-24 of the 1 m cloth's
+        // coordinates; double-float ones keep it, and leave the float32
+        // arithmetic's 2^-24 of each correction.
+        for (precision, x0, bound) in [
+            (Precision::Single, 0.0, 1e-5),
+            (Precision::Mixed, 300.0, 1e-6),
+            (Precision::Double, 300.0, 0.0),
+        ] {
+            let (float64, _) = state(Precision::Double, x0, SimdLevel::Baseline);
+            let (portable, _) = state(precision, x0, SimdLevel::Baseline);
+            let off = apart(&portable, &float64);
+            println!("{pass}, {precision:?}, {x0} m out: {off:e} m from float64");
+            assert!(
+                off <= bound,
+                "{pass}, {precision:?}: {off:e} m from float64"
+            );
+            for level in [SimdLevel::Avx2, SimdLevel::Avx512] {
+                let (x, ran) = state(precision, x0, level);
+                let off = apart(&x, &portable);
+                println!("{pass}, {precision:?} {ran:?}: {off:e} m from the portable lanes");
+                assert!(off < 1e-5, "{pass}, {precision:?} {ran:?}: {off:e} m");
+            }
         }
     }
 }

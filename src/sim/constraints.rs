@@ -295,9 +295,11 @@ pub(crate) fn length_correction(
 /// shares them (the grid engine's springs of one kind).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct XpbdSpring {
-    rest: f64,
-    alpha: f64,
-    gamma: f64,
+    pub(crate) rest: f64,
+    /// `α̃ = 1 / (k h²)`.
+    pub(crate) alpha: f64,
+    /// `γ = b / (k h)`.
+    pub(crate) gamma: f64,
 }
 
 impl XpbdSpring {

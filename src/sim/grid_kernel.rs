@@ -3,7 +3,7 @@
 //! symplectic Euler, explicit Euler or position Verlet, then constrained by a sphere
 //! collider and Provot's stretch limit. With XPBD the fused pass predicts with every
 //! force but the springs, and the springs become distance constraints corrected
-//! after it (`Kernel::xpbd_pass`, in the f64 engine's colour classes).
+//! after it ([`spring_passes`], in the f64 engine's colour classes).
 //!
 //! Units are SI (m, s, kg, N). The cloth is a `width x height` grid of particles,
 //! `p = r * width + c` (row `r` from the top). Every particle is joined to its
@@ -77,7 +77,8 @@
 //!   integration and the sphere, per SIMD block.
 //! * [`simd`]: the vector operations the loops are written over, and [`x86`] their
 //!   AVX2 and AVX-512 versions with the entry points compiled for them.
-//! * [`stretch_limit`], [`contact`]: the passes after the step; [`lattice`]: the same
+//! * [`spring_passes`] (XPBD's springs, the stretch limit), [`contact`]: the passes
+//!   after the step; [`lattice`]: the same
 //!   physics on a 3-D lattice (the jelly cube).
 
 use std::sync::OnceLock;
@@ -400,21 +401,14 @@ trait Real:
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
     /// Runs one band of a lattice's step, likewise.
     fn lattice_band(ctx: &lattice::Ctx<Self>, band: &mut lattice::Band<Self>, out: Out<Self>);
-    /// Runs [`stretch_limit_sweep`], likewise.
-    fn stretch_sweep(
-        simd: SimdLevel,
-        out: &mut Out<Self>,
-        base: usize,
-        inv_mass: &[Self],
-        alive: Option<&[Self]>,
-        lines: &SweepLines<Self>,
-    );
+    /// Runs [`spring_sweep`], likewise.
+    fn spring_sweep(simd: SimdLevel, out: &mut Out<Self>, base: usize, lines: &SweepLines<Self>);
 }
 
 /// `Real` for a float type: its constants and the row functions of each SIMD level.
 macro_rules! real {
     ($t:ident, bits: $bits:ty, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
-     lattice: $lattice512:ident, $lattice2:ident, stretch: $stretch512:ident, $stretch2:ident) => {
+     lattice: $lattice512:ident, $lattice2:ident, springs: $springs512:ident, $springs2:ident) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
@@ -481,46 +475,33 @@ macro_rules! real {
                     _ => lattice::band_modes(Portable::<$t>::default(), ctx, band, out),
                 }
             }
-            fn stretch_sweep(
+            fn spring_sweep(
                 simd: SimdLevel,
                 out: &mut Out<Self>,
                 base: usize,
-                inv_mass: &[Self],
-                alive: Option<&[Self]>,
                 lines: &SweepLines<Self>,
             ) {
                 fn at<const LO: bool>(
                     simd: SimdLevel,
                     out: &mut Out<$t>,
                     base: usize,
-                    inv_mass: &[$t],
-                    alive: Option<&[$t]>,
                     lines: &SweepLines<$t>,
                 ) {
                     match simd {
                         #[cfg(target_arch = "x86_64")]
                         // SAFETY: as above.
-                        SimdLevel::Avx512 => unsafe {
-                            x86::$stretch512::<LO>(out, base, inv_mass, alive, lines)
-                        },
+                        SimdLevel::Avx512 => unsafe { x86::$springs512::<LO>(out, base, lines) },
                         #[cfg(target_arch = "x86_64")]
                         // SAFETY: as above.
-                        SimdLevel::Avx2 => unsafe {
-                            x86::$stretch2::<LO>(out, base, inv_mass, alive, lines)
-                        },
-                        _ => {
-                            let portable = Portable::<$t>::default();
-                            stretch_limit_sweep::<_, LO>(
-                                portable, out, base, inv_mass, alive, lines,
-                            )
-                        }
+                        SimdLevel::Avx2 => unsafe { x86::$springs2::<LO>(out, base, lines) },
+                        _ => spring_sweep::<_, LO>(Portable::<$t>::default(), out, base, lines),
                     }
                 }
                 // Positions with low parts (`compensated`) or without.
                 if lines.sweep.compensated() {
-                    at::<true>(simd, out, base, inv_mass, alive, lines)
+                    at::<true>(simd, out, base, lines)
                 } else {
-                    at::<false>(simd, out, base, inv_mass, alive, lines)
+                    at::<false>(simd, out, base, lines)
                 }
             }
         }
@@ -531,10 +512,10 @@ macro_rules! real {
 // level's features.
 real!(f32, bits: u32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
       lattice: lattice_band_avx512, lattice_band_avx2,
-      stretch: stretch_limit_sweep_avx512, stretch_limit_sweep_avx2);
+      springs: spring_sweep_avx512, spring_sweep_avx2);
 real!(f64, bits: u64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
       lattice: lattice_band_avx512_f64, lattice_band_avx2_f64,
-      stretch: stretch_limit_sweep_avx512_f64, stretch_limit_sweep_avx2_f64);
+      springs: spring_sweep_avx512_f64, spring_sweep_avx2_f64);
 
 /// 16 floats, so that buffers and padded rows start on a cache line.
 #[derive(Clone, Copy, Debug)]
@@ -783,7 +764,8 @@ struct Kernel<E: Real> {
     par_bands: Vec<Band<E>>,
     simd: SimdLevel,
     /// XPBD's and self-collision's scratch (empty without them).
-    f64_copies_scratch: F64Copies,
+    /// Self-collision's f64 copy of the positions, kept between steps.
+    self_collision_scratch: Vec<DVec3>,
     /// Self-collision's candidate pairs.
     self_collision: SelfCollision,
     /// The springs left when some tore or were cut (`None`: the whole stencil).
@@ -901,18 +883,6 @@ impl<E: Real> Torn<E> {
     }
 }
 
-/// XPBD's and self-collision's f64 copies, per particle in cloth order (`p = row *
-/// width + column`): positions as the constraint pass moves them, before it, at the
-/// start of the step, and inverse masses.
-#[derive(Clone, Debug, Default)]
-struct F64Copies {
-    moved: Vec<DVec3>,
-    /// The positions before the pass.
-    before: Vec<DVec3>,
-    start: Vec<DVec3>,
-    inv_mass: Vec<f64>,
-}
-
 impl<E: Real> std::fmt::Debug for Kernel<E> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("GridCloth")
@@ -997,7 +967,7 @@ impl<E: Real> Kernel<E> {
             seq_band: make_bands(&grid, 1),
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
-            f64_copies_scratch: F64Copies::default(),
+            self_collision_scratch: Vec::new(),
             self_collision: SelfCollision::default(),
             torn: None,
             torn_log: Vec::new(),
@@ -1149,10 +1119,9 @@ impl<E: Real> Kernel<E> {
     }
 
     /// Whether a pass after the step splits its work with rayon's parallel
-    /// iterators (XPBD's springs, self-collision), which need the pool's other
-    /// thread free.
+    /// iterators (self-collision), which need the pool's other thread free.
     fn has_pooled_constraints(&self) -> bool {
-        self.spec.integrator == Integrator::Xpbd || self.spec.self_collision.is_some()
+        self.spec.self_collision.is_some()
     }
 
     fn one_step(&mut self, parallel: bool, duo: Option<&Duo>) {
@@ -1204,18 +1173,17 @@ impl<E: Real> Kernel<E> {
     /// The constraints the fused row pass leaves to after the step: XPBD's springs,
     /// Provot's stretch limit, then the colliders' contact with friction, as in the
     /// f64 engine. A move `δ` of a particle also adds `δ / h` to its velocity.
-    /// With `duo`, the pool's other thread is serving it: the stretch limit hands
-    /// it its second half, and the passes that would split their work with rayon
+    /// With `duo`, the pool's other thread is serving it: the spring passes hand
+    /// it their second half, and the passes that would split their work with rayon
     /// run on this thread ([`Kernel::has_pooled_constraints`] keeps them out of
     /// that mode).
     fn constrain(&mut self, dt: f64, parallel: bool, duo: Option<&Duo>) {
         let parallel_pooled = parallel && duo.is_none();
-        let xpbd = self.spec.integrator == Integrator::Xpbd;
-        if xpbd {
-            self.xpbd_pass(dt, parallel_pooled);
+        if self.spec.integrator == Integrator::Xpbd {
+            self.spring_pass(SpringRule::Xpbd, dt, parallel, duo);
         }
         if let Some(tau) = self.spec.stretch_limit {
-            self.stretch_limit_pass(tau, dt, parallel, duo);
+            self.spring_pass(SpringRule::StretchLimit(tau), dt, parallel, duo);
         }
         let parallel = parallel_pooled;
         if let Some(thickness) = self.spec.self_collision {
@@ -1414,110 +1382,6 @@ impl<E: Real> Kernel<E> {
         ]
     }
 
-    /// XPBD's springs: one Gauss-Seidel pass over the colour classes of
-    /// [`super::springs::constraint_order`] (by stencil direction, then by the parity of
-    /// the spring's step along it), each spring corrected by
-    /// [`constraints::xpbd_correction`] against the positions at the start of the
-    /// step (the other state buffer, after the swap). No two springs of a class
-    /// share a particle, so a class splits into blocks of rows that no spring
-    /// crosses, corrected on the pool's threads (`parallel`) with the same result
-    /// as one at a time: the f64 engine's, which visits the same classes in order.
-    ///
-    /// The pass runs on f64 copies of the positions and writes each moved particle
-    /// back once, with its move over `dt` added to its velocity.
-    fn xpbd_pass(&mut self, dt: f64, parallel: bool) {
-        let (w, h) = (self.grid.w, self.grid.h);
-        let n = w * h;
-        let mut s = self.f64_copies();
-        let bits = self.torn.as_ref().map(|t| t.bits.as_slice());
-        for (d, ((dr, dc), rest, present, kind)) in self.stencil().into_iter().enumerate() {
-            let spring = constraints::XpbdSpring::new(rest, kind.k, kind.b, dt);
-            let Some(spring) = spring.filter(|_| present) else {
-                continue;
-            };
-            let class = XpbdClass {
-                width: w,
-                dr,
-                dc,
-                spring,
-                left: bits.map(|bits| (bits, 1 << d)),
-            };
-            for colour in 0..2 {
-                // Springs along rows stay in their row; the others' rows alternate
-                // in runs of `dr`, so a block of `2 dr` rows from the colour's first
-                // holds whole springs of the class.
-                let (first_row, block_rows) = if dr == 0 {
-                    (0, 1)
-                } else {
-                    (colour * dr, 2 * dr)
-                };
-                let from = (first_row * w).min(n);
-                let size = block_rows * w;
-                let correct = |k: usize, ((x, x0), m)| {
-                    class.correct_block(x, x0, m, from + k * size, colour);
-                };
-                if parallel && n >= PARALLEL_MIN_PARTICLES {
-                    use rayon::prelude::*;
-                    let blocks = s.moved[from..]
-                        .par_chunks_mut(size)
-                        .zip(s.start[from..].par_chunks(size))
-                        .zip(s.inv_mass[from..].par_chunks(size));
-                    blocks.enumerate().for_each(|(k, block)| correct(k, block));
-                } else {
-                    let blocks = s.moved[from..]
-                        .chunks_mut(size)
-                        .zip(s.start[from..].chunks(size))
-                        .zip(s.inv_mass[from..].chunks(size));
-                    blocks.enumerate().for_each(|(k, block)| correct(k, block));
-                }
-            }
-        }
-        self.write_back(s, dt);
-    }
-
-    /// f64 copies of the positions, those at the start of the step and the inverse
-    /// masses, in cloth order (the scratch taken out of `self`; see
-    /// [`Self::write_back`]).
-    fn f64_copies(&mut self) -> F64Copies {
-        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let mut s = std::mem::take(&mut self.f64_copies_scratch);
-        s.moved.resize(w * h, DVec3::ZERO);
-        s.start.resize(w * h, DVec3::ZERO);
-        s.inv_mass.resize(w * h, 0.0);
-        // Row by row, each array's row read as a slice.
-        fn rows<E: Real>(
-            out: &mut [DVec3],
-            hi: &[Buf<E>; 3],
-            lo: &[Buf<E>; 3],
-            w: usize,
-            st: usize,
-        ) {
-            for (r, out) in out.chunks_exact_mut(w).enumerate() {
-                row_to_f64(out, hi, lo, r * st);
-            }
-        }
-        rows(&mut s.moved, &self.cur.x, &self.cur.xl, w, st);
-        rows(&mut s.start, &self.next.x, &self.next.xl, w, st);
-        for (r, out) in s.inv_mass.chunks_exact_mut(w).enumerate() {
-            let row = &self.inv_mass.as_slice()[r * st..r * st + w];
-            out.iter_mut().zip(row).for_each(|(m, &e)| *m = e.f64());
-        }
-        s.before.clone_from(&s.moved);
-        s
-    }
-
-    /// Moves each particle the pass moved to its copy's position (adding the move
-    /// over `dt` to its velocity) and puts the scratch back.
-    fn write_back(&mut self, s: F64Copies, dt: f64) {
-        let (w, st) = (self.grid.w, self.grid.stride);
-        for (p, (&to, &from)) in s.moved.iter().zip(&s.before).enumerate() {
-            if to != from {
-                self.move_particle((p / w) * st + p % w, to, dt);
-            }
-        }
-        self.f64_copies_scratch = s;
-    }
-
     /// Self-collision ([`super::self_collision`]) at thickness `h_c`, on an f64
     /// copy of the positions (made on the pool's threads with `parallel`); springs
     /// are the stencil's kinds that exist. The pass reads the positions at the
@@ -1528,7 +1392,7 @@ impl<E: Real> Kernel<E> {
         let (width, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let n = width * h;
         let parallel = parallel && n >= super::self_collision::PARALLEL_MIN_PARTICLES;
-        let mut x = std::mem::take(&mut self.f64_copies_scratch.moved);
+        let mut x = std::mem::take(&mut self.self_collision_scratch);
         x.resize(n, DVec3::ZERO);
         let (hi, lo) = (&self.cur.x, &self.cur.xl);
         // Blocks of 8 rows, each row's arrays read as slices.
@@ -1580,7 +1444,7 @@ impl<E: Real> Kernel<E> {
                 self.move_particle(g, x[i], dt);
             }
         }
-        self.f64_copies_scratch.moved = x;
+        self.self_collision_scratch = x;
     }
 
     /// Pairs pushed apart by the last self-collision pass.
@@ -1788,7 +1652,7 @@ mod contact;
 pub mod lattice;
 mod row;
 mod simd;
-mod stretch_limit;
+mod spring_passes;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
@@ -1798,7 +1662,7 @@ use row::{
     row_portable, row_variant, run_bands, run_two_bands, spring,
 };
 use simd::{Portable, Simd};
-use stretch_limit::{SweepLines, largest_magnitude_bits, stretch_limit_sweep};
+use spring_passes::{SpringRule, SweepLines, largest_magnitude_bits, spring_sweep};
 
 impl GridCloth {
     /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the
@@ -2147,67 +2011,6 @@ fn row_may_tear_dispatch<E: Real>(
         scan!(true)
     } else {
         scan!(false)
-    }
-}
-
-/// One colour class of XPBD's springs on a grid: the stencil direction `(dr, dc)`
-/// and its spring at the step.
-#[derive(Clone, Copy, Debug)]
-struct XpbdClass<'a> {
-    width: usize,
-    dr: usize,
-    dc: isize,
-    /// The kind's spring at the step's `dt`.
-    spring: constraints::XpbdSpring,
-    /// With springs missing, which are left ([`Torn::bits`]) and this direction's bit.
-    left: Option<(&'a [u8], u8)>,
-}
-
-impl XpbdClass<'_> {
-    /// Corrects the class's springs of colour `colour` inside one block of rows
-    /// (`x` positions, `x0` at the start of the step, `w` inverse masses, the block's
-    /// first row where the class's rows start, its first particle `first`): a row,
-    /// for springs along rows, else `dr` rows of springs reaching `dr` rows down.
-    /// No spring leaves the block.
-    fn correct_block(&self, x: &mut [DVec3], x0: &[DVec3], w: &[f64], first: usize, colour: usize) {
-        let width = self.width;
-        let rows = x.len() / width;
-        // Columns c with both ends on the cloth: 0 <= c + dc < width.
-        let (c0, c1) = (
-            (-self.dc).max(0) as usize,
-            width.saturating_sub(self.dc.max(0) as usize),
-        );
-        let spring = &self.spring;
-        let mut correct = |a: usize, b: usize| {
-            if let Some((bits, bit)) = self.left
-                && bits[first + a] & bit == 0
-            {
-                return;
-            }
-            if let Some(c) =
-                constraints::xpbd_correction([x[a], x[b]], [x0[a], x0[b]], w[a], w[b], spring)
-            {
-                x[a] -= w[a] * c;
-                x[b] += w[b] * c;
-            }
-        };
-        if self.dr == 0 {
-            // Along the row the springs alternate in runs of `dc` columns: the
-            // class's start at columns `2 dc m + dc colour + j`, j < dc.
-            let dc = self.dc as usize;
-            for m in (0..width).step_by(2 * dc) {
-                for c in (m + dc * colour..m + dc * colour + dc).filter(|&c| c + dc < width) {
-                    correct(c, c + dc);
-                }
-            }
-            return;
-        }
-        for r in 0..self.dr.min(rows.saturating_sub(self.dr)) {
-            for c in c0..c1 {
-                let a = r * width + c;
-                correct(a, (a + self.dr * width).wrapping_add_signed(self.dc));
-            }
-        }
     }
 }
 

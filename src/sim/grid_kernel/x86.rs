@@ -5,7 +5,7 @@ use std::arch::x86_64::*;
 use super::row::{RowMode, row_step};
 use super::{
     Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines, any_faster,
-    largest_magnitude_bits, lattice, row_may_tear, row_variant, stretch_limit_sweep,
+    largest_magnitude_bits, lattice, row_may_tear, row_variant, spring_sweep,
 };
 
 /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -181,11 +181,11 @@ pub(super) unsafe fn contact_rows_avx512<E: Real>(
     ctx.resolve_rows(out, first, rows)
 }
 
-/// The stretch limit's `stretch_limit_sweep` compiled for a SIMD level, in each
-/// precision: `name: target features, float type, lanes`.
-macro_rules! stretch_limit_sweeps {
+/// The spring passes' `spring_sweep` compiled for a SIMD level, in each precision:
+/// `name: target features, float type, lanes`.
+macro_rules! spring_sweeps {
     ($($name:ident: $features:literal, $t:ty, $lanes:expr;)*) => {$(
-        /// `stretch_limit_sweep` with these lanes and target features.
+        /// `spring_sweep` with these lanes and target features.
         ///
         /// # Safety
         /// The CPU must have the target features.
@@ -194,19 +194,17 @@ macro_rules! stretch_limit_sweeps {
         pub(super) unsafe fn $name<const LO: bool>(
             out: &mut Out<$t>,
             base: usize,
-            inv_mass: &[$t],
-            alive: Option<&[$t]>,
             lines: &SweepLines<$t>,
         ) {
-            stretch_limit_sweep::<_, LO>($lanes, out, base, inv_mass, alive, lines)
+            spring_sweep::<_, LO>($lanes, out, base, lines)
         }
     )*};
 }
-stretch_limit_sweeps! {
-    stretch_limit_sweep_avx2: "avx2,fma", f32, Avx2(());
-    stretch_limit_sweep_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
-    stretch_limit_sweep_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
-    stretch_limit_sweep_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
+spring_sweeps! {
+    spring_sweep_avx2: "avx2,fma", f32, Avx2(());
+    spring_sweep_avx2_f64: "avx2,fma", f64, Portable::<f64>::default();
+    spring_sweep_avx512: "avx512f,avx512vl,avx2,fma", f32, Avx512(());
+    spring_sweep_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Portable::<f64>::default();
 }
 
 // SAFETY (all intrinsics below): an `Avx512` / `Avx2` value exists only inside

@@ -1,15 +1,30 @@
-//! Provot's stretch limit on the grid: one Gauss-Seidel pass over the springs in
-//! twelve sweeps (six stencil directions, two colour classes each), a class's
-//! springs of one row corrected together in SIMD blocks ([`stretch_limit_line`]),
-//! in bands of rows that stay in the core's cache, and most rows on two threads in
-//! one hand-over ([`Kernel::stretch_limit_pass`]).
+//! The passes after the step that move particles along the grid's springs:
+//! Provot's stretch limit and XPBD's springs ([`SpringRule`]). Each is one
+//! Gauss-Seidel pass over the springs in twelve sweeps (six stencil directions,
+//! two colour classes each), a class's springs of one row corrected together in
+//! SIMD blocks ([`spring_line`]), in bands of rows that stay in the core's cache,
+//! and most rows on two threads in one hand-over ([`Kernel::spring_pass`]).
 
 use std::ops::Range;
 
+use super::super::constraints::XpbdSpring;
 use super::super::duo::Duo;
+use super::super::forces::EPSILON_LENGTH;
 #[cfg(target_arch = "x86_64")]
 use super::x86;
 use super::{BLOCK, Buf, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SimdLevel, add_double};
+
+/// What a [`Kernel::spring_pass`] does to each spring.
+#[derive(Clone, Copy, Debug)]
+pub(super) enum SpringRule {
+    /// Provot's stretch limit `tau`: a spring longer than `(1 + tau) L` is shortened
+    /// to that, as [`crate::sim::constraints::length_correction`] does.
+    StretchLimit(f64),
+    /// XPBD's springs: each corrected once by
+    /// [`crate::sim::constraints::xpbd_correction`] against the positions at the
+    /// start of the step (the kernel's other state buffer, after the swap).
+    Xpbd,
+}
 
 impl<E: Real> Kernel<E> {
     /// With double-float positions, how far (m) the high parts' difference may be
@@ -28,15 +43,15 @@ impl<E: Real> Kernel<E> {
         }
     }
 
-    /// Provot's stretch limit `tau` (see [`Self::constrain`]): one Gauss-Seidel pass
-    /// over the colour classes of [`crate::sim::springs::constraint_order`], the f64
-    /// engine's order, each spring corrected as [`crate::sim::constraints::length_correction`]
-    /// does. No two springs of a class share a particle, so a class's springs from
-    /// one row are corrected together ([`stretch_limit_line`]); with `parallel`,
-    /// most rows by two threads in one hand-over, with the same result as on one.
-    pub(super) fn stretch_limit_pass(
+    /// One pass of `rule` over the springs (see [`Self::constrain`]), in the
+    /// colour classes of [`crate::sim::springs::constraint_order`], the f64
+    /// engine's order. No two springs of a class share a particle, so a class's
+    /// springs from one row are corrected together ([`spring_line`]); with
+    /// `parallel`, most rows by two threads in one hand-over, with the same result
+    /// as on one. A move `δ` adds `δ / dt` to the particle's velocity.
+    pub(super) fn spring_pass(
         &mut self,
-        tau: f64,
+        rule: SpringRule,
         dt: f64,
         parallel: bool,
         duo: Option<&Duo>,
@@ -50,14 +65,30 @@ impl<E: Real> Kernel<E> {
         let stencil = self.stencil();
         let sweeps: [Option<Sweep<E>>; 12] = std::array::from_fn(|k| {
             let (d, colour) = (k / 2, k % 2);
-            let ((dr, dc), rest, present, _) = stencil[d];
+            let ((dr, dc), rest, present, kind) = stencil[d];
             // Columns c with both ends on the cloth: 0 <= c + dc < w.
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
             if !present || len == 0 || dr >= h {
                 return None;
             }
-            let near = ((1.0 + tau) * rest - slack).max(0.0);
+            let rule = match rule {
+                SpringRule::StretchLimit(tau) => {
+                    let near = ((1.0 + tau) * rest - slack).max(0.0);
+                    LineRule::Limit {
+                        longest: E::of((1.0 + tau) * rest),
+                        near2: E::of(near * near * (1.0 - 1.0 / 65536.0)),
+                    }
+                }
+                SpringRule::Xpbd => {
+                    let spring = XpbdSpring::new(rest, kind.k, kind.b, dt)?;
+                    LineRule::Xpbd {
+                        rest: E::of(spring.rest),
+                        alpha: E::of(spring.alpha),
+                        gamma: E::of(spring.gamma),
+                    }
+                }
+            };
             Some(Sweep {
                 direction: d,
                 dr,
@@ -65,13 +96,12 @@ impl<E: Real> Kernel<E> {
                 c0,
                 colour,
                 rows: h - dr,
-                line: StretchLine {
+                line: SpringLine {
                     a: 0,
                     b: 0,
                     len,
-                    class: StretchLine::class(c0, (dr == 0).then_some((colour, dc))),
-                    longest: E::of((1.0 + tau) * rest),
-                    near2: E::of(near * near * (1.0 - 1.0 / 65536.0)),
+                    class: SpringLine::class(c0, (dr == 0).then_some((colour, dc))),
+                    rule,
                     inv_dt,
                     compensated,
                 },
@@ -79,6 +109,16 @@ impl<E: Real> Kernel<E> {
         });
         let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
         let torn = self.torn.as_ref();
+        // XPBD's positions at the start of the step (whole arrays, cloth rows from
+        // row 0), high parts then low parts.
+        let start: [&[E]; 6] = match rule {
+            SpringRule::Xpbd => {
+                let [x, y, z] = self.next.x.each_ref().map(Buf::as_slice);
+                let [xl, yl, zl] = self.next.xl.each_ref().map(Buf::as_slice);
+                [x, y, z, xl, yl, zl]
+            }
+            SpringRule::StretchLimit(_) => Default::default(),
+        };
         // `skew[k]`: the rows sweep k's lines reach below their first, and those
         // of the sweeps before it: `dr` summed over sweeps 0 to k.
         let mut skew = [0; 12];
@@ -111,18 +151,20 @@ impl<E: Real> Kernel<E> {
                     for (k, sweep) in sweeps.iter().enumerate() {
                         let Some(sweep) = sweep else { continue };
                         let all = rows(k);
-                        let start = all.start.max(if t == from { 0 } else { cut(k, t) });
+                        let start_row = all.start.max(if t == from { 0 } else { cut(k, t) });
                         let end = all.end.min(cut(k, next)).min(sweep.rows);
-                        if start >= end {
+                        if start_row >= end {
                             continue;
                         }
-                        let alive = torn.map(|t| t.springs[sweep.direction].as_slice());
                         let lines = SweepLines {
                             sweep,
                             stride: st,
-                            rows: start..end,
+                            rows: start_row..end,
+                            inv_mass,
+                            alive: torn.map(|t| t.springs[sweep.direction].as_slice()),
+                            start,
                         };
-                        E::stretch_sweep(simd, out, first * st, inv_mass, alive, &lines);
+                        E::spring_sweep(simd, out, first * st, &lines);
                     }
                     t = next;
                 }
@@ -159,29 +201,42 @@ impl<E: Real> Kernel<E> {
     }
 }
 
-/// One row's springs of one colour class of the stretch limit: the first ends at
-/// array indices `a .. a + len`, the second ends at `b .. b + len`.
-struct StretchLine<E> {
+/// What a [`SpringLine`] does to its springs, in the kernel's float type.
+#[derive(Clone, Copy)]
+enum LineRule<E> {
+    /// The stretch limit: springs longer than `longest` are shortened to it.
+    Limit {
+        longest: E,
+        /// With double-float positions, a squared length under which the high
+        /// parts' difference shows a spring shorter than `longest` whatever the
+        /// low parts: a low part is at most half an ulp of its high part, so the
+        /// two ends' low parts and the high parts' subtraction put the difference
+        /// at most `4 R 2^-24` per coordinate from the spring's vector, for
+        /// coordinates of magnitude up to `R` (which a pass does not raise: it
+        /// moves a particle towards the other end of a spring). `near2` is
+        /// `(longest - 16 R 2^-23)²`, less 2^-16 of it for the float32 rounding of
+        /// the squared lengths.
+        near2: E,
+    },
+    /// XPBD: every spring, of rest length `rest`, corrected with `α̃` and `γ`
+    /// ([`XpbdSpring`]).
+    Xpbd { rest: E, alpha: E, gamma: E },
+}
+
+/// One row's springs of one colour class: the first ends at array indices `a ..
+/// a + len`, the second ends at `b .. b + len`.
+struct SpringLine<E> {
     a: usize,
     b: usize,
     len: usize,
-    /// 1 for the lanes of a block in the class, else 0 (see [`StretchLine::class`]).
+    /// 1 for the lanes of a block in the class, else 0 (see [`SpringLine::class`]).
     class: [E; BLOCK],
-    longest: E,
-    /// With double-float positions, a squared length under which the high parts'
-    /// difference shows a spring shorter than `longest` whatever the low parts: a
-    /// low part is at most half an ulp of its high part, so the two ends' low parts
-    /// and the high parts' subtraction put the difference at most `4 R 2^-24` per
-    /// coordinate from the spring's vector, for coordinates of magnitude up to `R`
-    /// (which a pass does not raise: it moves a particle towards the other end of
-    /// a spring). `near2` is `(longest - 16 R 2^-23)²`, less 2^-16 of it for the
-    /// float32 rounding of the squared lengths.
-    near2: E,
+    rule: LineRule<E>,
     inv_dt: E,
     compensated: bool,
 }
 
-impl<E: Real> StretchLine<E> {
+impl<E: Real> SpringLine<E> {
     /// 1 for the lanes of a block in the class, first column `c0`: every lane, or
     /// along rows (`along` = the colour and `dc`) the springs starting at columns
     /// `c` with `(c / dc) % 2 == colour`, a pattern of 2 or 4 lanes that repeats in
@@ -194,8 +249,8 @@ impl<E: Real> StretchLine<E> {
     }
 }
 
-/// One sweep of the stretch limit: the springs of one stencil direction `(dr, dc)`
-/// in one colour class, a [`StretchLine`] per row.
+/// One sweep of a spring pass: the springs of one stencil direction `(dr, dc)` in
+/// one colour class, a [`SpringLine`] per row.
 pub(super) struct Sweep<E> {
     /// Index of the direction in the stencil (and of its tear masks).
     direction: usize,
@@ -207,7 +262,7 @@ pub(super) struct Sweep<E> {
     /// Rows with both ends on the cloth: `0 .. rows`.
     rows: usize,
     /// The line of row 0 (its `a` and `b` set per row by [`Sweep::line_at`]).
-    line: StretchLine<E>,
+    line: SpringLine<E>,
 }
 
 impl<E: Real> Sweep<E> {
@@ -224,8 +279,8 @@ impl<E: Real> Sweep<E> {
     }
 
     /// The line of row `r` (rows `stride` floats apart).
-    fn line_at(&self, r: usize, stride: usize) -> StretchLine<E> {
-        StretchLine {
+    fn line_at(&self, r: usize, stride: usize) -> SpringLine<E> {
+        SpringLine {
             a: r * stride + self.c0,
             b: ((r + self.dr) * stride + self.c0).wrapping_add_signed(self.dc),
             ..self.line
@@ -233,80 +288,108 @@ impl<E: Real> Sweep<E> {
     }
 }
 
-/// The lines of a [`Sweep`] starting on `rows`, rows `stride` floats apart.
+/// The lines of a [`Sweep`] starting on `rows`, rows `stride` floats apart, and
+/// what they read besides the state: inverse masses, the direction's tear mask
+/// when springs tore ([`super::Torn`]), and for XPBD the positions at the start of
+/// the step (high parts, then low parts; empty for the stretch limit), all whole
+/// arrays indexed from row 0.
 pub(super) struct SweepLines<'a, E> {
     pub(super) sweep: &'a Sweep<E>,
     pub(super) stride: usize,
     pub(super) rows: Range<usize>,
+    inv_mass: &'a [E],
+    alive: Option<&'a [E]>,
+    start: [&'a [E]; 6],
 }
 
-/// [`stretch_limit_line`] on each line of `lines`, in order of rows (one call for
-/// a sweep, where a call per line cost its set-up every 8 blocks at 128 columns).
+/// [`spring_line`] on each line of `lines`, in order of rows (one call for a
+/// sweep, where a call per line cost its set-up every 8 blocks at 128 columns).
 #[inline(always)]
-pub(super) fn stretch_limit_sweep<S: Simd, const LO: bool>(
+pub(super) fn spring_sweep<S: Simd, const LO: bool>(
     s: S,
     out: &mut Out<S::E>,
     base: usize,
-    inv_mass: &[S::E],
-    alive: Option<&[S::E]>,
     lines: &SweepLines<S::E>,
 ) {
-    for r in lines.sweep.lines(lines.rows.clone()) {
-        let line = lines.sweep.line_at(r, lines.stride);
-        stretch_limit_line::<S, LO>(s, out, base, inv_mass, alive, &line);
+    let rows = lines.sweep.lines(lines.rows.clone());
+    match lines.sweep.line.rule {
+        LineRule::Limit { .. } => {
+            for r in rows {
+                let line = lines.sweep.line_at(r, lines.stride);
+                spring_line::<S, LO, false>(s, out, base, lines, &line);
+            }
+        }
+        LineRule::Xpbd { .. } => {
+            for r in rows {
+                let line = lines.sweep.line_at(r, lines.stride);
+                spring_line::<S, LO, true>(s, out, base, lines, &line);
+            }
+        }
     }
 }
 
-/// Corrects the springs of `line` that are longer than `line.longest` as
-/// [`crate::sim::constraints::length_correction`] does, in `out` (the state's
-/// arrays from array index `base` on), in blocks of `S::LANES` springs, four
-/// blocks' lengths at a time (with double-float positions, from the high parts
-/// first, and from both parts only when those come near the limit:
-/// [`StretchLine::near2`]), then for
-/// each block with a spring over the limit its corrections and at once the moves
-/// of its first ends and of its second ends. Each particle has at most one spring
-/// in a class, so the moves do not interact: a lane out of the class (or past the
-/// line, or a spring that tore: 0 in `alive`, the direction's mask, when some did)
-/// gets a move of 0, which leaves its particle as it was. A move `δ` adds `δ / h`
-/// to the velocity (and to Verlet's `u`). The lanes past `len` reach ghost columns
-/// inside the row's padding (rows are [`BLOCK`] floats longer than their blocks).
+/// Corrects the springs of `line` in `out` (the state's arrays from array index
+/// `base` on), in blocks of `S::LANES` springs, four blocks at a time: measures
+/// them all, then for each block with a spring to correct its corrections and at
+/// once the moves of its first ends and of its second ends.
+///
+/// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
+///   as [`crate::sim::constraints::length_correction`] does, and measures them
+///   (with double-float positions) from the high parts first, from both parts only
+///   when those come near the limit ([`LineRule::Limit::near2`]).
+/// * XPBD corrects every spring as [`crate::sim::constraints::xpbd_correction`]
+///   does, from the positions at the start of the step in `lines.start`.
+///
+/// Each particle has at most one spring in a class, so the moves do not interact:
+/// a lane out of the class (or past the line, or a spring that tore: 0 in the
+/// direction's mask, when some did) gets a move of 0, which leaves its particle as
+/// it was. A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`). The lanes
+/// past `len` reach ghost columns inside the row's padding (rows are [`BLOCK`]
+/// floats longer than their blocks).
 #[inline(always)]
-fn stretch_limit_line<S: Simd, const LO: bool>(
+fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     s: S,
     out: &mut Out<S::E>,
     base: usize,
-    inv_mass: &[S::E],
-    alive: Option<&[S::E]>,
-    line: &StretchLine<S::E>,
+    lines: &SweepLines<S::E>,
+    line: &SpringLine<S::E>,
 ) {
     let n = S::LANES;
-    let &StretchLine {
-        len,
-        longest,
-        inv_dt,
-        ..
-    } = line;
+    let &SpringLine { len, inv_dt, .. } = line;
     let (zero, one) = (S::E::ZERO, S::E::ONE);
+    let (longest, near2, rest, alpha, gamma) = match line.rule {
+        LineRule::Limit { longest, near2 } => (longest, near2, zero, zero, zero),
+        LineRule::Xpbd { rest, alpha, gamma } => (zero, zero, rest, alpha, gamma),
+    };
     let (a, b) = (line.a - base, line.b - base);
     let lanes = len.next_multiple_of(n);
     let end = a.max(b) + lanes;
-    let inv_mass = &inv_mass[base..];
+    let inv_mass = &lines.inv_mass[base..];
     let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
     let verlet = !ux.is_empty();
-    let fits = |arrays: [&[S::E]; 3]| arrays.iter().all(|p| p.len() >= end);
+    let fits = |arrays: [&[S::E]; 3], end: usize| arrays.iter().all(|p| p.len() >= end);
     // Every block below reads and writes inside these bounds.
-    assert!(inv_mass.len() >= end && fits([x, y, z]) && fits([vx, vy, vz]));
-    assert!((!LO || fits([xl, yl, zl])) && (!verlet || fits([ux, uy, uz])));
-    let alive = alive.map(|m| &m[line.a..line.a + lanes]);
+    assert!(inv_mass.len() >= end && fits([x, y, z], end) && fits([vx, vy, vz], end));
+    assert!((!LO || fits([xl, yl, zl], end)) && (!verlet || fits([ux, uy, uz], end)));
+    let [sx, sy, sz, sxl, syl, szl] = lines.start;
+    let start_end = line.a.max(line.b) + lanes;
+    assert!(!XPBD || fits([sx, sy, sz], start_end) && (!LO || fits([sxl, syl, szl], start_end)));
+    let alive = lines.alive.map(|m| &m[line.a..line.a + lanes]);
     let pos = [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()];
     let low = [xl.as_mut_ptr(), yl.as_mut_ptr(), zl.as_mut_ptr()];
     let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
     let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
+    let start = [sx.as_ptr(), sy.as_ptr(), sz.as_ptr()];
+    let start_low = [sxl.as_ptr(), syl.as_ptr(), szl.as_ptr()];
     let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
-    let (near2, zero_v) = (s.splat(line.near2), s.splat(zero));
+    let (near2, zero_v) = (s.splat(near2), s.splat(zero));
     let (longest_v, one_v) = (s.splat(longest), s.splat(one));
+    let (rest_v, alpha_v) = (s.splat(rest), s.splat(alpha));
+    let (gamma_v, one_gamma_v) = (s.splat(gamma), s.splat(one + gamma));
+    let tiny_length2 = S::E::of(EPSILON_LENGTH * EPSILON_LENGTH);
     // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
-    // `a + lanes` and `b + lanes` floats (asserted above).
+    // `a + lanes` and `b + lanes` floats (asserted above; the starting positions
+    // `line.a + lanes` and `line.b + lanes`).
     let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
     // Squared lengths of the vectors `d`.
     macro_rules! length2 {
@@ -316,9 +399,10 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
         }};
     }
     // The block at `j`: its springs' vectors `d` (first end less second), their
-    // squared lengths, positive where a spring is in the class and over the limit,
-    // and whether any is (with the high parts' vectors and zeros when, with
-    // double-float positions, those alone show none near the limit).
+    // squared lengths, positive where a spring is in the class (and for the
+    // stretch limit over the limit), and whether any is (for the stretch limit on
+    // double-float positions, the high parts' vectors and zeros when those alone
+    // show none near the limit).
     macro_rules! measure {
         ($j:expr) => {{
             let j = $j;
@@ -333,7 +417,7 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
             if let Some(m) = alive {
                 keep = s.mul(keep, load(m.as_ptr(), j));
             }
-            if LO && !s.any_positive(s.mul_sub(length2!(high), keep, near2)) {
+            if !XPBD && LO && !s.any_positive(s.mul_sub(length2!(high), keep, near2)) {
                 // The high parts alone show every spring within the limit.
                 (high, zero_v, zero_v, false)
             } else {
@@ -345,10 +429,46 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
                     high
                 };
                 let l2 = length2!(d);
-                // Positive where the spring is in the class and over the limit.
-                let over = s.mul_sub(l2, keep, longest2);
+                // Positive where the spring is to be corrected.
+                let over = if XPBD {
+                    keep
+                } else {
+                    s.mul_sub(l2, keep, longest2)
+                };
                 (d, l2, over, s.any_positive(over))
             }
+        }};
+    }
+    // XPBD's `(C + γ n·Δ) / (((1 + γ) w + α̃) l)` for the block at `j` (`C = l -
+    // rest`, `Δ` the first end's move since the start of the step less the
+    // second's), to scale `d` by; 0 where `l` is about 0.
+    macro_rules! xpbd_scale {
+        ($j:expr, $d:expr, $l2:expr, $w:expr) => {{
+            let (j, d, l2, w) = ($j, $d, $l2, $w);
+            let moved: [S::V; 3] = std::array::from_fn(|k| {
+                let (ia, ib) = (line.a + j, line.b + j);
+                let high = s.sub(
+                    s.sub(load(pos[k], a + j), load(start[k], ia)),
+                    s.sub(load(pos[k], b + j), load(start[k], ib)),
+                );
+                if LO {
+                    let low_a = s.sub(load(low[k], a + j), load(start_low[k], ia));
+                    let low_b = s.sub(load(low[k], b + j), load(start_low[k], ib));
+                    s.add(high, s.sub(low_a, low_b))
+                } else {
+                    high
+                }
+            });
+            let inv_l = s.rsqrt_or_zero(l2, tiny_length2);
+            // n·Δ with n = d / l, and C.
+            let along = s.mul_add(
+                d[0],
+                moved[0],
+                s.mul_add(d[1], moved[1], s.mul(d[2], moved[2])),
+            );
+            let (along, stretch) = (s.mul(along, inv_l), s.mul_sub(l2, inv_l, rest_v));
+            let numerator = s.mul(s.mul_add(gamma_v, along, stretch), inv_l);
+            s.div(numerator, s.mul_add(one_gamma_v, w, alpha_v))
         }};
     }
     // Moves the ends of the block at `j` by their corrections.
@@ -359,11 +479,16 @@ fn stretch_limit_line<S: Simd, const LO: bool>(
                 load(inv_mass.as_ptr(), a + j),
                 load(inv_mass.as_ptr(), b + j),
             );
-            // Positive where a spring over the limit is not pinned at both ends.
+            // Positive where a spring to correct is not pinned at both ends.
             let over = s.keep_if_positive(w, over);
-            // (l - longest) / (l w), with 1 / l from the lanes' reciprocal square root.
-            let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
-            let scale = s.keep_if_positive(over, s.div(shortening, w));
+            let scale = if XPBD {
+                s.keep_if_positive(over, xpbd_scale!(j, d, l2, w))
+            } else {
+                // (l - longest) / (l w), with 1 / l from the lanes' reciprocal
+                // square root.
+                let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
+                s.keep_if_positive(over, s.div(shortening, w))
+            };
             for (start, sign) in [(a, zero - one), (b, one)] {
                 let k = s.mul(
                     s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
