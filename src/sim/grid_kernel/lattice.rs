@@ -836,7 +836,7 @@ impl<S: Simd> Lanes<S> {
         // SAFETY: caller's contract.
         let ((bx, bxl, bv), real_b) = unsafe { (self.particle::<LO>(b), s.load(self.real.add(b))) };
         let mask = s.mul(real_a, real_b);
-        spring::<S, LO>(s, a, (&bx, &bxl, &bv), self.kinds[kind], Some(mask))
+        spring::<S, LO>(s, a, (&bx, &bxl, &bv), self.kinds[kind], Some(mask)).0
     }
 }
 

@@ -168,7 +168,7 @@ pub(super) type Particle<'a, V> = (&'a [V; 3], &'a [V; 3], &'a [V; 3]);
 /// any): `f = (k L / l - k - b (d·dv) / l²) d = ((-b (d·dv) / l + k L) / l - k) d`
 /// with `d = x_i - x_j` (high parts and low parts subtracted separately, so that `d`
 /// is accurate to its own size, not to that of the positions), `dv = v_i - v_j`.
-/// `kind` is `[-k, k L, -b]`.
+/// `kind` is `[-k, k L, -b]`. Returns the forces and `d`.
 #[inline(always)]
 pub(super) fn spring<S: Simd, const LO: bool>(
     s: S,
@@ -176,7 +176,7 @@ pub(super) fn spring<S: Simd, const LO: bool>(
     (xj, xlj, vj): Particle<S::V>,
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
-) -> [S::V; 3] {
+) -> ([S::V; 3], [S::V; 3]) {
     let d: [S::V; 3] = std::array::from_fn(|a| {
         if LO {
             s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a]))
@@ -197,22 +197,22 @@ pub(super) fn spring<S: Simd, const LO: bool>(
         Some(m) => s.mul(a, m),
         None => a,
     };
-    [s.mul(a, d[0]), s.mul(a, d[1]), s.mul(a, d[2])]
+    ([s.mul(a, d[0]), s.mul(a, d[1]), s.mul(a, d[2])], d)
 }
 
-/// Drag on each vertex of triangle `(p, q, d)` with relative air velocity `vr`, times
-/// `mask`: `-(ρ C_d / 12) |v_rel| (v_rel·m) m / |m|` with `m = (q - p) × (d - p)`,
-/// `|m| = 2A`; `|v_rel| / |m|` is computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`.
+/// Drag on each vertex of a triangle with edges `e1 = q - p` and `e2 = d - p` (or
+/// both negated) and relative air velocity `vr`, times `mask`: `-(ρ C_d / 12)
+/// |v_rel| (v_rel·m) m / |m|` with `m = e1 × e2`, `|m| = 2A`; `|v_rel| / |m|` is
+/// computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`. The edges are the springs' `d`
+/// (or their difference), accurate to their own size as those are.
 #[inline(always)]
 fn triangle<S: Simd>(
     s: S,
-    [p, q, d]: [&[S::V; 3]; 3],
+    [e1, e2]: [[S::V; 3]; 2],
     vr: &[S::V; 3],
     neg_drag: S::V,
     mask: Option<S::V>,
 ) -> [S::V; 3] {
-    let e1 = [s.sub(q[0], p[0]), s.sub(q[1], p[1]), s.sub(q[2], p[2])];
-    let e2 = [s.sub(d[0], p[0]), s.sub(d[1], p[1]), s.sub(d[2], p[2])];
     let m = [
         s.mul_sub(e1[1], e2[2], s.mul(e1[2], e2[1])),
         s.mul_sub(e1[2], e2[0], s.mul(e1[0], e2[2])),
@@ -479,12 +479,12 @@ unsafe fn block<
     };
     let mask = |m: usize| masks.map(|masks| masks[m]);
     let [structural, bend, shear] = k.kinds;
-    let right = spring::<S, LO>(s, p00, p01, structural, mask(0));
-    let right2 = spring::<S, LO>(s, p00, p02, bend, mask(1));
-    let d = spring::<S, LO>(s, p00, p10, structural, mask(2));
-    let dr = spring::<S, LO>(s, p00, p11, shear, mask(3));
-    let anti = spring::<S, LO>(s, p01, p10, shear, mask(4));
-    let d2 = spring::<S, LO>(s, p00, p20, bend, mask(5));
+    let (right, e_right) = spring::<S, LO>(s, p00, p01, structural, mask(0));
+    let (right2, _) = spring::<S, LO>(s, p00, p02, bend, mask(1));
+    let (d, e_down) = spring::<S, LO>(s, p00, p10, structural, mask(2));
+    let (dr, e_diagonal) = spring::<S, LO>(s, p00, p11, shear, mask(3));
+    let (anti, e_anti) = spring::<S, LO>(s, p01, p10, shear, mask(4));
+    let (d2, _) = spring::<S, LO>(s, p00, p20, bend, mask(5));
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
         let (va, vb, vd, ve) = (p00.2, p01.2, p10.2, p11.2);
@@ -492,8 +492,20 @@ unsafe fn block<
         let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
         let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
         (
-            triangle(s, [p00.0, p01.0, p10.0], &vr1, k.neg_drag, mask(6)),
-            triangle(s, [p01.0, p11.0, p10.0], &vr2, k.neg_drag, mask(7)),
+            // (a, b, d): edges b - a and d - a, the springs right and down negated.
+            triangle(s, [e_right, e_down], &vr1, k.neg_drag, mask(6)),
+            // (b, e, d): edges e - b and d - b negated, b - e = (a - e) - (a - b)
+            // and the other diagonal.
+            triangle(
+                s,
+                [
+                    std::array::from_fn(|i| s.sub(e_diagonal[i], e_right[i])),
+                    e_anti,
+                ],
+                &vr2,
+                k.neg_drag,
+                mask(7),
+            ),
         )
     } else {
         ([zero; 3], [zero; 3])
