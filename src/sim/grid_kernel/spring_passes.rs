@@ -489,6 +489,10 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
                 let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
                 s.keep_if_positive(over, s.div(shortening, w))
             };
+            // Exactly no move where none is due: a lane out of the class or past
+            // the line may reach a ghost, whose move `0 d` would be NaN (and stay)
+            // once a diverging neighbour's `d` is not finite.
+            let d: [S::V; 3] = std::array::from_fn(|axis| s.keep_if_positive(over, d[axis]));
             for (start, sign) in [(a, zero - one), (b, one)] {
                 let k = s.mul(
                     s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
