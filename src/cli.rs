@@ -459,6 +459,12 @@ fn hint(system: &System) -> String {
             stability.margin,
             0.5 * c
         ),
+        // XPBD's springs set no step limit, and safe stepping and implicit Euler
+        // leave the other forces as explicit as XPBD does.
+        Some(_) if integrator == Integrator::Xpbd => "xpbd's springs set no step limit, so a \
+             force it steps explicitly ran away (wind drag on light particles, gravity, a \
+             collider's push): try a smaller dt or more steps per frame, or less wind"
+            .to_string(),
         Some(_) => format!(
             "dt / dt_crit = {:.3}: the step is within the estimated stability limit, so it is not the step alone; \
              look at what pushes hardest (stiffness, wind, gravity, a collider, constraints){}",
