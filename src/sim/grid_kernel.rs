@@ -102,9 +102,10 @@ const TINY: f32 = 1e-30;
 /// several threads are allowed (threading costs more than it saves there).
 pub const PARALLEL_MIN_PARTICLES: usize = 48 * 48;
 
-/// Grids with at least this many particles hand their second band (and the
-/// stretch limit its second half) over by spinning ([`Duo`]) rather than with
-/// `rayon::join`, when no pass after the step uses rayon's parallel iterators. Measured on two AVX-512 cores (best of 3 runs of 960 steps, old and
+/// Grids with at least this many particles hand their second band (and the spring
+/// passes and the tear scan their second half) over by spinning ([`Duo`]) rather
+/// than with `rayon::join`, when no pass after the step uses rayon's parallel
+/// iterators. Measured on two AVX-512 cores (best of 3 runs of 960 steps, old and
 /// new binaries interleaved): 1.12x to 1.24x at 256 x 256, 0.9x to 1.1x at 128 x 128
 /// and 0.85x at 96 x 96; in runs of 10,000 steps 1.5x at 128 x 128. At the start of
 /// a run the system may put both threads on one core for a few milliseconds, and
@@ -1099,7 +1100,7 @@ impl<E: Real> Kernel<E> {
         let pool = self.pool.take();
         let parallel = pool.is_some();
         // Two bands and no pass after the step that splits its work with rayon: the
-        // second band (and the stretch limit's second half) is handed over by
+        // second band (and the spring passes' second half) is handed over by
         // spinning (`Duo`).
         let spin = parallel
             && self.par_bands.len() == 2
