@@ -321,6 +321,10 @@ impl XpbdSpring {
 /// `γ = α̃ β̃ / h` with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration from `λ = 0`:
 /// `Δλ = -(C + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
 /// with `n = (xa - xb) / l`.
+///
+/// The grid engine does the same arithmetic in float32 lanes, a colour class at a
+/// time (`grid_kernel/spring_passes.rs`, as it does [`length_correction`]);
+/// `tests/fast_engine.rs` and `tests/grid_kernel.rs` hold the two together.
 #[inline]
 pub(crate) fn xpbd_correction(
     x: [DVec3; 2],

@@ -33,7 +33,7 @@ impl<E: Real> Kernel<E> {
     /// and the high parts' subtraction put it at most `4 R 2^-24` per coordinate
     /// away; this is `16 R 2^-23`. A spring whose high parts alone show it
     /// shorter than a bound less this is shorter than the bound (the stretch
-    /// limit's `StretchLine::near2`, the tear scan's first look). 0 without low
+    /// limit's `LineRule::Limit::near2`, the tear scan's first look). 0 without low
     /// parts; infinite when a coordinate is not finite.
     pub(super) fn high_parts_slack(&self) -> f64 {
         if self.params.compensated {
