@@ -537,9 +537,9 @@ impl System {
             ground: _, // `ground` itself says
             applied,
         } = model.terms;
-        let constrained = stretch_limit.is_some() || !model.bars.is_empty();
+        let bars = !model.bars.is_empty() && model.params.bar_iterations > 0;
         let others = aero || self_collision || tear_strain.is_some() || max_speed.is_some();
-        if !springs.lattice || constrained || others || !LatticeSpec::supports(integrator) {
+        if !springs.lattice || bars || others || !LatticeSpec::supports(integrator) {
             return None;
         }
         let mut spec = LatticeSpec {
@@ -556,10 +556,12 @@ impl System {
             ground,
             sphere,
             friction,
+            stretch_limit: stretch_limit.filter(|_| !model.springs.is_empty()),
             integrator,
             precision: Precision::Single,
         };
-        spec.precision = Precision::cheapest(|r| spec.float32_noise(r), self.float32_reach());
+        let noise = |r| spec.float32_noise(r);
+        spec.precision = Precision::cheapest_for(integrator, noise, self.float32_reach());
         Some(spec)
     }
 

@@ -212,12 +212,22 @@ impl Precision {
     /// of the origin: `Single` when float32 positions keep the noise under the
     /// limit, else `Mixed` when float32 spring lengths do, else `Double`.
     pub fn needed(spec: &GridSpec, reach: f64) -> Self {
-        // XPBD's springs are not forces: a position's round-off moves a particle by
-        // about that much, not k times it, so float32 positions do at any k.
-        if spec.integrator == Integrator::Xpbd {
-            return Self::Single;
+        Self::cheapest_for(spec.integrator, |r| Self::float32_noise(spec, r), reach)
+    }
+
+    /// [`Precision::cheapest`] for springs stepped by `integrator`. XPBD's springs
+    /// are not forces: a position's round-off moves a particle by about that much,
+    /// not `k` times it, so float32 positions do at any `k`.
+    pub fn cheapest_for(
+        integrator: Integrator,
+        noise: impl Fn(Option<f64>) -> f64,
+        reach: f64,
+    ) -> Self {
+        if integrator == Integrator::Xpbd {
+            Self::Single
+        } else {
+            Self::cheapest(noise, reach)
         }
-        Self::cheapest(|r| Self::float32_noise(spec, r), reach)
     }
 
     /// The cheapest level whose float32 noise (`noise(Some(reach))` with float32

@@ -51,7 +51,9 @@ use super::integrators::euler_update;
 use super::springs;
 use super::springs::{Adjacency, BarPairs};
 use super::tearing::{overstretched, remove_broken};
-use super::{Bar, GridShape, Ground, Integrator, Model, SelfCollision, Sphere, Spring, Wind};
+use super::{
+    Bar, GridShape, Ground, Integrator, LatticeShape, Model, SelfCollision, Sphere, Spring, Wind,
+};
 
 /// Models with fewer particles than this run on the calling thread even when
 /// several threads are allowed. Measured on the jelly lattice (about 12 springs a
@@ -216,9 +218,10 @@ pub struct MeshKernel {
     triangle_links: Vec<u32>,
     /// Simulated time in s at the start of the next step (the gusts' clock).
     time: f64,
-    /// The grid's shape, if the particles form one (the order of the constraint
-    /// passes follows it).
+    /// The grid's or the lattice's shape, if the particles form one (the order of
+    /// the constraint passes follows it).
     grid: Option<GridShape>,
+    lattice: Option<LatticeShape>,
     /// Springs torn since the model last took them ([`Self::take_torn`]).
     torn: Vec<(u32, u32)>,
     /// The model's springs, canonical (for the stretch limit and to notice edits).
@@ -706,6 +709,7 @@ impl MeshKernel {
             triangle_links: Vec::new(),
             time: 0.0,
             grid: model.grid,
+            lattice: model.lattice,
             torn: Vec::new(),
             model_springs: Vec::new(),
             constraint_order: Vec::new(),
@@ -1052,7 +1056,7 @@ impl MeshKernel {
         let arrays = (self.springs.kept(&self.model_springs, &springs))
             .unwrap_or_else(|| SpringArrays::new(&springs));
         let set = SpringSet {
-            constraint_order: springs::constraint_order(&springs, self.grid),
+            constraint_order: springs::constraint_order(&springs, self.grid, self.lattice),
             adjacency: Adjacency::new(self.len(), &springs),
             springs,
             arrays,

@@ -6,7 +6,7 @@
 //! vector from `b` to `a` and `l` their distance. This module only stores the
 //! springs; `forces` evaluates them.
 
-use super::GridShape;
+use super::{GridShape, LatticeShape};
 
 /// What a spring stands for in the cloth, so that counts and colours can be shown per kind.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -80,22 +80,37 @@ pub fn canonicalize(springs: &mut Vec<Spring>) {
 
 /// The order in which the Gauss-Seidel passes over the springs (XPBD's springs and
 /// Provot's stretch limit) visit `springs` (canonical: sorted by their ends), as
-/// indices. On a grid (`p = row * width + column`) the springs
-/// are grouped into colour classes in which no two share a particle, so that a
-/// class can be corrected in any order, in parallel or in SIMD lanes, with the
-/// same result: by stencil direction (in the grid kernel's order: right, two right,
-/// down-left, down, down-right, two down), then by the parity of the spring's step
-/// along its direction (column `c / dc` for rows, row `r / dr` otherwise), then by
-/// first end. Springs that are not on the stencil come last, in canonical order;
-/// without a grid the order is the canonical one.
+/// indices. On a grid (`p = row * width + column`) or a lattice the springs are
+/// grouped into colour classes in which no two share a particle, so that a class
+/// can be corrected in any order, in parallel or in SIMD lanes, with the same
+/// result. On a grid: by stencil direction (in the grid kernel's order: right, two
+/// right, down-left, down, down-right, two down), then by the parity of the
+/// spring's step along its direction (column `c / dc` for rows, row `r / dr`
+/// otherwise), then by first end. On a lattice: by direction and colour as
+/// [`LatticeShape::constraint_class`] says, then by first end. Springs that are not
+/// on the stencil come last, in canonical order; without a grid or a lattice the
+/// order is the canonical one.
 ///
 /// The colour order is also what keeps a single pass stable: visited in particle
 /// order, one stretch-limit pass on a heavily loaded cloth (the 48 x 48 `bench`
 /// cloth with a 10% limit) lets a checkerboard mode near the pins grow until it
 /// diverges, in this engine and in an independent NumPy reproduction; visited by
 /// colour, the same pass stays bounded (`tests/stretch_limit.rs`).
-pub fn constraint_order(springs: &[Spring], grid: Option<GridShape>) -> Vec<u32> {
+pub fn constraint_order(
+    springs: &[Spring],
+    grid: Option<GridShape>,
+    lattice: Option<LatticeShape>,
+) -> Vec<u32> {
     let mut order: Vec<u32> = (0..springs.len() as u32).collect();
+    if let Some(lattice) = lattice.filter(|l| !l.is_empty()) {
+        let key = |s: &Spring| {
+            let (a, b) = (s.a as usize, s.b as usize);
+            let class = lattice.constraint_class(a, b);
+            (class.unwrap_or((usize::MAX, 0)), a)
+        };
+        order.sort_by_key(|&i| key(&springs[i as usize]));
+        return order;
+    }
     let Some(GridShape { width, .. }) = grid.filter(|g| g.width > 0) else {
         return order;
     };

@@ -86,7 +86,7 @@ impl System {
             }
         }
         let adjacency = Adjacency::new(n, &springs);
-        let constraint_order = springs::constraint_order(&springs, grid);
+        let constraint_order = springs::constraint_order(&springs, grid, lattice);
         let wind = Wind::new(params.wind, params.gust, params.seed);
         let mut model = Model {
             inv_mass: vec![0.0; n],

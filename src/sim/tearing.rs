@@ -75,7 +75,8 @@ impl System {
         }
         let n = model.mass.len();
         model.adjacency = Adjacency::new(n, &model.springs);
-        model.constraint_order = springs::constraint_order(&model.springs, model.grid);
+        model.constraint_order =
+            springs::constraint_order(&model.springs, model.grid, model.lattice);
         model.broken_springs += pairs.len();
         model.refresh_terms();
         let m = model.springs.len();

@@ -47,6 +47,10 @@
 
 use glam::DVec3;
 
+use super::spring_passes::{
+    ColourClass, RowColour, SpringRule, Sweep, SweepLines, SweepRules, SweepSprings,
+    high_parts_slack,
+};
 use super::{
     BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
     SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
@@ -102,24 +106,51 @@ impl LatticeShape {
     /// particle `a` to particle `b`, or `None` when `b` is not a forward neighbour
     /// of `a` within one cell.
     pub fn kind_of(&self, a: usize, b: usize) -> Option<usize> {
+        self.direction(a, b).map(|d| {
+            let (dx, dy, dz) = FORWARD[d];
+            dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1
+        })
+    }
+
+    /// The colour class of a spring from particle `a` to particle `b` in the
+    /// constraint passes (XPBD's springs, the stretch limit): its direction's index
+    /// among the 13 forward neighbours, and the parity of its first end's
+    /// coordinate along the direction (z where `dz != 0`, else y where `dy != 0`,
+    /// else x). Springs of one direction and parity share no particle (each steps
+    /// 1 along that coordinate, from an even one or from an odd one), so a class is
+    /// corrected in any order with the same result: the lattice kernel's lanes
+    /// and the f64 engine's one spring at a time ([`crate::sim::springs::constraint_order`]).
+    /// `None` when `b` is not a forward neighbour of `a`.
+    pub fn constraint_class(&self, a: usize, b: usize) -> Option<(usize, usize)> {
+        let direction = self.direction(a, b)?;
+        let (_, dy, dz) = FORWARD[direction];
+        let [x, y, z] = self.coordinates(a);
+        let along = if dz != 0 {
+            z
+        } else if dy != 0 {
+            y
+        } else {
+            x
+        };
+        Some((direction, along % 2))
+    }
+
+    /// Lattice coordinates `[x, y, z]` of model particle `p`.
+    fn coordinates(&self, p: usize) -> [usize; 3] {
+        let (w, h) = (self.width, self.height);
+        [p % w, (p / w) % h, p / (w * h)]
+    }
+
+    /// The index in [`FORWARD`] of the step from `a` to `b`.
+    fn direction(&self, a: usize, b: usize) -> Option<usize> {
         let n = self.len();
         if a >= n || b >= n {
             return None;
         }
-        let at = |p: usize| {
-            let (w, h) = (self.width, self.height);
-            [
-                (p % w) as isize,
-                ((p / w) % h) as isize,
-                (p / (w * h)) as isize,
-            ]
-        };
-        let ([xa, ya, za], [xb, yb, zb]) = (at(a), at(b));
-        let offset = (xb - xa, yb - ya, zb - za);
-        FORWARD.iter().position(|&o| o == offset).map(|d| {
-            let (dx, dy, dz) = FORWARD[d];
-            dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1
-        })
+        let ([xa, ya, za], [xb, yb, zb]) = (self.coordinates(a), self.coordinates(b));
+        let step = |from: usize, to: usize| to as isize - from as isize;
+        let offset = (step(xa, xb), step(ya, yb), step(za, zb));
+        FORWARD.iter().position(|&o| o == offset)
     }
 }
 
@@ -163,7 +194,10 @@ pub struct LatticeSpec {
     pub sphere: Option<Sphere>,
     /// Coulomb friction coefficient of the sphere.
     pub friction: f64,
-    /// Symplectic Euler, explicit Euler or position Verlet.
+    /// Provot's stretch limit `tau`: after the step no spring longer than `(1 +
+    /// tau)` times its rest length (`None`: off).
+    pub stretch_limit: Option<f64>,
+    /// Symplectic Euler, explicit Euler, position Verlet or XPBD.
     pub integrator: Integrator,
     /// The precision to compute in.
     pub precision: Precision,
@@ -185,7 +219,10 @@ impl LatticeSpec {
     pub fn supports(integrator: Integrator) -> bool {
         matches!(
             integrator,
-            Integrator::SymplecticEuler | Integrator::ExplicitEuler | Integrator::Verlet
+            Integrator::SymplecticEuler
+                | Integrator::ExplicitEuler
+                | Integrator::Verlet
+                | Integrator::Xpbd
         )
     }
 }
@@ -458,12 +495,17 @@ impl<E: Real> Lattice<E> {
     /// The per-step constants of `spec` (the step `dt` is set by each run). The
     /// kinds are indexed 0 axis, 1 face diagonal, 2 body diagonal.
     fn params(spec: &LatticeSpec) -> Params<E> {
-        let h = spec.spacing;
-        let rests = [h, h * 2f64.sqrt(), h * 3f64.sqrt()];
+        let rests = Self::rests(spec);
+        // XPBD's springs are constraints (`constrain`), not forces: the step
+        // predicts with every other force.
+        let xpbd = spec.integrator == Integrator::Xpbd;
+        let kinds = spec
+            .kinds
+            .map(|kind| if xpbd { Default::default() } else { kind });
         Params {
-            ks: spec.kinds.map(|kind| E::of(kind.k)),
-            kls: std::array::from_fn(|i| E::of(spec.kinds[i].k * rests[i])),
-            bs: spec.kinds.map(|kind| E::of(kind.b)),
+            ks: kinds.map(|kind| E::of(kind.k)),
+            kls: std::array::from_fn(|i| E::of(kinds[i].k * rests[i])),
+            bs: kinds.map(|kind| E::of(kind.b)),
             gravity: spec.gravity.map(E::of),
             wind: [E::ZERO; 3],
             drag: E::ZERO,
@@ -481,15 +523,23 @@ impl<E: Real> Lattice<E> {
             verlet: spec.integrator == Integrator::Verlet,
             compensated: spec.precision == Precision::Mixed,
             // With friction the sphere is resolved after the step, with the
-            // ground's friction, in the f64 engine's order (`resolve_contact`).
+            // ground's friction, in the f64 engine's order (`resolve_contact`),
+            // and so with XPBD or a stretch limit, after their passes.
             sphere: spec
                 .sphere
                 .filter(|_| !Self::contact(spec, 0.0).has_friction())
+                .filter(|_| !xpbd && spec.stretch_limit.is_none())
                 .map(|s| {
                     let r = E::of(s.radius);
                     (s.center.to_array().map(E::of), r, r * r)
                 }),
         }
+    }
+
+    /// Rest lengths of the kinds: axis `h`, face diagonal `h√2`, body diagonal `h√3`.
+    fn rests(spec: &LatticeSpec) -> [f64; 3] {
+        let h = spec.spacing;
+        [h, h * 2f64.sqrt(), h * 3f64.sqrt()]
     }
 
     /// The colliders as the f64 engine resolves them after a step `dt`.
@@ -685,6 +735,7 @@ impl<E: Real> Lattice<E> {
         let run = |duo: Option<&Duo>| {
             for _ in 0..n {
                 self.one_step(parallel, duo);
+                self.constrain(dt);
                 self.resolve_contact(dt);
             }
         };
@@ -697,6 +748,93 @@ impl<E: Real> Lattice<E> {
     /// The colliders with friction, after the step (without friction the step
     /// projected the particles out of the sphere itself): the grid kernel's
     /// contact rows, one lattice row each, on this thread.
+    /// The passes along the springs after the step, on this thread: XPBD's
+    /// springs, then Provot's stretch limit, as in the f64 engine.
+    fn constrain(&mut self, dt: f64) {
+        if self.spec.integrator == Integrator::Xpbd {
+            self.spring_pass(SpringRule::Xpbd, dt);
+        }
+        if let Some(tau) = self.spec.stretch_limit {
+            self.spring_pass(SpringRule::StretchLimit(tau), dt);
+        }
+    }
+
+    /// One pass of `rule` over the springs, with the grid's passes
+    /// ([`super::spring_passes`]): the lattice's array rows (`x + r W` with `r = y
+    /// + z H`) are a grid's rows, a direction `(dx, dy, dz)` is the grid direction
+    /// `(dy + dz H, dx)`, and the real-particle mask leaves out the springs that
+    /// reach a ghost. Sweeps go by direction in the order of [`FORWARD`], each
+    /// direction's two colour classes in turn ([`LatticeShape::constraint_class`],
+    /// the f64 engine's order): `z % 2` is the row's `(r / H) % 2`, and `y % 2` is
+    /// `(r % H) % 2`. On one thread: the lanes past a line's end reach the next
+    /// row's particles, which they store unchanged, and another thread could be
+    /// moving them.
+    fn spring_pass(&mut self, rule: SpringRule, dt: f64) {
+        let g = self.geometry;
+        let slab_rows = g.shape.height + 1;
+        let rows = slab_rows * g.shape.depth;
+        let rules = SweepRules {
+            rule,
+            dt,
+            slack: high_parts_slack(self.params.compensated, self.simd, &self.cur.x),
+            compensated: self.params.compensated,
+        };
+        let rests = Self::rests(&self.spec);
+        // XPBD's positions at the start of the step (after the step's swap).
+        let start: [&[E]; 6] = match rule {
+            SpringRule::Xpbd => {
+                let [x, y, z] = self.next.x.each_ref().map(Buf::as_slice);
+                let [xl, yl, zl] = self.next.xl.each_ref().map(Buf::as_slice);
+                [x, y, z, xl, yl, zl]
+            }
+            SpringRule::StretchLimit(_) => Default::default(),
+        };
+        let mut out = self.cur.rows();
+        for (direction, &(dx, dy, dz)) in FORWARD.iter().enumerate() {
+            let kind = dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1;
+            let springs = || SweepSprings {
+                direction,
+                dr: (dy + dz * slab_rows as isize) as usize,
+                dc: dx,
+                rest: rests[kind],
+                kind: self.spec.kinds[kind],
+            };
+            let colour_of_rows = if dz != 0 {
+                Some(RowColour {
+                    wrap: usize::MAX,
+                    period: slab_rows,
+                })
+            } else if dy != 0 {
+                Some(RowColour {
+                    wrap: slab_rows,
+                    period: 1,
+                })
+            } else {
+                None
+            };
+            for colour in 0..2 {
+                let class = ColourClass {
+                    rows: colour_of_rows,
+                    colour,
+                };
+                let Some(sweep) = Sweep::new(&rules, springs(), (g.shape.width, rows), class)
+                else {
+                    continue;
+                };
+                let lines = SweepLines {
+                    sweep: &sweep,
+                    stride: g.row,
+                    rows: sweep.rows(),
+                    inv_mass: self.inv_mass.as_slice(),
+                    alive: None,
+                    real: Some(self.real.as_slice()),
+                    start,
+                };
+                E::spring_sweep(self.simd, &mut out, 0, &lines);
+            }
+        }
+    }
+
     fn resolve_contact(&mut self, dt: f64) {
         let contact = Self::contact(&self.spec, dt);
         if !contact.is_active() || self.params.sphere.is_some() {

@@ -12,7 +12,10 @@ use super::super::duo::Duo;
 use super::super::forces::EPSILON_LENGTH;
 #[cfg(target_arch = "x86_64")]
 use super::x86;
-use super::{BLOCK, Buf, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SimdLevel, add_double};
+use super::{
+    BLOCK, Buf, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SimdLevel, SpringCoefficients,
+    add_double,
+};
 
 /// What a [`Kernel::spring_pass`] does to each spring.
 #[derive(Clone, Copy, Debug)]
@@ -27,20 +30,9 @@ pub(super) enum SpringRule {
 }
 
 impl<E: Real> Kernel<E> {
-    /// With double-float positions, how far (m) the high parts' difference may be
-    /// from a spring's vector, with room to spare: a low part is at most half an
-    /// ulp of its high part, so for coordinates up to `R` the two ends' low parts
-    /// and the high parts' subtraction put it at most `4 R 2^-24` per coordinate
-    /// away; this is `16 R 2^-23`. A spring whose high parts alone show it
-    /// shorter than a bound less this is shorter than the bound (the stretch
-    /// limit's `LineRule::Limit::near2`, the tear scan's first look). 0 without low
-    /// parts; infinite when a coordinate is not finite.
+    /// [`high_parts_slack`] of the kernel's positions.
     pub(super) fn high_parts_slack(&self) -> f64 {
-        if self.params.compensated {
-            16.0 * largest_magnitude(self.simd, &self.cur.x) * f32::EPSILON as f64
-        } else {
-            0.0
-        }
+        high_parts_slack(self.params.compensated, self.simd, &self.cur.x)
     }
 
     /// One pass of `rule` over the springs (see [`Self::constrain`]), in the
@@ -58,54 +50,35 @@ impl<E: Real> Kernel<E> {
     ) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
-        let inv_dt = E::of(1.0 / dt);
-        let compensated = self.params.compensated;
-        let slack = self.high_parts_slack();
+        let rules = SweepRules {
+            rule,
+            dt,
+            slack: self.high_parts_slack(),
+            compensated: self.params.compensated,
+        };
         // The sweeps in their order: each direction's two colour classes.
         let stencil = self.stencil();
         let sweeps: [Option<Sweep<E>>; 12] = std::array::from_fn(|k| {
             let (d, colour) = (k / 2, k % 2);
             let ((dr, dc), rest, present, kind) = stencil[d];
-            // Columns c with both ends on the cloth: 0 <= c + dc < w.
-            let c0 = (-dc).max(0) as usize;
-            let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
-            if !present || len == 0 || dr >= h {
+            if !present {
                 return None;
             }
-            let rule = match rule {
-                SpringRule::StretchLimit(tau) => {
-                    let near = ((1.0 + tau) * rest - slack).max(0.0);
-                    LineRule::Limit {
-                        longest: E::of((1.0 + tau) * rest),
-                        near2: E::of(near * near * (1.0 - 1.0 / 65536.0)),
-                    }
-                }
-                SpringRule::Xpbd => {
-                    let spring = XpbdSpring::new(rest, kind.k, kind.b, dt)?;
-                    LineRule::Xpbd {
-                        rest: E::of(spring.rest),
-                        alpha: E::of(spring.alpha),
-                        gamma: E::of(spring.gamma),
-                    }
-                }
+            let class = ColourClass {
+                rows: (dr > 0).then_some(RowColour {
+                    wrap: usize::MAX,
+                    period: dr,
+                }),
+                colour,
             };
-            Some(Sweep {
+            let springs = SweepSprings {
                 direction: d,
                 dr,
                 dc,
-                c0,
-                colour,
-                rows: h - dr,
-                line: SpringLine {
-                    a: 0,
-                    b: 0,
-                    len,
-                    class: SpringLine::class(c0, (dr == 0).then_some((colour, dc))),
-                    rule,
-                    inv_dt,
-                    compensated,
-                },
-            })
+                rest,
+                kind,
+            };
+            Sweep::new(&rules, springs, (w, h), class)
         });
         let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
         let torn = self.torn.as_ref();
@@ -162,6 +135,7 @@ impl<E: Real> Kernel<E> {
                             rows: start_row..end,
                             inv_mass,
                             alive: torn.map(|t| t.springs[sweep.direction].as_slice()),
+                            real: None,
                             start,
                         };
                         E::spring_sweep(simd, out, first * st, &lines);
@@ -249,8 +223,44 @@ impl<E: Real> SpringLine<E> {
     }
 }
 
-/// One sweep of a spring pass: the springs of one stencil direction `(dr, dc)` in
-/// one colour class, a [`SpringLine`] per row.
+/// What the sweeps of one spring pass share: the rule, the step, and (for the
+/// stretch limit on double-float positions) [`high_parts_slack`].
+pub(super) struct SweepRules {
+    pub(super) rule: SpringRule,
+    pub(super) dt: f64,
+    pub(super) slack: f64,
+    pub(super) compensated: bool,
+}
+
+/// The springs of one direction: from each particle to the one `dr` rows down and
+/// `dc` columns right, of rest length `rest` and coefficients `kind`; `direction`
+/// indexes the tear masks.
+pub(super) struct SweepSprings {
+    pub(super) direction: usize,
+    pub(super) dr: usize,
+    pub(super) dc: isize,
+    pub(super) rest: f64,
+    pub(super) kind: SpringCoefficients,
+}
+
+/// Which springs of a direction are in a colour class: along rows (no `rows`),
+/// those starting at columns `c` with `(c / dc) % 2 == colour`; else those
+/// starting on rows `r` with `((r % wrap) / period) % 2 == colour`.
+#[derive(Clone, Copy)]
+pub(super) struct ColourClass {
+    pub(super) rows: Option<RowColour>,
+    pub(super) colour: usize,
+}
+
+/// A colour of rows: `((r % wrap) / period) % 2` (see [`ColourClass`]).
+#[derive(Clone, Copy)]
+pub(super) struct RowColour {
+    pub(super) wrap: usize,
+    pub(super) period: usize,
+}
+
+/// One sweep of a spring pass: the springs of one direction `(dr, dc)` in one
+/// colour class, a [`SpringLine`] per row.
 pub(super) struct Sweep<E> {
     /// Index of the direction in the stencil (and of its tear masks).
     direction: usize,
@@ -258,7 +268,7 @@ pub(super) struct Sweep<E> {
     dc: isize,
     /// First column with both ends on the cloth.
     c0: usize,
-    colour: usize,
+    class: ColourClass,
     /// Rows with both ends on the cloth: `0 .. rows`.
     rows: usize,
     /// The line of row 0 (its `a` and `b` set per row by [`Sweep::line_at`]).
@@ -266,11 +276,81 @@ pub(super) struct Sweep<E> {
 }
 
 impl<E: Real> Sweep<E> {
+    /// The sweep of `springs` in `class` on rows of `width` particles, `height`
+    /// rows in all, under `rules`; `None` when it has no springs (or, for XPBD,
+    /// when their rest length or stiffness leaves nothing to correct).
+    pub(super) fn new(
+        rules: &SweepRules,
+        springs: SweepSprings,
+        (width, height): (usize, usize),
+        class: ColourClass,
+    ) -> Option<Self> {
+        let SweepSprings {
+            direction,
+            dr,
+            dc,
+            rest,
+            kind,
+        } = springs;
+        // Columns c with both ends on the cloth: 0 <= c + dc < width.
+        let c0 = (-dc).max(0) as usize;
+        let len = width.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
+        if len == 0 || dr >= height {
+            return None;
+        }
+        let rule = match rules.rule {
+            SpringRule::StretchLimit(tau) => {
+                let near = ((1.0 + tau) * rest - rules.slack).max(0.0);
+                LineRule::Limit {
+                    longest: E::of((1.0 + tau) * rest),
+                    near2: E::of(near * near * (1.0 - 1.0 / 65536.0)),
+                }
+            }
+            SpringRule::Xpbd => {
+                let spring = XpbdSpring::new(rest, kind.k, kind.b, rules.dt)?;
+                LineRule::Xpbd {
+                    rest: E::of(spring.rest),
+                    alpha: E::of(spring.alpha),
+                    gamma: E::of(spring.gamma),
+                }
+            }
+        };
+        let along = match class.rows {
+            None => Some((class.colour, dc)),
+            Some(_) => None,
+        };
+        Some(Sweep {
+            direction,
+            dr,
+            dc,
+            c0,
+            class,
+            rows: height - dr,
+            line: SpringLine {
+                a: 0,
+                b: 0,
+                len,
+                class: SpringLine::class(c0, along),
+                rule,
+                inv_dt: E::of(1.0 / rules.dt),
+                compensated: rules.compensated,
+            },
+        })
+    }
+
     /// The rows of `rows` whose springs are in the class: every row along rows
-    /// (the class is a pattern of columns), else rows `2 dr m + dr colour + j`,
-    /// `j < dr`.
+    /// (the class is a pattern of columns), else those of the class's colour.
     fn lines(&self, rows: Range<usize>) -> impl Iterator<Item = usize> + '_ {
-        rows.filter(|r| self.dr == 0 || (r / self.dr) % 2 == self.colour)
+        let ColourClass {
+            rows: colour_of,
+            colour,
+        } = self.class;
+        rows.filter(move |r| colour_of.is_none_or(|c| ((r % c.wrap) / c.period) % 2 == colour))
+    }
+
+    /// The rows the sweep's lines start on.
+    pub(super) fn rows(&self) -> Range<usize> {
+        0..self.rows
     }
 
     /// Whether positions have low parts.
@@ -290,16 +370,19 @@ impl<E: Real> Sweep<E> {
 
 /// The lines of a [`Sweep`] starting on `rows`, rows `stride` floats apart, and
 /// what they read besides the state: inverse masses, the direction's tear mask
-/// when springs tore ([`super::Torn`]), and for XPBD the positions at the start of
-/// the step (high parts, then low parts; empty for the stretch limit), all whole
-/// arrays indexed from row 0.
+/// when springs tore ([`super::Torn`], indexed by first end), the mask of real
+/// particles when the arrays hold ghosts that springs reach (1 for particles, 0
+/// for ghosts: a lattice's), and for XPBD the positions at the start of the step
+/// (high parts, then low parts; empty for the stretch limit), all whole arrays
+/// indexed from row 0.
 pub(super) struct SweepLines<'a, E> {
     pub(super) sweep: &'a Sweep<E>,
     pub(super) stride: usize,
     pub(super) rows: Range<usize>,
-    inv_mass: &'a [E],
-    alive: Option<&'a [E]>,
-    start: [&'a [E]; 6],
+    pub(super) inv_mass: &'a [E],
+    pub(super) alive: Option<&'a [E]>,
+    pub(super) real: Option<&'a [E]>,
+    pub(super) start: [&'a [E]; 6],
 }
 
 /// [`spring_line`] on each line of `lines`, in order of rows (one call for a
@@ -375,6 +458,8 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     let start_end = line.a.max(line.b) + lanes;
     assert!(!XPBD || fits([sx, sy, sz], start_end) && (!LO || fits([sxl, syl, szl], start_end)));
     let alive = lines.alive.map(|m| &m[line.a..line.a + lanes]);
+    let real = lines.real.map(|m| &m[base..]);
+    assert!(real.is_none_or(|m| m.len() >= end));
     let pos = [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()];
     let low = [xl.as_mut_ptr(), yl.as_mut_ptr(), zl.as_mut_ptr()];
     let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
@@ -416,6 +501,10 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
             }
             if let Some(m) = alive {
                 keep = s.mul(keep, load(m.as_ptr(), j));
+            }
+            if let Some(m) = real {
+                let both = s.mul(load(m.as_ptr(), a + j), load(m.as_ptr(), b + j));
+                keep = s.mul(keep, both);
             }
             if !XPBD && LO && !s.any_positive(s.mul_sub(length2!(high), keep, near2)) {
                 // The high parts alone show every spring within the limit.
@@ -548,6 +637,26 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     }
     if j < lanes {
         blocks!(j; 0);
+    }
+}
+
+/// With double-float positions (`compensated`), how far (m) the high parts'
+/// difference may be from a spring's vector, with room to spare: a low part is at
+/// most half an ulp of its high part, so for coordinates up to `R` the two ends'
+/// low parts and the high parts' subtraction put it at most `4 R 2^-24` per
+/// coordinate away; this is `16 R 2^-23`. A spring whose high parts alone show it
+/// shorter than a bound less this is shorter than the bound (the stretch limit's
+/// `LineRule::Limit::near2`, the tear scan's first look). 0 without low parts;
+/// infinite when a coordinate is not finite.
+pub(super) fn high_parts_slack<E: Real>(
+    compensated: bool,
+    simd: SimdLevel,
+    x: &[Buf<E>; 3],
+) -> f64 {
+    if compensated {
+        16.0 * largest_magnitude(simd, x) * f32::EPSILON as f64
+    } else {
+        0.0
     }
 }
 
