@@ -171,6 +171,10 @@ fn a_jelly_agrees_with_the_f64_engine_feature_by_feature() {
             ],
         ),
         (
+            "stretch limit, on the ground",
+            vec!["stretch_limit=0.001".into(), ground.clone()],
+        ),
+        (
             "stretch limit, sphere below",
             vec![
                 "stretch_limit=0.01".into(),
