@@ -3,14 +3,16 @@
 //! cell (26 neighbours: axis springs of rest `h`, face diagonals of rest `h√2`,
 //! body diagonals of rest `h√3`, one stiffness and damping per kind), under
 //! gravity (and the applied force, as an acceleration), air damping and a penalty
-//! ground, stepped by symplectic Euler, explicit Euler or position Verlet, then
-//! projected out of a sphere, and with friction on the sphere or the ground
+//! ground, stepped by symplectic Euler, explicit Euler, position Verlet or XPBD,
+//! then projected out of a sphere, and with friction on the sphere or the ground
 //! resolved with it. These are the grid kernel's forces, integrators, projection
 //! and contact, written once in [`super`] and shared: a spring is [`spring`], a
 //! particle's step [`integrate`], the sphere [`project_out_of_sphere`], contact with
-//! friction [`ContactRows`] (over [`Contact::resolve`]). What the lattice does not
-//! model (the stretch limit, bars, drag, tearing) runs on the mesh engine instead
-//! (`super::super::fast_path` decides, spring by spring).
+//! friction [`ContactRows`] (over [`Contact::resolve`]), XPBD's springs and
+//! Provot's stretch limit the grid's spring passes ([`super::spring_passes`], see
+//! `Lattice::spring_pass`). What the lattice does not model (bars, drag, tearing)
+//! runs on the mesh engine instead (`super::super::fast_path` decides, spring by
+//! spring).
 //!
 //! # Layout
 //! Structure of arrays in the grid kernel's precision levels: float32 arithmetic
@@ -44,6 +46,10 @@
 //! reach into it), into its own accumulator, so no thread writes what another
 //! reads and the result is bit-identical for any number of threads. Two bands hand
 //! over each step by spinning ([`Duo`]), as the grid kernel's do.
+//!
+//! With XPBD the step predicts without the springs (their coefficients are 0 in
+//! it), and XPBD's pass over the springs follows, then the stretch limit's, both
+//! on the calling thread, then the contact with friction.
 
 use glam::DVec3;
 
