@@ -262,7 +262,9 @@ fn info_reports_counts_terms_parameters_and_stability() {
     );
 
     // With XPBD the springs are constraints: no force term, no step limit, and the
-    // grid runs on float32 positions at any stiffness.
+    // grid's precision follows the step, not the stiffness: double-float positions
+    // at the cloth's 1/960 s steps, even at 1e9 N/m (float32 ones would round its
+    // moves, and so its velocities), float32 ones at 1/60 s steps.
     let xpbd = cloth(&[
         "info",
         "--scene",
@@ -274,7 +276,21 @@ fn info_reports_counts_terms_parameters_and_stability() {
         "--json",
     ]);
     let v: serde_json::Value = serde_json::from_str(stdout(&xpbd).trim()).unwrap();
-    assert_eq!(v["engine"], "grid-f32");
+    assert_eq!(v["engine"], "grid-mixed");
+    let frames = cloth(&[
+        "info",
+        "--scene",
+        "cloth",
+        "--set",
+        "integrator=\"xpbd\"",
+        "--set",
+        "stiffness=1e9",
+        "--set",
+        "dt=0.016666666666666666",
+        "--json",
+    ]);
+    let frames: serde_json::Value = serde_json::from_str(stdout(&frames).trim()).unwrap();
+    assert_eq!(frames["engine"], "grid-f32");
     assert!(
         !v["force_terms"]
             .as_array()

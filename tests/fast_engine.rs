@@ -10,7 +10,7 @@
 //! cloths move by 0.05 to 1 m over these runs).
 
 use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, Precision, SpringCoefficients};
-use cloth_sandbox::sim::{Engine, System, safe};
+use cloth_sandbox::sim::{Engine, Integrator, System, safe};
 use glam::DVec3;
 
 mod common;
@@ -257,13 +257,22 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
     // stiff one, float32 for the peers' cloth.
     let mut spec = GridSpec::peer_bench(32, false);
     spec.structural.k = 1e7;
-    assert_eq!(Precision::needed(&spec, 2.0), Precision::Double);
+    assert_eq!(Precision::needed(&spec, 2.0, 1e-3), Precision::Double);
     spec.structural.k = 100.0;
-    assert_eq!(Precision::needed(&spec, 2.0), Precision::Mixed);
+    assert_eq!(Precision::needed(&spec, 2.0, 1e-3), Precision::Mixed);
     assert_eq!(
-        Precision::needed(&GridSpec::peer_bench(32, false), 2.0),
+        Precision::needed(&GridSpec::peer_bench(32, false), 2.0, 1e-3),
         Precision::Single
     );
+    // XPBD: whatever the stiffness, float32 positions for whole 1/60 s frames
+    // (noise `2^-23 2 m / h²` = 8.6e-4 m/s²), double-float ones for substeps of
+    // 1e-3 s (0.24 m/s²).
+    spec.integrator = Integrator::Xpbd;
+    for k in [100.0, 1e7] {
+        spec.structural.k = k;
+        assert_eq!(Precision::needed(&spec, 2.0, 1.0 / 60.0), Precision::Single);
+        assert_eq!(Precision::needed(&spec, 2.0, 1e-3), Precision::Mixed);
+    }
 }
 
 #[test]

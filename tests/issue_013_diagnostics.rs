@@ -53,7 +53,7 @@ fn xpbd_on_the_grid_kernel_reports_the_true_divergence_step() {
         "--json",
     ];
     let fast = diverged(&base);
-    assert_eq!(fast["engine"], "grid-f32");
+    assert_eq!(fast["engine"], "grid-mixed");
     let exact = diverged(&[&base[..], &["--exact"]].concat());
     assert_eq!(
         fast["diverged"]["step"], exact["diverged"]["step"],

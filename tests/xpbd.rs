@@ -108,14 +108,42 @@ fn xpbd_has_no_step_limit_from_the_springs() {
     assert!(!system.force_terms().springs);
 }
 
-/// XPBD's spring order on a grid falls into at most 12 classes (6 stencil
-/// directions, 2 parities) in which no two springs share a particle, so each
-/// class can be corrected in any order with the same result. Counted here by
-/// walking the order and starting a new class whenever a spring touches a
-/// particle the current class already moved.
 #[test]
-fn xpbd_visits_a_grid_in_twelve_classes_of_independent_springs() {
-    let system = cloth("xpbd", 100.0, 16);
+fn xpbd_on_a_penalty_ground_has_the_grounds_step_limit() {
+    // XPBD predicts with symplectic Euler under every force but the springs, so
+    // the jelly's ground (k_c = 50,000 N/m under 0.1 kg particles, no air damping)
+    // sets its limit: 2 / sqrt(k_c / m) = 2.828e-3 s. Safe stepping splits a
+    // 1/60 s frame by it and the dropped jelly comes to rest on the ground; whole
+    // frames run away on the first bounce.
+    use cloth_sandbox::sim::safe;
+    let jelly = |dt: f64| {
+        let mut system = build("jelly", &["integrator=\"xpbd\"", &format!("dt={dt}")]);
+        system.set_fast_path(true);
+        system
+    };
+    let frame = 1.0 / 60.0;
+    let system = jelly(frame);
+    let limit = 2.0 / (50_000.0f64 / 0.1).sqrt();
+    let critical = system.stability().dt_critical.unwrap();
+    assert!(
+        (critical - limit).abs() <= 1e-12 * limit,
+        "{critical} s, not the ground's {limit} s"
+    );
+    let step = safe::safe_step(system.model(), frame, safe::DEFAULT_SAFETY, 1 << 20);
+    assert!(step.safe && step.dt <= 0.5 * limit, "{step:?}");
+    let mut safe = jelly(step.dt);
+    safe.run((10.0 / step.dt).round() as u64).unwrap();
+    let kinetic = safe.energy().kinetic;
+    println!("safe steps of {:.3e} s: {kinetic:e} J after 10 s", step.dt);
+    assert!(kinetic < 0.01, "{kinetic} J after 10 s");
+    let mut whole = jelly(frame);
+    assert!(whole.run(600).is_err(), "whole frames held on the ground");
+}
+
+/// The classes of independent springs that a system's constraint order falls
+/// into, counted by walking the order and starting a new class whenever a spring
+/// touches a particle the current class already moved (each spring once).
+fn independent_classes(system: &System) -> usize {
     let model = system.model();
     assert_eq!(model.constraint_order.len(), model.springs.len());
     let mut seen = vec![false; model.springs.len()];
@@ -134,5 +162,21 @@ fn xpbd_visits_a_grid_in_twelve_classes_of_independent_springs() {
         touched[a] = classes;
         touched[b] = classes;
     }
-    assert_eq!(classes, 12);
+    classes
+}
+
+/// XPBD's spring order on a grid falls into 12 classes (6 stencil directions, 2
+/// parities) in which no two springs share a particle, and on a lattice into 26
+/// (13 directions, 2 parities), so that each class can be corrected in any
+/// order with the same result: the fast engines' lanes and the f64 engine's one
+/// spring at a time.
+#[test]
+fn xpbd_visits_a_grid_in_twelve_classes_and_a_lattice_in_26() {
+    assert_eq!(independent_classes(&cloth("xpbd", 100.0, 16)), 12);
+    for size in ["5", "6"] {
+        let sizes = ["width", "height", "depth"].map(|k| format!("{k}={size}"));
+        let overrides: Vec<&str> = sizes.iter().map(String::as_str).collect();
+        let jelly = build("jelly", &[&overrides[..], &["integrator=\"xpbd\""]].concat());
+        assert_eq!(independent_classes(&jelly), 26, "jelly {size}³");
+    }
 }

@@ -560,8 +560,8 @@ impl System {
             integrator,
             precision: Precision::Single,
         };
-        let noise = |r| spec.float32_noise(r);
-        spec.precision = Precision::cheapest_for(integrator, noise, self.float32_reach());
+        let (reach, dt) = (self.float32_reach(), model.params.dt);
+        spec.precision = Precision::cheapest(|r| spec.float32_noise(r, dt), reach);
         Some(spec)
     }
 
@@ -684,7 +684,7 @@ impl System {
             present: springs.present,
             precision: Precision::Single,
         };
-        spec.precision = Precision::needed(&spec, self.float32_reach());
+        spec.precision = Precision::needed(&spec, self.float32_reach(), model.params.dt);
         Some(spec)
     }
 

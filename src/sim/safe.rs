@@ -47,9 +47,7 @@ pub fn safe_step(model: &Model, frame_time: f64, safety: f64, max_substeps: u32)
     } else {
         DEFAULT_SAFETY
     };
-    let omega = stability::omega_max_bound(model);
-    let zeta = stability::damping_ratio(model, omega);
-    let dt_critical = stability::critical_step(model.params.integrator, omega, zeta);
+    let dt_critical = stability::estimate(model).dt_critical;
     if !(frame_time.is_finite() && frame_time > 0.0) {
         return SafeStep {
             substeps: 1,

@@ -213,12 +213,13 @@ impl LatticeSpec {
     /// The float32 acceleration noise of this lattice (see
     /// [`Precision::float32_noise`]): a particle has up to 6 axis springs, 12 face
     /// diagonals and 8 body diagonals.
-    pub fn float32_noise(&self, reach: Option<f64>) -> f64 {
+    pub fn float32_noise(&self, reach: Option<f64>, dt: f64) -> f64 {
         let h = self.spacing.abs();
         let springs = [(6.0, h), (12.0, h * 2f64.sqrt()), (8.0, h * 3f64.sqrt())];
         let springs =
             (self.kinds.iter().zip(springs)).map(|(kind, (count, rest))| (kind.k, count, rest));
-        Precision::spring_noise(springs, self.particle_mass, reach)
+        let xpbd = (self.integrator == Integrator::Xpbd).then_some(dt);
+        Precision::spring_noise(springs, self.particle_mass, reach, xpbd)
     }
 
     /// Whether the kernel models an integrator.
