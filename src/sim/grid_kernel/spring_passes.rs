@@ -411,6 +411,29 @@ pub(super) fn spring_sweep<S: Simd, const LO: bool>(
     }
 }
 
+/// `[f(0), f(1), f(2)]` for `per_axis!(|k| f(k))`, written out: the closures of
+/// `std::array::from_fn` were not inlined into the double-float positions' SIMD
+/// code, so the vector operations in them ran as calls (3.4x slower for XPBD's
+/// pass).
+macro_rules! per_axis {
+    (|$k:ident| $e:expr) => {
+        [
+            {
+                let $k = 0;
+                $e
+            },
+            {
+                let $k = 1;
+                $e
+            },
+            {
+                let $k = 2;
+                $e
+            },
+        ]
+    };
+}
+
 /// Corrects the springs of `line` in `out` (the state's arrays from array index
 /// `base` on), in blocks of `S::LANES` springs, four blocks at a time: measures
 /// them all, then for each block with a spring to correct its corrections and at
@@ -492,7 +515,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
         ($j:expr) => {{
             let j = $j;
             let high: [S::V; 3] =
-                std::array::from_fn(|k| s.sub(load(pos[k], a + j), load(pos[k], b + j)));
+                per_axis!(|k| s.sub(load(pos[k], a + j), load(pos[k], b + j)));
             let mut keep = load(line.class.as_ptr(), 0);
             if j + n > len {
                 let tail: [S::E; BLOCK] =
@@ -511,7 +534,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
                 (high, zero_v, zero_v, false)
             } else {
                 let d: [S::V; 3] = if LO {
-                    std::array::from_fn(|k| {
+                    per_axis!(|k| {
                         s.add(high[k], s.sub(load(low[k], a + j), load(low[k], b + j)))
                     })
                 } else {
@@ -534,7 +557,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     macro_rules! xpbd_scale {
         ($j:expr, $d:expr, $l2:expr, $w:expr) => {{
             let (j, d, l2, w) = ($j, $d, $l2, $w);
-            let moved: [S::V; 3] = std::array::from_fn(|k| {
+            let moved: [S::V; 3] = per_axis!(|k| {
                 let (ia, ib) = (line.a + j, line.b + j);
                 let high = s.sub(
                     s.sub(load(pos[k], a + j), load(start[k], ia)),
@@ -581,7 +604,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
             // Exactly no move where none is due: a lane out of the class or past
             // the line may reach a ghost, whose move `0 d` would be NaN (and stay)
             // once a diverging neighbour's `d` is not finite.
-            let d: [S::V; 3] = std::array::from_fn(|axis| s.keep_if_positive(over, d[axis]));
+            let d: [S::V; 3] = per_axis!(|axis| s.keep_if_positive(over, d[axis]));
             for (start, sign) in [(a, zero - one), (b, one)] {
                 let k = s.mul(
                     s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
