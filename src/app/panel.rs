@@ -829,7 +829,8 @@ fn contents(
             match s.dt_critical {
                 Some(c) if c.is_infinite() => {
                     let why = if s.omega_max == 0.0 {
-                        "nothing here oscillates on a step (bars and constraints only)"
+                        "nothing here oscillates on a step: bars and constraints only \
+                         (XPBD's springs are constraints)"
                     } else {
                         "this integrator is stable at any dt"
                     };

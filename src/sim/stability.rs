@@ -8,7 +8,9 @@
 //! highest mode: spring damping gives `zeta = (b/k) omega / 2` (the smallest `b/k`
 //! over the springs), air damping `c / (2 m omega)`. Undamped, this gives
 //! symplectic Euler and Verlet `2/omega`, RK4 `2 sqrt 2 / omega`, and no stable step
-//! for explicit Euler and RK2; implicit Euler has no limit.
+//! for explicit Euler and RK2; implicit Euler has no limit. XPBD's springs are
+//! constraints, not forces: its limit is symplectic Euler's (its prediction) on the
+//! forces it integrates, the ground's penalty, and none without one.
 
 use super::{Integrator, Model};
 
