@@ -8,6 +8,8 @@ use cloth_sandbox::session::{DEFAULT_WIND, Edit, Session};
 use cloth_sandbox::sim::SpringKind;
 use glam::DVec3;
 
+mod common;
+
 fn count(session: &Session, kind: SpringKind) -> usize {
     session
         .system()
@@ -205,4 +207,32 @@ fn the_wind_switch_in_still_air_brings_a_breeze() {
     s.set_wind_on(true).expect("turns on");
     assert_eq!(s.system().params().wind, DEFAULT_WIND);
     assert!(s.wind_on());
+}
+
+#[test]
+fn the_jelly_made_bigger_is_dropped_from_above_the_ground_not_started_in_it() {
+    // Centred at the default origin (8 m up), the 16³ cube's rotated corner lies
+    // 5 m deep; it is lifted whole until its lowest particle is one rest length
+    // (1 m) above the ground, with its shape kept. The first steps then are a
+    // fall: no more kinetic energy than the 1 m drop gives, where the ground's
+    // penalty had put 7.4e6 J into it.
+    let system = common::build("jelly", &["width=16", "height=16", "depth=16"]);
+    let x = system.positions();
+    let lowest = x.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+    assert!((lowest - 1.0).abs() < 1e-9, "lowest particle at {lowest} m");
+    let springs = system.springs();
+    let strained = springs
+        .iter()
+        .map(|s| (x[s.a as usize].distance(x[s.b as usize]) - s.rest).abs())
+        .fold(0.0, f64::max);
+    assert!(strained < 1e-9, "the lift deformed the cube by {strained} m");
+    let mut system = system;
+    system.run(100).unwrap();
+    let e = system.energy();
+    let mass: f64 = system.masses().iter().sum();
+    assert!(e.kinetic <= mass * 9.81 * 1.0, "{e:?}");
+    // The default jelly already starts clear of the ground: it is not moved.
+    let small = common::build("jelly", &[]);
+    let lowest = (small.positions().iter()).map(|p| p.y).fold(f64::INFINITY, f64::min);
+    assert!(lowest > 1.0, "the default jelly starts at {lowest} m");
 }

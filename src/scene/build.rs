@@ -874,8 +874,23 @@ impl Resolved {
     /// collider itself would move it, so that the run starts from a state that
     /// satisfies it (pushed out by the first step instead, the particles would
     /// gain at once an energy the divergence check cannot tell from a blow-up).
+    ///
+    /// A lattice (a solid, centred on `origin`) that would start with particles in
+    /// the ground is first lifted whole until its lowest particle is one rest
+    /// length above it, so that the jelly made bigger is dropped as the small one
+    /// is: centred at the default origin, the 16³ jelly started 5 m deep, and the
+    /// ground's penalty put 7.4e6 J into it on the first step.
     pub fn positions(&self) -> Vec<DVec3> {
         let mut positions = self.layout_positions();
+        if let (Layout::Lattice, Some(ground)) = (self.layout, &self.params.ground) {
+            let lowest = positions.iter().map(|x| x.y).fold(f64::INFINITY, f64::min);
+            if lowest < ground.height {
+                let lift = ground.height + self.rest_length.abs() - lowest;
+                for x in &mut positions {
+                    x.y += lift;
+                }
+            }
+        }
         if let Some(sphere) = &self.params.sphere {
             for x in &mut positions {
                 if let Some(outside) = out_of_sphere(*x, sphere) {

@@ -8,9 +8,15 @@
 //! so a new one fails to compile until the kernel models it or refuses it. Results
 //! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
 //!
+//! A lattice block whose springs really are the 26-neighbour stencil (the jelly
+//! cube) goes to the lattice kernel of [`super::grid_kernel::lattice`] on the same
+//! terms (without bars, drag, self-collision, tearing or a speed limit), within a
+//! stated bound of the f64 engine (`tests/lattice_kernel.rs`).
+//!
 //! Any other system stepped by symplectic
-//! Euler, explicit Euler, position Verlet or XPBD (chains, lattices, ropes,
-//! meshes) goes to the f64 mesh engine of [`super::mesh_kernel`], which does the
+//! Euler, explicit Euler, position Verlet or XPBD (chains, ropes, meshes, and the
+//! lattices the lattice kernel leaves) goes to the f64 mesh engine of
+//! [`super::mesh_kernel`], which does the
 //! general path's arithmetic in its order: bit for bit its results for the Euler
 //! methods and XPBD, f64 round-off for Verlet (`tests/mesh_engine.rs`).
 //!
