@@ -477,7 +477,9 @@ fn a_stiff_jelly_does_not_heat_up_on_the_lattice_kernel() {
         }
         let (fast, exact) = (fast.energy().kinetic, exact.energy().kinetic);
         let scale = 216.0 * m * 9.81 * 0.01;
-        println!("{integrator}, k = {k:e}, m = {m}: kinetic {fast:.4e} J (fast) vs {exact:.4e} J (f64)");
+        println!(
+            "{integrator}, k = {k:e}, m = {m}: kinetic {fast:.4e} J (fast) vs {exact:.4e} J (f64)"
+        );
         assert!(
             (fast - exact).abs() <= 0.01 * exact + 1e-12 * scale,
             "{integrator}, k = {k:e}: kinetic energy {fast:e} J against {exact:e} J"

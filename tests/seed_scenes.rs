@@ -225,7 +225,10 @@ fn the_jelly_made_bigger_is_dropped_from_above_the_ground_not_started_in_it() {
         .iter()
         .map(|s| (x[s.a as usize].distance(x[s.b as usize]) - s.rest).abs())
         .fold(0.0, f64::max);
-    assert!(strained < 1e-9, "the lift deformed the cube by {strained} m");
+    assert!(
+        strained < 1e-9,
+        "the lift deformed the cube by {strained} m"
+    );
     let mut system = system;
     system.run(100).unwrap();
     let e = system.energy();
@@ -233,6 +236,8 @@ fn the_jelly_made_bigger_is_dropped_from_above_the_ground_not_started_in_it() {
     assert!(e.kinetic <= mass * 9.81 * 1.0, "{e:?}");
     // The default jelly already starts clear of the ground: it is not moved.
     let small = common::build("jelly", &[]);
-    let lowest = (small.positions().iter()).map(|p| p.y).fold(f64::INFINITY, f64::min);
+    let lowest = (small.positions().iter())
+        .map(|p| p.y)
+        .fold(f64::INFINITY, f64::min);
     assert!(lowest > 1.0, "the default jelly starts at {lowest} m");
 }

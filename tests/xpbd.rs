@@ -176,7 +176,10 @@ fn xpbd_visits_a_grid_in_twelve_classes_and_a_lattice_in_26() {
     for size in ["5", "6"] {
         let sizes = ["width", "height", "depth"].map(|k| format!("{k}={size}"));
         let overrides: Vec<&str> = sizes.iter().map(String::as_str).collect();
-        let jelly = build("jelly", &[&overrides[..], &["integrator=\"xpbd\""]].concat());
+        let jelly = build(
+            "jelly",
+            &[&overrides[..], &["integrator=\"xpbd\""]].concat(),
+        );
         assert_eq!(independent_classes(&jelly), 26, "jelly {size}³");
     }
 }

@@ -767,8 +767,8 @@ impl<E: Real> Lattice<E> {
     }
 
     /// One pass of `rule` over the springs, with the grid's passes
-    /// ([`super::spring_passes`]): the lattice's array rows (`x + r W` with `r = y
-    /// + z H`) are a grid's rows, a direction `(dx, dy, dz)` is the grid direction
+    /// ([`super::spring_passes`]): the lattice's array rows (`x + r W` with
+    /// `r = y + z H`) are a grid's rows, a direction `(dx, dy, dz)` is the grid direction
     /// `(dy + dz H, dx)`, and the real-particle mask leaves out the springs that
     /// reach a ghost. Sweeps go by direction in the order of [`FORWARD`], each
     /// direction's two colour classes in turn ([`LatticeShape::constraint_class`],

@@ -514,8 +514,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     macro_rules! measure {
         ($j:expr) => {{
             let j = $j;
-            let high: [S::V; 3] =
-                per_axis!(|k| s.sub(load(pos[k], a + j), load(pos[k], b + j)));
+            let high: [S::V; 3] = per_axis!(|k| s.sub(load(pos[k], a + j), load(pos[k], b + j)));
             let mut keep = load(line.class.as_ptr(), 0);
             if j + n > len {
                 let tail: [S::E; BLOCK] =
