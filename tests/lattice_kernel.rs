@@ -92,8 +92,9 @@ fn a_jelly_agrees_with_the_f64_engine_feature_by_feature() {
         let overrides: Vec<&str> = big.iter().chain(extra).map(String::as_str).collect();
         build("jelly", &overrides)
     };
-    // Resting on the ground from the start: its lowest particle 5 cm deep.
-    let ground = format!("ground_height={}", lowest(&with(&[])) + 0.05);
+    // On the ground from the start: its lowest particle touching it (a ground
+    // above it would have the scene lift the cube clear).
+    let ground = format!("ground_height={}", lowest(&with(&[])));
     // A sphere of radius 2 m under the cube's lowest corner, 1 cm below it: the
     // corner lands on it after 0.045 s and is held on its surface. (A sphere that
     // starts inside the cube throws the particles out at 1,800 m/s, and the
@@ -437,7 +438,7 @@ fn every_simd_level_agrees() {
 
 #[test]
 fn a_stiff_jelly_does_not_heat_up_on_the_lattice_kernel() {
-    // The jelly resting on the ground (its lowest corner 1 cm deep), stepped at
+    // The jelly on the ground (its lowest corner touching it), stepped at
     // the safe step for each stiffness: the lattice kernel's kinetic energy must
     // follow the f64 engine's to 1% at every stiffness, down to the round-off of a
     // cube at rest. The precision rule has the stiff ones computed in float64,
@@ -459,10 +460,7 @@ fn a_stiff_jelly_does_not_heat_up_on_the_lattice_kernel() {
             .chain([format!("integrator=\"{integrator}\"")])
             .collect();
         let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
-        let ground = format!(
-            "ground_height={}",
-            lowest(&build("jelly", &overrides)) + 0.01
-        );
+        let ground = format!("ground_height={}", lowest(&build("jelly", &overrides)));
         let overrides: Vec<&str> = overrides.into_iter().chain([ground.as_str()]).collect();
         let mut exact = build("jelly", &overrides);
         let step = safe::safe_step(exact.model(), 1.0 / 60.0, safe::DEFAULT_SAFETY, 1 << 20);
