@@ -265,32 +265,24 @@ fn info_reports_counts_terms_parameters_and_stability() {
     // grid's precision follows the step, not the stiffness: double-float positions
     // at the cloth's 1/960 s steps, even at 1e9 N/m (float32 ones would round its
     // moves, and so its velocities), float32 ones at 1/60 s steps.
-    let xpbd = cloth(&[
-        "info",
-        "--scene",
-        "cloth",
-        "--set",
-        "integrator=\"xpbd\"",
-        "--set",
-        "stiffness=1e9",
-        "--json",
-    ]);
-    let v: serde_json::Value = serde_json::from_str(stdout(&xpbd).trim()).unwrap();
+    let xpbd_info = |dt: &str| {
+        let info = cloth(&[
+            "info",
+            "--scene",
+            "cloth",
+            "--set",
+            "integrator=\"xpbd\"",
+            "--set",
+            "stiffness=1e9",
+            "--set",
+            dt,
+            "--json",
+        ]);
+        serde_json::from_str::<serde_json::Value>(stdout(&info).trim()).unwrap()
+    };
+    let v = xpbd_info("dt=0.0010416666666666667");
     assert_eq!(v["engine"], "grid-mixed");
-    let frames = cloth(&[
-        "info",
-        "--scene",
-        "cloth",
-        "--set",
-        "integrator=\"xpbd\"",
-        "--set",
-        "stiffness=1e9",
-        "--set",
-        "dt=0.016666666666666666",
-        "--json",
-    ]);
-    let frames: serde_json::Value = serde_json::from_str(stdout(&frames).trim()).unwrap();
-    assert_eq!(frames["engine"], "grid-f32");
+    assert_eq!(xpbd_info("dt=0.016666666666666666")["engine"], "grid-f32");
     assert!(
         !v["force_terms"]
             .as_array()

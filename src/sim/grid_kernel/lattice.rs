@@ -55,7 +55,7 @@ use glam::DVec3;
 
 use super::spring_passes::{
     ColourClass, RowColour, SpringRule, Sweep, SweepLines, SweepRules, SweepSprings,
-    high_parts_slack,
+    high_parts_slack, step_start,
 };
 use super::{
     BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
@@ -787,15 +787,7 @@ impl<E: Real> Lattice<E> {
             compensated: self.params.compensated,
         };
         let rests = Self::rests(&self.spec);
-        // XPBD's positions at the start of the step (after the step's swap).
-        let start: [&[E]; 6] = match rule {
-            SpringRule::Xpbd => {
-                let [x, y, z] = self.next.x.each_ref().map(Buf::as_slice);
-                let [xl, yl, zl] = self.next.xl.each_ref().map(Buf::as_slice);
-                [x, y, z, xl, yl, zl]
-            }
-            SpringRule::StretchLimit(_) => Default::default(),
-        };
+        let start = step_start(rule, &self.next);
         let mut out = self.cur.rows();
         for (direction, &(dx, dy, dz)) in FORWARD.iter().enumerate() {
             let kind = dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1;

@@ -14,7 +14,7 @@ use super::super::forces::EPSILON_LENGTH;
 use super::x86;
 use super::{
     BLOCK, Buf, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SimdLevel, SpringCoefficients,
-    add_double,
+    State, add_double,
 };
 
 /// What a [`Kernel::spring_pass`] does to each spring.
@@ -82,16 +82,7 @@ impl<E: Real> Kernel<E> {
         });
         let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
         let torn = self.torn.as_ref();
-        // XPBD's positions at the start of the step (whole arrays, cloth rows from
-        // row 0), high parts then low parts.
-        let start: [&[E]; 6] = match rule {
-            SpringRule::Xpbd => {
-                let [x, y, z] = self.next.x.each_ref().map(Buf::as_slice);
-                let [xl, yl, zl] = self.next.xl.each_ref().map(Buf::as_slice);
-                [x, y, z, xl, yl, zl]
-            }
-            SpringRule::StretchLimit(_) => Default::default(),
-        };
+        let start = step_start(rule, &self.next);
         // `skew[k]`: the rows sweep k's lines reach below their first, and those
         // of the sweeps before it: `dr` summed over sweeps 0 to k.
         let mut skew = [0; 12];
@@ -172,6 +163,20 @@ impl<E: Real> Kernel<E> {
         }
         let rest = |k: usize| cut(k, split)..below(k);
         run(&mut self.cur.rows(), 0, 0, &rest);
+    }
+}
+
+/// What `rule` reads of the positions at the start of the step, `state` (the
+/// kernel's other state buffer, after the step's swap): XPBD the whole arrays,
+/// high parts then low parts; the stretch limit nothing.
+pub(super) fn step_start<E: Real>(rule: SpringRule, state: &State<E>) -> [&[E]; 6] {
+    match rule {
+        SpringRule::Xpbd => {
+            let [x, y, z] = state.x.each_ref().map(Buf::as_slice);
+            let [xl, yl, zl] = state.xl.each_ref().map(Buf::as_slice);
+            [x, y, z, xl, yl, zl]
+        }
+        SpringRule::StretchLimit(_) => Default::default(),
     }
 }
 
