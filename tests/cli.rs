@@ -262,9 +262,9 @@ fn info_reports_counts_terms_parameters_and_stability() {
     );
 
     // With XPBD the springs are constraints: no force term, no step limit, and the
-    // grid's precision follows the step, not the stiffness: double-float positions
-    // at the cloth's 1/960 s steps, even at 1e9 N/m (float32 ones would round its
-    // moves, and so its velocities), float32 ones at 1/60 s steps.
+    // grid's precision follows the step, not the stiffness: its stiff springs act
+    // as springs of stiffness `m / 2h²`, so double-float positions at the cloth's
+    // 1/960 s steps even at 1e9 N/m, float32 ones at 1/60 s steps.
     let xpbd_info = |dt: &str| {
         let info = cloth(&[
             "info",
