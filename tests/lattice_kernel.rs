@@ -290,6 +290,13 @@ fn edits_update_the_kernel_in_place() {
     system.set_particle_mass(0.12);
     system.set_pinned(3, true);
     system.run(10).unwrap();
+    // The stretch limit turned on, changed and off: coefficients of the passes.
+    for limit in [Some(0.1), Some(0.05), None] {
+        let mut params = *system.params();
+        params.stretch_limit = limit;
+        system.set_params(params);
+        system.run(10).unwrap();
+    }
     assert!(matches!(system.engine(), Engine::Lattice(_)));
     assert_eq!(system.kernel_builds(), 1, "an edit rebuilt the kernel");
 }
