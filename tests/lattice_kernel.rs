@@ -371,17 +371,27 @@ fn kernel_run(
 fn one_two_and_three_threads_give_identical_results() {
     // 21,168 particles: past `lattice::PARALLEL_MIN_PARTICLES`, 27 slabs cut into
     // bands that start mid-block; two threads hand over by spinning, three join.
+    // The spring passes (XPBD, the stretch limit) split each sweep's lines; on a
+    // lattice 3 wide, a line's lanes past its end reach several rows on.
     let shape = LatticeShape {
         width: 28,
         height: 28,
         depth: 27,
     };
-    for (integrator, precision, stretch_limit) in [
-        (Integrator::SymplecticEuler, Precision::Mixed, None),
-        (Integrator::Verlet, Precision::Mixed, None),
-        (Integrator::SymplecticEuler, Precision::Double, None),
-        (Integrator::Xpbd, Precision::Single, None),
-        (Integrator::Verlet, Precision::Mixed, Some(0.001)),
+    let narrow = LatticeShape {
+        width: 3,
+        height: 90,
+        depth: 80,
+    };
+    for (shape, integrator, precision, stretch_limit) in [
+        (shape, Integrator::SymplecticEuler, Precision::Mixed, None),
+        (shape, Integrator::Verlet, Precision::Mixed, None),
+        (shape, Integrator::SymplecticEuler, Precision::Double, None),
+        (shape, Integrator::Xpbd, Precision::Single, None),
+        (shape, Integrator::Xpbd, Precision::Mixed, None),
+        (shape, Integrator::Verlet, Precision::Mixed, Some(0.001)),
+        (narrow, Integrator::Xpbd, Precision::Mixed, None),
+        (narrow, Integrator::SymplecticEuler, Precision::Mixed, Some(0.001)),
     ] {
         let spec = LatticeSpec {
             precision,
@@ -394,7 +404,7 @@ fn one_two_and_three_threads_give_identical_results() {
             let many = kernel_run(&spec, threads, simd, 60);
             assert!(
                 one == many,
-                "{integrator:?} {precision:?}: 1 and {threads} threads differ"
+                "{shape:?} {integrator:?} {precision:?}: 1 and {threads} threads differ"
             );
         }
     }

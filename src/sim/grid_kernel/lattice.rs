@@ -51,6 +51,8 @@
 //! it), and XPBD's pass over the springs follows, then the stretch limit's, both
 //! on the calling thread, then the contact with friction.
 
+use std::ops::Range;
+
 use glam::DVec3;
 
 use super::spring_passes::{
@@ -742,7 +744,7 @@ impl<E: Real> Lattice<E> {
         let run = |duo: Option<&Duo>| {
             for _ in 0..n {
                 self.one_step(parallel, duo);
-                self.constrain(dt);
+                self.constrain(dt, duo);
                 self.resolve_contact(dt);
             }
         };
@@ -755,14 +757,14 @@ impl<E: Real> Lattice<E> {
     /// The colliders with friction, after the step (without friction the step
     /// projected the particles out of the sphere itself): the grid kernel's
     /// contact rows, one lattice row each, on this thread.
-    /// The passes along the springs after the step, on this thread: XPBD's
-    /// springs, then Provot's stretch limit, as in the f64 engine.
-    fn constrain(&mut self, dt: f64) {
+    /// The passes along the springs after the step: XPBD's springs, then
+    /// Provot's stretch limit, as in the f64 engine; with `duo`, on both threads.
+    fn constrain(&mut self, dt: f64, duo: Option<&Duo>) {
         if self.spec.integrator == Integrator::Xpbd {
-            self.spring_pass(SpringRule::Xpbd, dt);
+            self.spring_pass(SpringRule::Xpbd, dt, duo);
         }
         if let Some(tau) = self.spec.stretch_limit {
-            self.spring_pass(SpringRule::StretchLimit(tau), dt);
+            self.spring_pass(SpringRule::StretchLimit(tau), dt, duo);
         }
     }
 
@@ -773,10 +775,16 @@ impl<E: Real> Lattice<E> {
     /// reach a ghost. Sweeps go by direction in the order of [`FORWARD`], each
     /// direction's two colour classes in turn ([`LatticeShape::constraint_class`],
     /// the f64 engine's order): `z % 2` is the row's `(r / H) % 2`, and `y % 2` is
-    /// `(r % H) % 2`. On one thread: the lanes past a line's end reach the next
-    /// row's particles, which they store unchanged, and another thread could be
-    /// moving them.
-    fn spring_pass(&mut self, rule: SpringRule, dt: f64) {
+    /// `(r % H) % 2`.
+    ///
+    /// With `duo`, each sweep's lines run on two threads: the lines from the
+    /// middle row `m` on on the other thread, those that touch no row from `m` on
+    /// on this one, then the few between here. A line's lanes past its end reach
+    /// the next rows' particles (the lattice has no padding), which they store
+    /// unchanged, so a line from row `r` touches rows `r` to `r + dr` and one or
+    /// two more; kept apart so, the two threads' lines touch no particle in
+    /// common, and the result is the same as on one thread.
+    fn spring_pass(&mut self, rule: SpringRule, dt: f64, duo: Option<&Duo>) {
         let g = self.geometry;
         let slab_rows = g.shape.height + 1;
         let rows = slab_rows * g.shape.depth;
@@ -788,7 +796,6 @@ impl<E: Real> Lattice<E> {
         };
         let rests = Self::rests(&self.spec);
         let start = step_start(rule, &self.next);
-        let mut out = self.cur.rows();
         for (direction, &(dx, dy, dz)) in FORWARD.iter().enumerate() {
             let kind = dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1;
             let springs = || SweepSprings {
@@ -820,16 +827,35 @@ impl<E: Real> Lattice<E> {
                 else {
                     continue;
                 };
-                let lines = SweepLines {
+                let lines = |rows: Range<usize>| SweepLines {
                     sweep: &sweep,
                     stride: g.row,
-                    rows: sweep.rows(),
+                    rows,
                     inv_mass: self.inv_mass.as_slice(),
                     alive: None,
                     real: Some(self.real.as_slice()),
                     start,
                 };
-                E::spring_sweep(self.simd, &mut out, 0, &lines);
+                // A line from row `r` touches rows `r` to `r + dr` and, through its
+                // lanes past the end (up to `BLOCK` more), the rows after those.
+                let all = sweep.rows();
+                let split = all.end / 2;
+                let touched = springs().dr + (g.shape.width + 1 + BLOCK).div_ceil(g.row);
+                let above = split.saturating_sub(touched);
+                let simd = self.simd;
+                match duo {
+                    Some(duo) if above > 0 => {
+                        let (mut upper, mut lower) = self.cur.rows().split_at(split * g.row);
+                        let (top, bottom) = (lines(0..above), lines(split..all.end));
+                        let mut second =
+                            || E::spring_sweep(simd, &mut lower, split * g.row, &bottom);
+                        duo.fork(&mut second, || {
+                            E::spring_sweep(simd, &mut upper, 0, &top)
+                        });
+                        E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(above..split));
+                    }
+                    _ => E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(all)),
+                }
             }
         }
     }
