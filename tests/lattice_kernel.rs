@@ -391,7 +391,12 @@ fn one_two_and_three_threads_give_identical_results() {
         (shape, Integrator::Xpbd, Precision::Mixed, None),
         (shape, Integrator::Verlet, Precision::Mixed, Some(0.001)),
         (narrow, Integrator::Xpbd, Precision::Mixed, None),
-        (narrow, Integrator::SymplecticEuler, Precision::Mixed, Some(0.001)),
+        (
+            narrow,
+            Integrator::SymplecticEuler,
+            Precision::Mixed,
+            Some(0.001),
+        ),
     ] {
         let spec = LatticeSpec {
             precision,

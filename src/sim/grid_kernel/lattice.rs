@@ -48,8 +48,8 @@
 //! over each step by spinning ([`Duo`]), as the grid kernel's do.
 //!
 //! With XPBD the step predicts without the springs (their coefficients are 0 in
-//! it), and XPBD's pass over the springs follows, then the stretch limit's, both
-//! on the calling thread, then the contact with friction.
+//! it), and XPBD's pass over the springs follows, then the stretch limit's (each
+//! sweep's lines split between the two threads), then the contact with friction.
 
 use std::ops::Range;
 
@@ -849,9 +849,7 @@ impl<E: Real> Lattice<E> {
                         let (top, bottom) = (lines(0..above), lines(split..all.end));
                         let mut second =
                             || E::spring_sweep(simd, &mut lower, split * g.row, &bottom);
-                        duo.fork(&mut second, || {
-                            E::spring_sweep(simd, &mut upper, 0, &top)
-                        });
+                        duo.fork(&mut second, || E::spring_sweep(simd, &mut upper, 0, &top));
                         E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(above..split));
                     }
                     _ => E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(all)),
