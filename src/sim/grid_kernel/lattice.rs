@@ -754,9 +754,6 @@ impl<E: Real> Lattice<E> {
         self.pool = pool;
     }
 
-    /// The colliders with friction, after the step (without friction the step
-    /// projected the particles out of the sphere itself): the grid kernel's
-    /// contact rows, one lattice row each, on this thread.
     /// The passes along the springs after the step: XPBD's springs, then
     /// Provot's stretch limit, as in the f64 engine; with `duo`, on both threads.
     fn constrain(&mut self, dt: f64, duo: Option<&Duo>) {
@@ -858,6 +855,9 @@ impl<E: Real> Lattice<E> {
         }
     }
 
+    /// The colliders with friction, after the step (without friction the step
+    /// projected the particles out of the sphere itself): the grid kernel's
+    /// contact rows, one lattice row each, on this thread.
     fn resolve_contact(&mut self, dt: f64) {
         let contact = Self::contact(&self.spec, dt);
         if !contact.is_active() || self.params.sphere.is_some() {
