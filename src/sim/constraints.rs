@@ -1,6 +1,7 @@
 //! Position constraints enforced after integration, each optional per scene:
 //! - with XPBD, every spring: a distance constraint of compliance `1/k`, one
-//!   Gauss-Seidel pass in the model's constraint order (`xpbd_correction`);
+//!   symmetric Gauss-Seidel sweep, the model's constraint order forward and then
+//!   backward (`xpbd_pass`);
 //! - rigid bars (seed 001), relaxed `bar_iterations` times per step: each pass moves
 //!   the two ends along the bar so that its length is restored, split by inverse mass;
 //! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`,
@@ -35,6 +36,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
             order,
             &model.inv_mass,
             p.dt,
+            &mut work.multipliers,
         );
     }
     if p.bar_iterations > 0 {
@@ -86,10 +88,23 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     }
 }
 
-/// XPBD's pass over `springs` in `order` ([`xpbd_correction`] of each, Gauss-Seidel)
-/// on positions `x` that were `prev` at the start of the step `dt`, with inverse
-/// masses `inv_mass`: the f64 and mesh engines' (the grid engine's on its f64
-/// copies).
+/// XPBD's pass over `springs` ([`xpbd_correction`] of each) on positions `x`
+/// that were `prev` at the start of the step `dt`, with inverse masses
+/// `inv_mass`: one symmetric Gauss-Seidel sweep, the springs in `order` and then
+/// in the reverse order, each spring's multiplier `λ` (in `multipliers`, one per
+/// spring) kept from its first correction to its second. The f64 and mesh
+/// engines' pass (the grid engine's on its f64 copies).
+///
+/// Why both ways: XPBD's position error follows `e' = G (2e - e_prev)`, with `G`
+/// the sweep's iteration matrix on the springs' linearised system. A symmetric
+/// sweep's `G` has real eigenvalues `g` in [0, 1), for which that recurrence
+/// decays (its roots have `|μ|² = g`); a forward sweep's may be complex on a mesh
+/// with loops, and then need not. They were: a forward sweep alone ran the jelly
+/// away at k = 1e8 N/m and its 2e-4 s steps (and a 4³ one at k = 1e7 and 1.4 ms),
+/// on every engine, where the symmetric sweep keeps it in one piece
+/// (`tests/xpbd.rs`). Kept across the two corrections, `λ` makes the second the
+/// XPBD iteration it is: from `λ = 0` it would count the compliance twice and
+/// stiffen soft springs.
 pub(crate) fn xpbd_pass(
     x: &mut [DVec3],
     prev: &[DVec3],
@@ -97,14 +112,21 @@ pub(crate) fn xpbd_pass(
     order: &[u32],
     inv_mass: &[f64],
     dt: f64,
+    multipliers: &mut Vec<f64>,
 ) {
-    for s in order.iter().map(|&i| &springs[i as usize]) {
+    multipliers.clear();
+    multipliers.resize(springs.len(), 0.0);
+    for &i in order.iter().chain(order.iter().rev()) {
+        let s = &springs[i as usize];
         let (a, b) = (s.a as usize, s.b as usize);
         let (wa, wb) = (inv_mass[a], inv_mass[b]);
         let Some(spring) = XpbdSpring::new(s.rest, s.stiffness, s.damping, dt) else {
             continue;
         };
-        if let Some(c) = xpbd_correction([x[a], x[b]], [prev[a], prev[b]], wa, wb, &spring) {
+        let lambda = &mut multipliers[i as usize];
+        let ends = ([x[a], x[b]], [prev[a], prev[b]]);
+        if let Some((c, delta)) = xpbd_correction(ends.0, ends.1, wa, wb, &spring, *lambda) {
+            *lambda += delta;
             x[a] -= wa * c;
             x[b] += wb * c;
         }
@@ -313,18 +335,20 @@ impl XpbdSpring {
 }
 
 /// XPBD's correction of a `spring` between particles now at `x = [xa, xb]` that
-/// were at `prev` at the start of the step, with inverse masses `wa`, `wb`: `xa -=
-/// wa c`, `xb += wb c`, as [`length_correction`].
+/// were at `prev` at the start of the step, with inverse masses `wa`, `wb`, and its
+/// multiplier so far `λ`: `xa -= wa c`, `xb += wb c`, as [`length_correction`].
+/// Returns `c` and the multiplier's change `Δλ`.
 ///
 /// The spring `(rest, k, b)` is the constraint `C = l - L` with compliance `α = 1/k`
 /// (the same k, the same material), `α̃ = α / h²`, and the XPBD paper's damping
-/// `γ = α̃ β̃ / h` with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration from `λ = 0`:
-/// `Δλ = -(C + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
+/// `γ = α̃ β̃ / h` with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration:
+/// `Δλ = -(C + α̃ λ + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
 /// with `n = (xa - xb) / l`.
 ///
 /// The grid engine does the same arithmetic in float32 lanes, a colour class at a
-/// time (`grid_kernel/spring_passes.rs`, as it does [`length_correction`]);
-/// `tests/fast_engine.rs` and `tests/grid_kernel.rs` hold the two together.
+/// time (`grid_kernel/spring_passes.rs`, as it does [`length_correction`]), and
+/// keeps `α̃ λ` rather than `λ`; `tests/fast_engine.rs` and `tests/grid_kernel.rs`
+/// hold the two together.
 #[inline]
 pub(crate) fn xpbd_correction(
     x: [DVec3; 2],
@@ -332,7 +356,8 @@ pub(crate) fn xpbd_correction(
     wa: f64,
     wb: f64,
     spring: &XpbdSpring,
-) -> Option<DVec3> {
+    lambda: f64,
+) -> Option<(DVec3, f64)> {
     let w = wa + wb;
     if w == 0.0 {
         return None;
@@ -345,21 +370,15 @@ pub(crate) fn xpbd_correction(
     let n = d * (1.0 / l);
     let moved = n.dot((x[0] - prev[0]) - (x[1] - prev[1]));
     let (alpha, gamma) = (spring.alpha, spring.gamma);
-    Some(-xpbd_multiplier(l - spring.rest, moved, w, alpha, gamma) * n)
+    let stretch = l - spring.rest + alpha * lambda;
+    let delta = -(stretch + gamma * moved) / ((1.0 + gamma) * w + alpha);
+    Some((-delta * n, delta))
 }
 
 /// XPBD's `(α̃, γ) = (1 / (k h²), b / (k h))` for a spring `(k, b)` at step `h`.
 #[inline]
 pub(crate) fn xpbd_coefficients(k: f64, b: f64, h: f64) -> (f64, f64) {
     (1.0 / (k * h * h), b / (k * h))
-}
-
-/// XPBD's `Δλ = -(C + γ ∇C·(x - x_prev)) / ((1 + γ) w + α̃)` for a stretch `C`, a
-/// move along the spring since the start of the step `moved`, inverse masses
-/// summing to `w` and coefficients from [`xpbd_coefficients`].
-#[inline]
-pub(crate) fn xpbd_multiplier(stretch: f64, moved: f64, w: f64, alpha: f64, gamma: f64) -> f64 {
-    -(stretch + gamma * moved) / ((1.0 + gamma) * w + alpha)
 }
 
 /// Moves particles `a` and `b` along their joining line so that their distance becomes

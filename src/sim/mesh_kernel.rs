@@ -244,6 +244,8 @@ pub struct MeshKernel {
     /// arrays of vectors.
     copy_x: Vec<DVec3>,
     copy_start: Vec<DVec3>,
+    /// XPBD's multiplier of each spring in its pass.
+    multipliers: Vec<f64>,
 }
 
 /// Springs as structure of arrays, in the order the spring pass evaluates them:
@@ -725,6 +727,7 @@ impl MeshKernel {
             self_collision: SelfCollision::default(),
             copy_x: Vec::new(),
             copy_start: Vec::new(),
+            multipliers: Vec::new(),
         };
         kernel.set_springs(SpringSet {
             springs: model.springs.clone(),
@@ -1279,6 +1282,7 @@ impl MeshKernel {
             order,
             &self.inv_mass,
             self.params.dt,
+            &mut self.multipliers,
         );
         let mut positions = self.x.each_mut().map(Vec::as_mut_slice);
         for (i, &p) in x.iter().enumerate() {

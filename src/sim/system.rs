@@ -33,6 +33,8 @@ pub struct Workspace {
     pub(crate) before_constraints: Vec<DVec3>,
     /// Positions at the start of the step (XPBD's damping, self-collision's friction).
     pub(crate) step_start: Vec<DVec3>,
+    /// XPBD's multiplier of each spring in its pass ([`constraints::xpbd_pass`]).
+    pub(crate) multipliers: Vec<f64>,
     /// The self-collision pass's candidate pairs.
     pub(crate) self_collision: super::SelfCollision,
     pub(crate) implicit: implicit::ImplicitWorkspace,

@@ -56,8 +56,8 @@ use std::ops::Range;
 use glam::DVec3;
 
 use super::spring_passes::{
-    ColourClass, RowColour, SpringRule, Sweep, SweepLines, SweepRules, SweepSprings,
-    high_parts_slack, step_start,
+    ColourClass, Multipliers, RowColour, SpringRule, Sweep, SweepLines, SweepMultipliers,
+    SweepRules, SweepSprings, high_parts_slack, step_start,
 };
 use super::{
     BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
@@ -458,6 +458,8 @@ struct Lattice<E: Real> {
     bands: Vec<Band<E>>,
     pool: Option<rayon::ThreadPool>,
     simd: SimdLevel,
+    /// XPBD's multipliers, kept from each spring's first correction to its second.
+    multipliers: Multipliers<E>,
 }
 
 impl<E: Real> std::fmt::Debug for Lattice<E> {
@@ -495,6 +497,7 @@ impl<E: Real> Lattice<E> {
             bands: make_bands(&geometry, 1),
             pool: None,
             simd: SimdLevel::detect(),
+            multipliers: Multipliers::default(),
             spec,
         };
         kernel.reset_masses();
@@ -792,10 +795,11 @@ impl<E: Real> Lattice<E> {
             compensated: self.params.compensated,
         };
         let rests = Self::rests(&self.spec);
-        let start = step_start(rule, &self.next);
-        for (direction, &(dx, dy, dz)) in FORWARD.iter().enumerate() {
+        let sweeps: [Option<Sweep<E>>; 2 * FORWARD.len()] = std::array::from_fn(|k| {
+            let (direction, colour) = (k / 2, k % 2);
+            let (dx, dy, dz) = FORWARD[direction];
             let kind = dx.unsigned_abs() + dy.unsigned_abs() + dz.unsigned_abs() - 1;
-            let springs = || SweepSprings {
+            let springs = SweepSprings {
                 direction,
                 dr: (dy + dz * slab_rows as isize) as usize,
                 dc: dx,
@@ -815,43 +819,74 @@ impl<E: Real> Lattice<E> {
             } else {
                 None
             };
-            for colour in 0..2 {
-                let class = ColourClass {
-                    rows: colour_of_rows,
-                    colour,
-                };
-                let Some(sweep) = Sweep::new(&rules, springs(), (g.shape.width, rows), class)
-                else {
-                    continue;
-                };
-                let lines = |rows: Range<usize>| SweepLines {
-                    sweep: &sweep,
-                    stride: g.row,
-                    rows,
-                    inv_mass: self.inv_mass.as_slice(),
-                    alive: None,
-                    real: Some(self.real.as_slice()),
-                    start,
-                };
-                // A line from row `r` touches rows `r` to `r + dr` and, through its
-                // lanes past the end (up to `BLOCK` more), the rows after those.
-                let all = sweep.rows();
-                let split = all.end / 2;
-                let touched = springs().dr + (g.shape.width + 1 + BLOCK).div_ceil(g.row);
-                let above = split.saturating_sub(touched);
-                let simd = self.simd;
-                match duo {
-                    Some(duo) if above > 0 => {
-                        let (mut upper, mut lower) = self.cur.rows().split_at(split * g.row);
-                        let (top, bottom) = (lines(0..above), lines(split..all.end));
-                        let mut second =
-                            || E::spring_sweep(simd, &mut lower, split * g.row, &bottom);
-                        duo.fork(&mut second, || E::spring_sweep(simd, &mut upper, 0, &top));
-                        E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(above..split));
-                    }
-                    _ => E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(all)),
+            let class = ColourClass {
+                rows: colour_of_rows,
+                colour,
+            };
+            Sweep::new(&rules, springs, (g.shape.width, rows), class)
+        });
+        let xpbd = matches!(rule, SpringRule::Xpbd);
+        let mut multipliers = std::mem::take(&mut self.multipliers);
+        if xpbd {
+            multipliers.ensure(sweeps.len(), self.inv_mass.as_slice().len());
+        }
+        for (k, sweep) in sweeps.iter().enumerate() {
+            if let Some(sweep) = sweep {
+                let m = xpbd.then(|| multipliers.of_sweep(k, false));
+                self.sweep_lines(rule, sweep, m, duo);
+            }
+        }
+        if xpbd {
+            // Backward, but for the last sweep, whose springs' second correction
+            // would change nothing.
+            let last = sweeps.iter().rposition(Option::is_some);
+            for (k, sweep) in sweeps.iter().enumerate().rev() {
+                if let Some(sweep) = sweep.as_ref().filter(|_| Some(k) != last) {
+                    let m = multipliers.of_sweep(k, true);
+                    self.sweep_lines(rule, sweep, Some(m), duo);
                 }
             }
+        }
+        self.multipliers = multipliers;
+    }
+
+    /// The lines of one sweep, on two threads with `duo` (see
+    /// [`Self::spring_pass`]).
+    fn sweep_lines(
+        &mut self,
+        rule: SpringRule,
+        sweep: &Sweep<E>,
+        multipliers: Option<SweepMultipliers<E>>,
+        duo: Option<&Duo>,
+    ) {
+        let g = self.geometry;
+        let start = step_start(rule, &self.next);
+        let lines = |rows: Range<usize>| SweepLines {
+            sweep,
+            stride: g.row,
+            rows,
+            inv_mass: self.inv_mass.as_slice(),
+            alive: None,
+            real: Some(self.real.as_slice()),
+            start,
+            multipliers,
+        };
+        // A line from row `r` touches rows `r` to `r + dr` and, through its lanes
+        // past the end (up to `BLOCK` more), the rows after those.
+        let all = sweep.rows();
+        let split = all.end / 2;
+        let touched = sweep.dr() + (g.shape.width + 1 + BLOCK).div_ceil(g.row);
+        let above = split.saturating_sub(touched);
+        let simd = self.simd;
+        match duo {
+            Some(duo) if above > 0 => {
+                let (mut upper, mut lower) = self.cur.rows().split_at(split * g.row);
+                let (top, bottom) = (lines(0..above), lines(split..all.end));
+                let mut second = || E::spring_sweep(simd, &mut lower, split * g.row, &bottom);
+                duo.fork(&mut second, || E::spring_sweep(simd, &mut upper, 0, &top));
+                E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(above..split));
+            }
+            _ => E::spring_sweep(simd, &mut self.cur.rows(), 0, &lines(all)),
         }
     }
 

@@ -37,10 +37,14 @@ impl<E: Real> Kernel<E> {
 
     /// One pass of `rule` over the springs (see [`Self::constrain`]), in the
     /// colour classes of [`crate::sim::springs::constraint_order`], the f64
-    /// engine's order. No two springs of a class share a particle, so a class's
-    /// springs from one row are corrected together ([`spring_line`]); with
-    /// `parallel`, most rows by two threads in one hand-over, with the same result
-    /// as on one. A move `δ` adds `δ / dt` to the particle's velocity.
+    /// engine's order; for XPBD then the classes in reverse, each spring's
+    /// multiplier kept (the f64 engine's symmetric sweep,
+    /// [`crate::sim::constraints::xpbd_pass`], less the last class's second
+    /// correction, which in exact arithmetic changes nothing). No two springs of a
+    /// class share a particle, so a class's springs from one row are corrected
+    /// together ([`spring_line`]); with `parallel`, most rows by two threads in one
+    /// hand-over a sweep order, with the same result as on one. A move `δ` adds
+    /// `δ / dt` to the particle's velocity.
     pub(super) fn spring_pass(
         &mut self,
         rule: SpringRule,
@@ -48,7 +52,7 @@ impl<E: Real> Kernel<E> {
         parallel: bool,
         duo: Option<&Duo>,
     ) {
-        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let (w, h) = (self.grid.w, self.grid.h);
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
         let rules = SweepRules {
             rule,
@@ -80,15 +84,61 @@ impl<E: Real> Kernel<E> {
             };
             Sweep::new(&rules, springs, (w, h), class)
         });
+        let xpbd = matches!(rule, SpringRule::Xpbd);
+        let mut multipliers = std::mem::take(&mut self.multipliers);
+        if xpbd {
+            multipliers.ensure(sweeps.len(), self.inv_mass.as_slice().len());
+        }
+        let mut order: [Option<(&Sweep<E>, Option<SweepMultipliers<E>>)>; 12] =
+            std::array::from_fn(|k| {
+                let m = xpbd.then(|| multipliers.of_sweep(k, false));
+                sweeps[k].as_ref().map(|sweep| (sweep, m))
+            });
+        self.sweep_rows(rule, &order, false, parallel, duo);
+        if xpbd {
+            // Backward: the sweeps in reverse, but for the last, whose springs'
+            // second correction would change nothing.
+            let last = order.iter().rposition(Option::is_some);
+            order = std::array::from_fn(|k| {
+                let k = order.len() - 1 - k;
+                let m = multipliers.of_sweep(k, true);
+                sweeps[k]
+                    .as_ref()
+                    .filter(|_| Some(k) != last)
+                    .map(|sweep| (sweep, Some(m)))
+            });
+            self.sweep_rows(rule, &order, true, parallel, duo);
+        }
+        self.multipliers = multipliers;
+    }
+
+    /// The lines of `sweeps`, each with its multipliers, in the sweeps' order:
+    /// row by row down the cloth, or up it (`upward`, XPBD's backward sweeps), in
+    /// bands of rows that stay in the core's cache, and with `parallel` most rows
+    /// on two threads in one hand-over.
+    fn sweep_rows(
+        &mut self,
+        rule: SpringRule,
+        sweeps: &[Option<(&Sweep<E>, Option<SweepMultipliers<E>>)>; 12],
+        upward: bool,
+        parallel: bool,
+        duo: Option<&Duo>,
+    ) {
+        let (h, st) = (self.grid.h, self.grid.stride);
         let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
         let torn = self.torn.as_ref();
         let start = step_start(rule, &self.next);
+        // Rows below are counted in the pass's direction: `q` is row `q` down
+        // the cloth, or (`upward`) up from its bottom. A line from row `q` (its
+        // first end's, counted so) reaches `dr` rows further, either way: upward,
+        // a line whose springs start on row `r` is the line from `rows - 1 - r`,
+        // with `rows = h - dr` the rows its springs start on.
         // `skew[k]`: the rows sweep k's lines reach below their first, and those
         // of the sweeps before it: `dr` summed over sweeps 0 to k.
         let mut skew = [0; 12];
         let mut reach = 0;
         for (k, sweep) in sweeps.iter().enumerate() {
-            reach += sweep.as_ref().map_or(0, |s| s.dr);
+            reach += sweep.as_ref().map_or(0, |(s, _)| s.dr);
             skew[k] = reach;
         }
         // Lines run in bands of rows, each band's sweeps in order, then the next
@@ -106,14 +156,16 @@ impl<E: Real> Kernel<E> {
         let row_bytes = self.cur.x.len() * 4 * st * std::mem::size_of::<E>();
         let band = (192 * 1024 / row_bytes.max(1)).max(8);
         // The lines of every sweep in `rows(k)`, band by band from row `from`,
-        // in `out` (the state's arrays from row `first` on).
+        // in `out` (the state's arrays from row `first` on, counted down).
         let run =
             |out: &mut Out<E>, first: usize, from: usize, rows: &dyn Fn(usize) -> Range<usize>| {
                 let mut t = from;
                 while t < h + reach {
                     let next = t + band;
                     for (k, sweep) in sweeps.iter().enumerate() {
-                        let Some(sweep) = sweep else { continue };
+                        let Some((sweep, multipliers)) = *sweep else {
+                            continue;
+                        };
                         let all = rows(k);
                         let start_row = all.start.max(if t == from { 0 } else { cut(k, t) });
                         let end = all.end.min(cut(k, next)).min(sweep.rows);
@@ -123,11 +175,15 @@ impl<E: Real> Kernel<E> {
                         let lines = SweepLines {
                             sweep,
                             stride: st,
-                            rows: start_row..end,
+                            rows: match upward {
+                                false => start_row..end,
+                                true => sweep.rows - end..sweep.rows - start_row,
+                            },
                             inv_mass,
                             alive: torn.map(|t| t.springs[sweep.direction].as_slice()),
                             real: None,
                             start,
+                            multipliers,
                         };
                         E::spring_sweep(simd, out, first * st, &lines);
                     }
@@ -145,15 +201,21 @@ impl<E: Real> Kernel<E> {
         // bands as above; then this thread runs the lines left, in order. A line
         // left over from sweep k shares no row with any later sweep's line that
         // the threads ran before it, nor with any line of theirs that should have
-        // seen it: the bounds move apart by each sweep's `dr`.
+        // seen it: the bounds move apart by each sweep's `dr`. (Upward, the top
+        // thread's rows are the bottom of the cloth.)
         let split = h / 2;
         let below = |k: usize| split + if k == 0 { 0 } else { skew[k - 1] };
         let top = |k: usize| 0..cut(k, split);
         let bottom = |k: usize| below(k)..h;
         {
-            let (mut upper, mut lower) = self.cur.rows().split_at(split * st);
-            let mut second = || run(&mut lower, split, split, &bottom);
-            let first = || run(&mut upper, 0, 0, &top);
+            let at = if upward { h - split } else { split };
+            let (mut upper, mut lower) = self.cur.rows().split_at(at * st);
+            let ((first_out, first_at), (second_out, second_at)) = match upward {
+                false => ((&mut upper, 0), (&mut lower, split)),
+                true => ((&mut lower, at), (&mut upper, 0)),
+            };
+            let mut second = || run(second_out, second_at, split, &bottom);
+            let first = || run(first_out, first_at, 0, &top);
             match duo {
                 Some(duo) => duo.fork(&mut second, first),
                 None => {
@@ -358,6 +420,11 @@ impl<E: Real> Sweep<E> {
         0..self.rows
     }
 
+    /// The rows from a spring's first end to its second.
+    pub(super) fn dr(&self) -> usize {
+        self.dr
+    }
+
     /// Whether positions have low parts.
     pub(super) fn compensated(&self) -> bool {
         self.line.compensated
@@ -378,8 +445,8 @@ impl<E: Real> Sweep<E> {
 /// when springs tore ([`super::Torn`], indexed by first end), the mask of real
 /// particles when the arrays hold ghosts that springs reach (1 for particles, 0
 /// for ghosts: a lattice's), and for XPBD the positions at the start of the step
-/// (high parts, then low parts; empty for the stretch limit), all whole arrays
-/// indexed from row 0.
+/// (high parts, then low parts; empty for the stretch limit) and the sweep's
+/// [`SweepMultipliers`], all whole arrays indexed from row 0.
 pub(super) struct SweepLines<'a, E> {
     pub(super) sweep: &'a Sweep<E>,
     pub(super) stride: usize,
@@ -388,7 +455,53 @@ pub(super) struct SweepLines<'a, E> {
     pub(super) alive: Option<&'a [E]>,
     pub(super) real: Option<&'a [E]>,
     pub(super) start: [&'a [E]; 6],
+    pub(super) multipliers: Option<SweepMultipliers<E>>,
 }
+
+/// XPBD's multipliers of one sweep's springs, kept from a spring's first
+/// correction (the forward sweep) to its second (the backward one), as `α̃ λ` (m):
+/// one array per sweep, indexed by the springs' first ends as the state's arrays
+/// are (see [`crate::sim::constraints::xpbd_pass`]).
+#[derive(Default)]
+pub(super) struct Multipliers<E>(Vec<Buf<E>>);
+
+impl<E: Real> Multipliers<E> {
+    /// The arrays of `sweeps` sweeps of `len` floats, made once.
+    pub(super) fn ensure(&mut self, sweeps: usize, len: usize) {
+        if self.0.len() != sweeps || self.0.first().is_some_and(|b| b.as_slice().len() < len) {
+            self.0 = (0..sweeps).map(|_| Buf::zeros(len)).collect();
+        }
+    }
+
+    /// Sweep `k`'s array, written by its forward sweep or read by its backward one
+    /// (`second`).
+    pub(super) fn of_sweep(&mut self, k: usize, second: bool) -> SweepMultipliers<E> {
+        let values = self.0[k].as_mut_slice();
+        SweepMultipliers {
+            values: values.as_mut_ptr(),
+            len: values.len(),
+            second,
+        }
+    }
+}
+
+/// One sweep's array of [`Multipliers`], as its lines use it. A line writes its
+/// own springs' entries only (`a .. a + len`), and no two lines of a sweep have a
+/// spring in common, so lines on different threads write different floats.
+#[derive(Clone, Copy)]
+pub(super) struct SweepMultipliers<E> {
+    values: *mut E,
+    len: usize,
+    /// Whether this is the springs' second correction, which reads the values (the
+    /// first writes them).
+    second: bool,
+}
+
+// SAFETY: the lines that share a `SweepMultipliers` write disjoint entries (see
+// the type's doc), and the backward sweep that reads them runs after the forward
+// one has joined.
+unsafe impl<E: Send> Send for SweepMultipliers<E> {}
+unsafe impl<E: Sync> Sync for SweepMultipliers<E> {}
 
 /// [`spring_line`] on each line of `lines`, in order of rows (one call for a
 /// sweep, where a call per line cost its set-up every 8 blocks at 128 columns).
@@ -485,6 +598,8 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     let [sx, sy, sz, sxl, syl, szl] = lines.start;
     let start_end = line.a.max(line.b) + lanes;
     assert!(!XPBD || fits([sx, sy, sz], start_end) && (!LO || fits([sxl, syl, szl], start_end)));
+    let multipliers = lines.multipliers.filter(|_| XPBD);
+    assert!(!XPBD || multipliers.is_some_and(|m| m.len >= line.a + lanes));
     let alive = lines.alive.map(|m| &m[line.a..line.a + lanes]);
     let real = lines.real.map(|m| &m[base..]);
     assert!(real.is_none_or(|m| m.len() >= end));
@@ -499,6 +614,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     let (longest_v, one_v) = (s.splat(longest), s.splat(one));
     let (rest_v, alpha_v) = (s.splat(rest), s.splat(alpha));
     let (gamma_v, one_gamma_v) = (s.splat(gamma), s.splat(one + gamma));
+    let minus_alpha_v = s.splat(zero - alpha);
     let tiny_length2 = S::E::of(EPSILON_LENGTH * EPSILON_LENGTH);
     // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
     // `a + lanes` and `b + lanes` floats (asserted above; the starting positions
@@ -555,9 +671,10 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
             }
         }};
     }
-    // XPBD's `(C + γ n·Δ) / (((1 + γ) w + α̃) l)` for the block at `j` (`C = l -
-    // rest`, `Δ` the first end's move since the start of the step less the
-    // second's), to scale `d` by; 0 where `l` is about 0.
+    // XPBD's `t = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)` for the block at `j` (`C
+    // = l - rest`, `Δ` the first end's move since the start of the step less the
+    // second's, `λ` the multiplier so far, 0 in the forward sweep), and `t / l`,
+    // to scale `d` by (0 where `l` is about 0). The multiplier's change is `-t`.
     macro_rules! xpbd_scale {
         ($j:expr, $d:expr, $l2:expr, $w:expr) => {{
             let (j, d, l2, w) = ($j, $d, $l2, $w);
@@ -576,15 +693,23 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
                 }
             });
             let inv_l = s.rsqrt_or_zero(l2, tiny_length2);
-            // n·Δ with n = d / l, and C.
+            // n·Δ with n = d / l, and C + α̃ λ.
             let along = s.mul_add(
                 d[0],
                 moved[0],
                 s.mul_add(d[1], moved[1], s.mul(d[2], moved[2])),
             );
-            let (along, stretch) = (s.mul(along, inv_l), s.mul_sub(l2, inv_l, rest_v));
-            let numerator = s.mul(s.mul_add(gamma_v, along, stretch), inv_l);
-            s.div(numerator, s.mul_add(one_gamma_v, w, alpha_v))
+            let stretch = s.mul_sub(l2, inv_l, rest_v);
+            let stretch = match multipliers {
+                Some(m) if m.second => s.add(stretch, load(m.values, line.a + j)),
+                _ => stretch,
+            };
+            let along = s.mul(along, inv_l);
+            let t = s.div(
+                s.mul_add(gamma_v, along, stretch),
+                s.mul_add(one_gamma_v, w, alpha_v),
+            );
+            (s.mul(t, inv_l), t)
         }};
     }
     // Moves the ends of the block at `j` by their corrections.
@@ -598,7 +723,23 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
             // Positive where a spring to correct is not pinned at both ends.
             let over = s.keep_if_positive(w, over);
             let scale = if XPBD {
-                s.keep_if_positive(over, xpbd_scale!(j, d, l2, w))
+                let (scale, t) = xpbd_scale!(j, d, l2, w);
+                if let Some(m) = multipliers.filter(|m| !m.second) {
+                    // `α̃ λ` after the first correction (from `λ = 0`): `-α̃ t`, 0
+                    // where no spring was corrected; lanes past the line keep
+                    // what they hold (they may be the next row's springs).
+                    let mut kept = s.keep_if_positive(over, s.mul(minus_alpha_v, t));
+                    let i = line.a + j;
+                    if j + n > len {
+                        let past: [S::E; BLOCK] =
+                            std::array::from_fn(|l| if j + l < len { zero } else { one });
+                        let past = load(past.as_ptr(), 0);
+                        kept = s.add(kept, s.keep_if_positive(past, load(m.values, i)));
+                    }
+                    // SAFETY: `i + n <= line.a + lanes <= m.len` (asserted above).
+                    unsafe { s.store(m.values.add(i), kept) };
+                }
+                s.keep_if_positive(over, scale)
             } else {
                 // (l - longest) / (l w), with 1 / l from the lanes' reciprocal
                 // square root.
