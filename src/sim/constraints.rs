@@ -21,14 +21,14 @@ use glam::DVec3;
 
 use super::forces::{EPSILON_LENGTH, ground_support};
 use super::lanes::{Lanes, V3};
-use super::{Ground, Integrator, Model, Params, Sphere, State, Workspace};
+use super::{Ground, Integrator, LatticeShape, Model, Params, Sphere, State, Workspace};
 
 /// Applies every constraint the model has, then updates velocities.
 pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let p = &model.params;
     let x = &mut state.positions;
     if p.integrator == Integrator::Xpbd {
-        let order = &model.constraint_order;
+        let order = (&model.constraint_order[..], xpbd_sweeps_back(model.lattice));
         xpbd_pass(
             x,
             &work.step_start,
@@ -88,35 +88,56 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     }
 }
 
+/// Whether XPBD's pass sweeps back after it sweeps forward ([`xpbd_pass`]) over
+/// the springs of a model with this `lattice` shape: on a lattice (a solid), not
+/// on a cloth or a chain.
+///
+/// Why: on a stiff solid the forward sweep alone pumps energy into a spin. In a
+/// NumPy reproduction of the pass, a free 4³ jelly (k = 1e7 N/m, 0.1 kg, 1.4 ms
+/// steps, the engines' colour order) spinning at 1 rad/s went from 9 J to 3.2e5 J
+/// of kinetic energy in 250 steps; swept back as well, it kept its 9 J (9.00 after
+/// 1,000 steps). Round-off starts such a spin in any falling jelly: at the
+/// panel's k = 1e8 to 1e9 N/m and the scene's 2e-4 s steps the forward sweep ran
+/// it away, on every engine (`tests/xpbd.rs`). Both ways, the jelly also came
+/// 1.1 to 1.4 times closer to symplectic Euler at a fifth of its critical step
+/// after 1.5 s (k = 2e3 and 2e4 N/m, steps of 0.2 to 2.5 ms). A cloth showed
+/// neither: a spinning flat cloth lost the same energy either way in the
+/// reproduction, no scene's cloth ran away on the forward sweep (k of 1e7 and
+/// 1e9 N/m, 1/960 and 1/250 s steps), and at 5 and 10 substeps a frame the stiff-cloth
+/// study's cloth came out up to twice as far from its reference swept both ways
+/// (the forward sweep last corrects the springs that carry its weight), at
+/// twice the cost.
+pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
+    lattice.is_some_and(|l| !l.is_empty())
+}
+
 /// XPBD's pass over `springs` ([`xpbd_correction`] of each) on positions `x`
 /// that were `prev` at the start of the step `dt`, with inverse masses
-/// `inv_mass`: one symmetric Gauss-Seidel sweep, the springs in `order` and then
-/// in the reverse order, each spring's multiplier `λ` (in `multipliers`, one per
-/// spring) kept from its first correction to its second. The f64 and mesh
-/// engines' pass (the grid engine's on its f64 copies).
-///
-/// Why both ways: XPBD's position error follows `e' = G (2e - e_prev)`, with `G`
-/// the sweep's iteration matrix on the springs' linearised system. A symmetric
-/// sweep's `G` has real eigenvalues `g` in [0, 1), for which that recurrence
-/// decays (its roots have `|μ|² = g`); a forward sweep's may be complex on a mesh
-/// with loops, and then need not. They were: a forward sweep alone ran the jelly
-/// away at k = 1e8 N/m and its 2e-4 s steps (and a 4³ one at k = 1e7 and 1.4 ms),
-/// on every engine, where the symmetric sweep keeps it in one piece
-/// (`tests/xpbd.rs`). Kept across the two corrections, `λ` makes the second the
-/// XPBD iteration it is: from `λ = 0` it would count the compliance twice and
-/// stiffen soft springs.
+/// `inv_mass`: one Gauss-Seidel sweep in `order` and, with `back`
+/// ([`xpbd_sweeps_back`]), one in the reverse order after it, each spring's
+/// multiplier `λ` (in `multipliers`, one per spring) kept from its first
+/// correction to its second. Forward and back, the two are a symmetric
+/// Gauss-Seidel iteration on the step's linearised system, whose iteration
+/// matrix has real eigenvalues in [0, 1) (the system is symmetric positive
+/// definite), where a forward sweep's may be complex (though linearised at rest,
+/// both steps' error recurrences had a spectral radius of 1 on 3³ and 4³
+/// lattices in the reproduction: the spin that tells them apart is nonlinear).
+/// From `λ = 0` the second
+/// correction would count the compliance twice (a mass hanging on a spring would
+/// stop at half its stretch, `tests/xpbd.rs`). The f64 and mesh engines' pass.
 pub(crate) fn xpbd_pass(
     x: &mut [DVec3],
     prev: &[DVec3],
     springs: &[super::Spring],
-    order: &[u32],
+    (order, back): (&[u32], bool),
     inv_mass: &[f64],
     dt: f64,
     multipliers: &mut Vec<f64>,
 ) {
     multipliers.clear();
     multipliers.resize(springs.len(), 0.0);
-    for &i in order.iter().chain(order.iter().rev()) {
+    let backward = order.iter().rev().take(if back { order.len() } else { 0 });
+    for &i in order.iter().chain(backward) {
         let s = &springs[i as usize];
         let (a, b) = (s.a as usize, s.b as usize);
         let (wa, wb) = (inv_mass[a], inv_mass[b]);
@@ -345,9 +366,9 @@ impl XpbdSpring {
 /// `Δλ = -(C + α̃ λ + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
 /// with `n = (xa - xb) / l`.
 ///
-/// The grid engine does the same arithmetic in float32 lanes, a colour class at a
-/// time (`grid_kernel/spring_passes.rs`, as it does [`length_correction`]), and
-/// keeps `α̃ λ` rather than `λ`; `tests/fast_engine.rs` and `tests/grid_kernel.rs`
+/// The grid and lattice engines do the same arithmetic in float32 lanes, a
+/// colour class at a time (`grid_kernel/spring_passes.rs`, as they do
+/// [`length_correction`]), the lattice's keeping `α̃ λ` rather than `λ`; `tests/fast_engine.rs` and `tests/grid_kernel.rs`
 /// hold the two together.
 #[inline]
 pub(crate) fn xpbd_correction(

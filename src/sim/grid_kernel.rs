@@ -775,8 +775,6 @@ struct Kernel<E: Real> {
     /// One band per thread.
     par_bands: Vec<Band<E>>,
     simd: SimdLevel,
-    /// XPBD's multipliers, kept from each spring's first correction to its second.
-    multipliers: Multipliers<E>,
     /// Self-collision's f64 copy of the positions, kept between steps (empty
     /// without it).
     self_collision_scratch: Vec<DVec3>,
@@ -981,7 +979,6 @@ impl<E: Real> Kernel<E> {
             seq_band: make_bands(&grid, 1),
             par_bands: Vec::new(),
             simd: SimdLevel::detect(),
-            multipliers: Multipliers::default(),
             self_collision_scratch: Vec::new(),
             self_collision: SelfCollision::default(),
             torn: None,
@@ -1677,7 +1674,7 @@ use row::{
     row_portable, row_variant, run_bands, run_two_bands, spring,
 };
 use simd::{Portable, Simd};
-use spring_passes::{Multipliers, SpringRule, SweepLines, largest_magnitude_bits, spring_sweep};
+use spring_passes::{SpringRule, SweepLines, largest_magnitude_bits, spring_sweep};
 
 impl GridCloth {
     /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the

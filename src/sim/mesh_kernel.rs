@@ -45,7 +45,7 @@
 
 use glam::DVec3;
 
-use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass};
+use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass, xpbd_sweeps_back};
 use super::forces::{ground_force, spring_force, triangle_drag};
 use super::integrators::euler_update;
 use super::springs;
@@ -1274,7 +1274,8 @@ impl MeshKernel {
         );
         copy_positions(&mut x, &self.x);
         copy_positions(&mut start, &self.x_next);
-        let (springs, order) = (&self.model_springs, &self.constraint_order);
+        let springs = &self.model_springs;
+        let order = (&self.constraint_order[..], xpbd_sweeps_back(self.lattice));
         xpbd_pass(
             &mut x,
             &start,

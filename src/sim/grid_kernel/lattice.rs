@@ -48,7 +48,8 @@
 //! over each step by spinning ([`Duo`]), as the grid kernel's do.
 //!
 //! With XPBD the step predicts without the springs (their coefficients are 0 in
-//! it), and XPBD's pass over the springs follows, then the stretch limit's (each
+//! it), and XPBD's pass over the springs follows (forward and back, see
+//! [`xpbd_sweeps_back`]), then the stretch limit's (each
 //! sweep's lines split between the two threads), then the contact with friction.
 
 use std::ops::Range;
@@ -64,7 +65,7 @@ use super::{
     SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
     runaway_scan, spring,
 };
-use crate::sim::constraints::Contact;
+use crate::sim::constraints::{Contact, xpbd_sweeps_back};
 use crate::sim::duo::{Duo, run_in_pool};
 use crate::sim::{Ground, Integrator, Sphere};
 
@@ -825,18 +826,19 @@ impl<E: Real> Lattice<E> {
             };
             Sweep::new(&rules, springs, (g.shape.width, rows), class)
         });
-        let xpbd = matches!(rule, SpringRule::Xpbd);
+        // XPBD sweeps back as well on a lattice, each spring's multiplier kept.
+        let back = matches!(rule, SpringRule::Xpbd) && xpbd_sweeps_back(Some(g.shape));
         let mut multipliers = std::mem::take(&mut self.multipliers);
-        if xpbd {
+        if back {
             multipliers.ensure(sweeps.len(), self.inv_mass.as_slice().len());
         }
         for (k, sweep) in sweeps.iter().enumerate() {
             if let Some(sweep) = sweep {
-                let m = xpbd.then(|| multipliers.of_sweep(k, false));
+                let m = back.then(|| multipliers.of_sweep(k, false));
                 self.sweep_lines(rule, sweep, m, duo);
             }
         }
-        if xpbd {
+        if back {
             // Backward, but for the last sweep, whose springs' second correction
             // would change nothing.
             let last = sweeps.iter().rposition(Option::is_some);

@@ -23,9 +23,10 @@ pub(super) enum SpringRule {
     /// Provot's stretch limit `tau`: a spring longer than `(1 + tau) L` is shortened
     /// to that, as [`crate::sim::constraints::length_correction`] does.
     StretchLimit(f64),
-    /// XPBD's springs: each corrected once by
+    /// XPBD's springs: each corrected by
     /// [`crate::sim::constraints::xpbd_correction`] against the positions at the
-    /// start of the step (the kernel's other state buffer, after the swap).
+    /// start of the step (the kernel's other state buffer, after the swap), once
+    /// on a grid, twice on a lattice (forward and back, [`Multipliers`]).
     Xpbd,
 }
 
@@ -37,14 +38,10 @@ impl<E: Real> Kernel<E> {
 
     /// One pass of `rule` over the springs (see [`Self::constrain`]), in the
     /// colour classes of [`crate::sim::springs::constraint_order`], the f64
-    /// engine's order; for XPBD then the classes in reverse, each spring's
-    /// multiplier kept (the f64 engine's symmetric sweep,
-    /// [`crate::sim::constraints::xpbd_pass`], less the last class's second
-    /// correction, which in exact arithmetic changes nothing). No two springs of a
-    /// class share a particle, so a class's springs from one row are corrected
-    /// together ([`spring_line`]); with `parallel`, most rows by two threads in one
-    /// hand-over a sweep order, with the same result as on one. A move `δ` adds
-    /// `δ / dt` to the particle's velocity.
+    /// engine's order. No two springs of a class share a particle, so a class's
+    /// springs from one row are corrected together ([`spring_line`]); with
+    /// `parallel`, most rows by two threads in one hand-over, with the same result
+    /// as on one. A move `δ` adds `δ / dt` to the particle's velocity.
     pub(super) fn spring_pass(
         &mut self,
         rule: SpringRule,
@@ -52,7 +49,7 @@ impl<E: Real> Kernel<E> {
         parallel: bool,
         duo: Option<&Duo>,
     ) {
-        let (w, h) = (self.grid.w, self.grid.h);
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let parallel = parallel && w * h >= PARALLEL_MIN_PARTICLES;
         let rules = SweepRules {
             rule,
@@ -84,61 +81,15 @@ impl<E: Real> Kernel<E> {
             };
             Sweep::new(&rules, springs, (w, h), class)
         });
-        let xpbd = matches!(rule, SpringRule::Xpbd);
-        let mut multipliers = std::mem::take(&mut self.multipliers);
-        if xpbd {
-            multipliers.ensure(sweeps.len(), self.inv_mass.as_slice().len());
-        }
-        let mut order: [Option<(&Sweep<E>, Option<SweepMultipliers<E>>)>; 12] =
-            std::array::from_fn(|k| {
-                let m = xpbd.then(|| multipliers.of_sweep(k, false));
-                sweeps[k].as_ref().map(|sweep| (sweep, m))
-            });
-        self.sweep_rows(rule, &order, false, parallel, duo);
-        if xpbd {
-            // Backward: the sweeps in reverse, but for the last, whose springs'
-            // second correction would change nothing.
-            let last = order.iter().rposition(Option::is_some);
-            order = std::array::from_fn(|k| {
-                let k = order.len() - 1 - k;
-                let m = multipliers.of_sweep(k, true);
-                sweeps[k]
-                    .as_ref()
-                    .filter(|_| Some(k) != last)
-                    .map(|sweep| (sweep, Some(m)))
-            });
-            self.sweep_rows(rule, &order, true, parallel, duo);
-        }
-        self.multipliers = multipliers;
-    }
-
-    /// The lines of `sweeps`, each with its multipliers, in the sweeps' order:
-    /// row by row down the cloth, or up it (`upward`, XPBD's backward sweeps), in
-    /// bands of rows that stay in the core's cache, and with `parallel` most rows
-    /// on two threads in one hand-over.
-    fn sweep_rows(
-        &mut self,
-        rule: SpringRule,
-        sweeps: &[Option<(&Sweep<E>, Option<SweepMultipliers<E>>)>; 12],
-        upward: bool,
-        parallel: bool,
-        duo: Option<&Duo>,
-    ) {
-        let (h, st) = (self.grid.h, self.grid.stride);
         let (inv_mass, simd) = (self.inv_mass.as_slice(), self.simd);
         let torn = self.torn.as_ref();
         let start = step_start(rule, &self.next);
-        // Rows below are counted in the pass's direction: `q` is row `q` down
-        // the cloth, or (`upward`) up from its bottom. A line from row `q` (its
-        // first end's, counted so) reaches `dr` rows further, either way: upward,
-        // a line whose springs start on row `r` is the line from `rows - 1 - r`,
-        // with `rows = h - dr` the rows its springs start on.
         // `skew[k]`: the rows sweep k's lines reach below their first, and those
         // of the sweeps before it: `dr` summed over sweeps 0 to k.
         let mut skew = [0; 12];
         let mut reach = 0;
         for (k, sweep) in sweeps.iter().enumerate() {
-            reach += sweep.as_ref().map_or(0, |(s, _)| s.dr);
+            reach += sweep.as_ref().map_or(0, |s| s.dr);
             skew[k] = reach;
         }
         // Lines run in bands of rows, each band's sweeps in order, then the next
@@ -156,16 +107,14 @@ impl<E: Real> Kernel<E> {
         let row_bytes = self.cur.x.len() * 4 * st * std::mem::size_of::<E>();
         let band = (192 * 1024 / row_bytes.max(1)).max(8);
         // The lines of every sweep in `rows(k)`, band by band from row `from`,
-        // in `out` (the state's arrays from row `first` on, counted down).
+        // in `out` (the state's arrays from row `first` on).
         let run =
             |out: &mut Out<E>, first: usize, from: usize, rows: &dyn Fn(usize) -> Range<usize>| {
                 let mut t = from;
                 while t < h + reach {
                     let next = t + band;
                     for (k, sweep) in sweeps.iter().enumerate() {
-                        let Some((sweep, multipliers)) = *sweep else {
-                            continue;
-                        };
+                        let Some(sweep) = sweep else { continue };
                         let all = rows(k);
                         let start_row = all.start.max(if t == from { 0 } else { cut(k, t) });
                         let end = all.end.min(cut(k, next)).min(sweep.rows);
@@ -175,15 +124,12 @@ impl<E: Real> Kernel<E> {
                         let lines = SweepLines {
                             sweep,
                             stride: st,
-                            rows: match upward {
-                                false => start_row..end,
-                                true => sweep.rows - end..sweep.rows - start_row,
-                            },
+                            rows: start_row..end,
                             inv_mass,
                             alive: torn.map(|t| t.springs[sweep.direction].as_slice()),
                             real: None,
                             start,
-                            multipliers,
+                            multipliers: None,
                         };
                         E::spring_sweep(simd, out, first * st, &lines);
                     }
@@ -201,21 +147,15 @@ impl<E: Real> Kernel<E> {
         // bands as above; then this thread runs the lines left, in order. A line
         // left over from sweep k shares no row with any later sweep's line that
         // the threads ran before it, nor with any line of theirs that should have
-        // seen it: the bounds move apart by each sweep's `dr`. (Upward, the top
-        // thread's rows are the bottom of the cloth.)
+        // seen it: the bounds move apart by each sweep's `dr`.
         let split = h / 2;
         let below = |k: usize| split + if k == 0 { 0 } else { skew[k - 1] };
         let top = |k: usize| 0..cut(k, split);
         let bottom = |k: usize| below(k)..h;
         {
-            let at = if upward { h - split } else { split };
-            let (mut upper, mut lower) = self.cur.rows().split_at(at * st);
-            let ((first_out, first_at), (second_out, second_at)) = match upward {
-                false => ((&mut upper, 0), (&mut lower, split)),
-                true => ((&mut lower, at), (&mut upper, 0)),
-            };
-            let mut second = || run(second_out, second_at, split, &bottom);
-            let first = || run(first_out, first_at, 0, &top);
+            let (mut upper, mut lower) = self.cur.rows().split_at(split * st);
+            let mut second = || run(&mut lower, split, split, &bottom);
+            let first = || run(&mut upper, 0, 0, &top);
             match duo {
                 Some(duo) => duo.fork(&mut second, first),
                 None => {
@@ -445,8 +385,9 @@ impl<E: Real> Sweep<E> {
 /// when springs tore ([`super::Torn`], indexed by first end), the mask of real
 /// particles when the arrays hold ghosts that springs reach (1 for particles, 0
 /// for ghosts: a lattice's), and for XPBD the positions at the start of the step
-/// (high parts, then low parts; empty for the stretch limit) and the sweep's
-/// [`SweepMultipliers`], all whole arrays indexed from row 0.
+/// (high parts, then low parts; empty for the stretch limit) and, when it sweeps
+/// back as well (a lattice's, see [`crate::sim::constraints::xpbd_pass`]), the
+/// sweep's [`SweepMultipliers`], all whole arrays indexed from row 0.
 pub(super) struct SweepLines<'a, E> {
     pub(super) sweep: &'a Sweep<E>,
     pub(super) stride: usize,
@@ -599,7 +540,7 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     let start_end = line.a.max(line.b) + lanes;
     assert!(!XPBD || fits([sx, sy, sz], start_end) && (!LO || fits([sxl, syl, szl], start_end)));
     let multipliers = lines.multipliers.filter(|_| XPBD);
-    assert!(!XPBD || multipliers.is_some_and(|m| m.len >= line.a + lanes));
+    assert!(multipliers.is_none_or(|m| m.len >= line.a + lanes));
     let alive = lines.alive.map(|m| &m[line.a..line.a + lanes]);
     let real = lines.real.map(|m| &m[base..]);
     assert!(real.is_none_or(|m| m.len() >= end));
