@@ -1,7 +1,7 @@
 //! Position constraints enforced after integration, each optional per scene:
 //! - with XPBD, every spring: a distance constraint of compliance `1/k`, one
-//!   symmetric Gauss-Seidel sweep, the model's constraint order forward and then
-//!   backward (`xpbd_pass`);
+//!   Gauss-Seidel sweep in the model's constraint order, and on a lattice one back
+//!   (`xpbd_pass`);
 //! - rigid bars (seed 001), relaxed `bar_iterations` times per step: each pass moves
 //!   the two ends along the bar so that its length is restored, split by inverse mass;
 //! - maximum stretch (Provot 1995, seed 004): no spring longer than `(1 + tau) L`,
@@ -103,10 +103,10 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
 /// after 1.5 s (k = 2e3 and 2e4 N/m, steps of 0.2 to 2.5 ms). A cloth showed
 /// neither: a spinning flat cloth lost the same energy either way in the
 /// reproduction, no scene's cloth ran away on the forward sweep (k of 1e7 and
-/// 1e9 N/m, 1/960 and 1/250 s steps), and at 5 and 10 substeps a frame the stiff-cloth
-/// study's cloth came out up to twice as far from its reference swept both ways
-/// (the forward sweep last corrects the springs that carry its weight), at
-/// twice the cost.
+/// 1e9 N/m, 1/960 and 1/250 s steps), and at 5 and 10 substeps a frame the
+/// stiff-cloth study's cloth came out up to twice as far from its reference swept
+/// both ways (the forward sweep last corrects the springs that carry its weight),
+/// at twice the cost.
 pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
     lattice.is_some_and(|l| !l.is_empty())
 }
@@ -122,9 +122,11 @@ pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
 /// definite), where a forward sweep's may be complex (though linearised at rest,
 /// both steps' error recurrences had a spectral radius of 1 on 3³ and 4³
 /// lattices in the reproduction: the spin that tells them apart is nonlinear).
-/// From `λ = 0` the second
-/// correction would count the compliance twice (a mass hanging on a spring would
-/// stop at half its stretch, `tests/xpbd.rs`). The f64 and mesh engines' pass.
+/// From `λ = 0` the second correction would count the compliance twice (a mass
+/// hanging on a spring would stop at half its stretch, `tests/xpbd.rs`). In exact
+/// arithmetic a spring's second correction straight after its first changes
+/// nothing, so the lattice kernel does not sweep its last class back; this pass
+/// does, to round-off. The f64 and mesh engines' pass.
 pub(crate) fn xpbd_pass(
     x: &mut [DVec3],
     prev: &[DVec3],
@@ -368,8 +370,9 @@ impl XpbdSpring {
 ///
 /// The grid and lattice engines do the same arithmetic in float32 lanes, a
 /// colour class at a time (`grid_kernel/spring_passes.rs`, as they do
-/// [`length_correction`]), the lattice's keeping `α̃ λ` rather than `λ`; `tests/fast_engine.rs` and `tests/grid_kernel.rs`
-/// hold the two together.
+/// [`length_correction`]), the lattice's keeping `α̃ λ` rather than `λ`;
+/// `tests/fast_engine.rs`, `tests/grid_kernel.rs` and `tests/lattice_kernel.rs`
+/// hold them together.
 #[inline]
 pub(crate) fn xpbd_correction(
     x: [DVec3; 2],

@@ -49,8 +49,8 @@
 //!
 //! With XPBD the step predicts without the springs (their coefficients are 0 in
 //! it), and XPBD's pass over the springs follows (forward and back, see
-//! [`xpbd_sweeps_back`]), then the stretch limit's (each
-//! sweep's lines split between the two threads), then the contact with friction.
+//! [`xpbd_sweeps_back`]), then the stretch limit's (each sweep's lines split
+//! between the two threads), then the contact with friction.
 
 use std::ops::Range;
 

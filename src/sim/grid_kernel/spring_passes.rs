@@ -426,9 +426,10 @@ impl<E: Real> Multipliers<E> {
     }
 }
 
-/// One sweep's array of [`Multipliers`], as its lines use it. A line writes its
-/// own springs' entries only (`a .. a + len`), and no two lines of a sweep have a
-/// spring in common, so lines on different threads write different floats.
+/// One sweep's array of [`Multipliers`], as its lines use it. A line changes its
+/// own springs' entries only (`a .. a + len`; its lanes past the end store back
+/// what they read, as they do the state's), and no two lines of a sweep have a
+/// spring in common.
 #[derive(Clone, Copy)]
 pub(super) struct SweepMultipliers<E> {
     values: *mut E,
@@ -438,9 +439,10 @@ pub(super) struct SweepMultipliers<E> {
     second: bool,
 }
 
-// SAFETY: the lines that share a `SweepMultipliers` write disjoint entries (see
-// the type's doc), and the backward sweep that reads them runs after the forward
-// one has joined.
+// SAFETY: lines on different threads touch different entries, as they touch
+// different particles: the threads' lines are kept apart by the rows a line's
+// lanes reach (see the lattice's `spring_pass`); and the backward sweep, which
+// reads the entries, runs after the forward one has joined.
 unsafe impl<E: Send> Send for SweepMultipliers<E> {}
 unsafe impl<E: Sync> Sync for SweepMultipliers<E> {}
 
