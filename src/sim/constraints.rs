@@ -115,7 +115,7 @@ pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
 /// that were `prev` at the start of the step `dt`, with inverse masses
 /// `inv_mass`: one Gauss-Seidel sweep in `order` and, with `back`
 /// ([`xpbd_sweeps_back`]), one in the reverse order after it, each spring's
-/// multiplier `λ` (in `multipliers`, one per spring) kept from its first
+/// multiplier `λ` (in `multipliers`, one per spring, only then) kept from its first
 /// correction to its second. Forward and back, the two are a symmetric
 /// Gauss-Seidel iteration on the step's linearised system, whose iteration
 /// matrix has real eigenvalues in [0, 1) (the system is symmetric positive
@@ -136,22 +136,38 @@ pub(crate) fn xpbd_pass(
     dt: f64,
     multipliers: &mut Vec<f64>,
 ) {
-    multipliers.clear();
-    multipliers.resize(springs.len(), 0.0);
-    let backward = order.iter().rev().take(if back { order.len() } else { 0 });
-    for &i in order.iter().chain(backward) {
+    // Corrects spring `i` whose multiplier so far is `lambda`; returns its change.
+    #[inline(always)]
+    fn correct(
+        x: &mut [DVec3],
+        (prev, springs, inv_mass, dt): (&[DVec3], &[super::Spring], &[f64], f64),
+        i: u32,
+        lambda: f64,
+    ) -> Option<f64> {
         let s = &springs[i as usize];
         let (a, b) = (s.a as usize, s.b as usize);
         let (wa, wb) = (inv_mass[a], inv_mass[b]);
-        let Some(spring) = XpbdSpring::new(s.rest, s.stiffness, s.damping, dt) else {
-            continue;
-        };
-        let lambda = &mut multipliers[i as usize];
+        let spring = XpbdSpring::new(s.rest, s.stiffness, s.damping, dt)?;
         let ends = ([x[a], x[b]], [prev[a], prev[b]]);
-        if let Some((c, delta)) = xpbd_correction(ends.0, ends.1, wa, wb, &spring, *lambda) {
+        let (c, delta) = xpbd_correction(ends.0, ends.1, wa, wb, &spring, lambda)?;
+        x[a] -= wa * c;
+        x[b] += wb * c;
+        Some(delta)
+    }
+    let given = (prev, springs, inv_mass, dt);
+    multipliers.clear();
+    if !back {
+        // One sweep visits each spring once, from `λ = 0`: nothing to keep.
+        for &i in order {
+            correct(x, given, i, 0.0);
+        }
+        return;
+    }
+    multipliers.resize(springs.len(), 0.0);
+    for &i in order.iter().chain(order.iter().rev()) {
+        let lambda = &mut multipliers[i as usize];
+        if let Some(delta) = correct(x, given, i, *lambda) {
             *lambda += delta;
-            x[a] -= wa * c;
-            x[b] += wb * c;
         }
     }
 }
@@ -373,7 +389,7 @@ impl XpbdSpring {
 /// [`length_correction`]), the lattice's keeping `α̃ λ` rather than `λ`;
 /// `tests/fast_engine.rs`, `tests/grid_kernel.rs` and `tests/lattice_kernel.rs`
 /// hold them together.
-#[inline]
+#[inline(always)]
 pub(crate) fn xpbd_correction(
     x: [DVec3; 2],
     prev: [DVec3; 2],
@@ -394,7 +410,9 @@ pub(crate) fn xpbd_correction(
     let n = d * (1.0 / l);
     let moved = n.dot((x[0] - prev[0]) - (x[1] - prev[1]));
     let (alpha, gamma) = (spring.alpha, spring.gamma);
-    let stretch = l - spring.rest + alpha * lambda;
+    // `C + α̃ λ`, with `α̃ λ` taken from the rest length, off the chain of
+    // positions that a Gauss-Seidel pass waits on.
+    let stretch = l - (spring.rest - alpha * lambda);
     let delta = -(stretch + gamma * moved) / ((1.0 + gamma) * w + alpha);
     Some((-delta * n, delta))
 }
