@@ -15,11 +15,11 @@ CLOTH=target/release/cloth
 
 # name | scene and settings (the grid size is added; the first case is the bench the
 # others are measured against). The bench moved 300 m off the origin is the same
-# cloth, on double-float positions (`grid-mixed`), which the drape and the sheet
+# cloth, on fixed-point positions (`grid-mixed`), which the drape and the sheet
 # need: what that precision costs by itself.
 CASES=(
   "bench (plain)|--scene bench"
-  "bench, double-float positions|--scene bench --set origin=300,1,0"
+  "bench, fixed-point positions|--scene bench --set origin=300,1,0"
   "drape (sphere, ground, friction)|--scene drape --set self_collision=false"
   "drape + self-collision|--scene drape"
   "50 pins at random places|--scene bench --set pins=RANDOM50"

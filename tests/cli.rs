@@ -239,7 +239,7 @@ fn info_reports_counts_terms_parameters_and_stability() {
     assert_eq!(v["parameters"]["integrator"], "symplectic-euler");
     assert_eq!(
         v["engine"], "grid-mixed",
-        "k / m = 1e5 needs double-float positions"
+        "k / m = 1e5 needs fixed-point positions"
     );
     let bench = cloth(&["info", "--scene", "bench", "--json"]);
     let v: serde_json::Value = serde_json::from_str(stdout(&bench).trim()).unwrap();
@@ -263,7 +263,7 @@ fn info_reports_counts_terms_parameters_and_stability() {
 
     // With XPBD the springs are constraints: no force term, no step limit, and the
     // grid's precision follows the step, not the stiffness: its stiff springs act
-    // as springs of stiffness `m / 2h²`, so double-float positions at the cloth's
+    // as springs of stiffness `m / 2h²`, so fixed-point positions at the cloth's
     // 1/960 s steps even at 1e9 N/m, float32 ones at 1/60 s steps.
     let xpbd_info = |dt: &str| {
         let info = cloth(&[

@@ -3,7 +3,8 @@
 //! and compared particle by particle.
 //!
 //! Tolerance: the fast engine evaluates forces in float32 (relative round-off about
-//! 6e-8 per operation) on positions kept to about 1e-14 m (double-float), so the two
+//! 6e-8 per operation) on positions kept to a few nm (fixed point, 2^-29 of twice
+//! the cloth's size: 7.5e-9 m for the drape), so the two
 //! runs part by float32 round-off of the accelerations, integrated over the run and
 //! amplified by whatever instability the motion has. Each case states its bound;
 //! every bound is at least 1000 times smaller than the motion it checks (the
@@ -95,12 +96,15 @@ fn each_feature_agrees_with_the_f64_engine() {
             160,
             1e-6,
         ),
+        // Thrown out at hundreds of m/s, the cloth amplifies the rounding of its
+        // fixed-point positions (half its 7.5e-9 m unit a step): 2.4e-6 m apart,
+        // where double-float positions gave 5e-7 m and a unit 16 times finer 6e-7.
         (
             "drape",
             &["sphere_radius=0.01"],
             &["sphere_radius=0.5", "sphere_center=\"0.5,1.0,0\""],
             40,
-            1e-6,
+            1e-5,
         ),
         (
             "drape",
@@ -120,6 +124,11 @@ fn each_feature_agrees_with_the_f64_engine() {
         // XPBD's grid runs on float32 positions (its springs are not forces, see
         // `Precision::needed`): round-off of 6e-8 of the 1.5 m cloth per step.
         ("cloth", still, &["integrator=\"xpbd\""], 960, 1e-5),
+        // XPBD corrects a spring by a small part of its stretch each step; on
+        // fixed-point positions the part of a move under half a unit reaches the
+        // position through the velocity (`spring_line`), where rounding it away
+        // had put this case 9e-5 m apart: 3.0e-6 m (9.6e-7 on the double-float
+        // positions before).
         (
             "drape",
             &["integrator=\"xpbd\"", "sphere_radius=0.01"],
@@ -202,7 +211,7 @@ fn stiff_energies(stiffness: f64, mass: f64, steps: u64) -> (f64, f64, f64) {
 #[test]
 fn stiff_cloth_does_not_heat_up_on_the_fast_engine() {
     // Float32 positions lose `x += h v` below 6e-8 m; times k that is force noise
-    // that heated a k = 1e7 cloth to 0.15 J. The engine keeps positions in two parts
+    // that heated a k = 1e7 cloth to 0.15 J. The engine keeps positions in fixed point
     // and computes in float64 where float32 lengths are too coarse for k
     // (`Precision::needed`), so its kinetic energy must follow the f64 engine's to
     // 1% at every stiffness the panel allows, down to the 1e-15 J of a cloth at rest.
@@ -243,7 +252,7 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
         [Precision::Single, Precision::Mixed, Precision::Double].map(kinetic);
     println!(
         "kinetic energy from rest: {single:.3e} J (float32), {mixed:.3e} J (float32 on \
-         double-float positions), {double:.3e} J (float64)"
+         fixed-point positions), {double:.3e} J (float64)"
     );
     assert!(
         single > 1e3 * double.max(1e-30),
@@ -253,7 +262,7 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
         mixed > 1e3 * double.max(1e-30),
         "{mixed:e} J vs {double:e} J"
     );
-    // The rule: float64 for this cloth, double-float positions for a moderately
+    // The rule: float64 for this cloth, fixed-point positions for a moderately
     // stiff one, float32 for the peers' cloth.
     let mut spec = GridSpec::peer_bench(32, false);
     spec.structural.k = 1e7;
@@ -266,8 +275,8 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
     );
     // XPBD: its stiff springs act as springs of stiffness `m / 2h²` whatever k
     // is, so float32 positions for whole 1/60 s frames (noise 5e-3 m/s² at 2 m),
-    // double-float ones for steps of 1e-3 s (0.48 m/s² on float32 positions,
-    // 8e-3 on double-float ones), never float64.
+    // fixed-point ones for steps of 1e-3 s (0.48 m/s² on float32 positions,
+    // 8e-3 on fixed-point ones), never float64.
     spec.integrator = Integrator::Xpbd;
     for k in [1e7, 1e9] {
         spec.structural.k = k;
@@ -372,4 +381,32 @@ fn live_edits_update_the_kernel_in_place() {
     system.set_params(p);
     system.run(1).unwrap();
     assert_eq!(system.kernel_builds(), 2);
+}
+
+#[test]
+fn far_from_the_origin_a_cloth_moves_as_it_does_at_the_origin() {
+    // Fixed-point positions are stored relative to a frame on the cloth, so a
+    // cloth 10 km out steps as the same cloth at the origin (float32 positions
+    // there would resolve only 1 mm). Both runs on the fast engine, compared less
+    // the shift: the f64 coordinates near 1e4 m are themselves good to 2e-12 m.
+    let run = |origin: &str| {
+        let mut system = build("cloth", &["gust=0", "wind=\"0,0,0\"", origin]);
+        system.set_fast_path(true);
+        assert_eq!(system.engine(), Engine::Grid(Precision::Mixed));
+        let start = system.positions().to_vec();
+        system.run(960).unwrap();
+        (start, system.positions().to_vec())
+    };
+    let (start, near) = run("origin=\"0,1,0\"");
+    let (_, far) = run("origin=\"10000,1,-5000\"");
+    let shift = DVec3::new(10000.0, 0.0, -5000.0);
+    let d = near
+        .iter()
+        .zip(&far)
+        .map(|(p, q)| p.distance(*q - shift))
+        .fold(0.0, f64::max);
+    let moved = motion(&start, &near);
+    println!("{d:.3e} m apart after moving {moved:.3} m");
+    assert!(moved > 0.01);
+    assert!(d < 1e-9, "{d:e} m apart");
 }

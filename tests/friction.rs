@@ -146,7 +146,10 @@ fn the_engines_agree_with_friction() {
     // engine's float32 forces part them by round-off (5e-7 m when the cloth lands
     // on the sphere at 0.35 s). Sticking or slipping is decided by a threshold, so
     // once the cloth buckles over the sphere they part by millimetres (measured:
-    // 4 mm at 0.45 s); 50 ms after landing they agree to 1.7e-5 m.
+    // 4 mm at 0.45 s). 50 ms after landing they agree to 1.1e-4 m on fixed-point
+    // positions (1.7e-5 m on the double-float ones before), which round each move
+    // to half their 7.5e-9 m unit: the f64 engine started 3.7e-9 m off parts from
+    // itself by 1.4e-6 m at this time, and the fast engine rounds every step.
     let run = |fast: bool| {
         let mut s = build("drape", &[]);
         s.set_fast_path(fast);
@@ -157,5 +160,5 @@ fn the_engines_agree_with_friction() {
     exact.run(384).unwrap();
     let apart = common::max_distance(fast.positions(), exact.positions());
     println!("apart after 0.4 s: {apart:e} m");
-    assert!(apart < 1e-4, "{apart}");
+    assert!(apart < 3e-4, "{apart}");
 }

@@ -1,6 +1,6 @@
 //! The grid fast path against the peers' float64 reference (shared/peers/scene.py).
 
-use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, SimdLevel};
+use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, Precision, SimdLevel};
 use glam::DVec3;
 
 const DT: f64 = 1.0 / 960.0;
@@ -221,9 +221,9 @@ fn threads_give_bit_identical_results_with_every_feature() {
 /// The passes along the springs after the step, Provot's stretch limit (with
 /// Verlet) and XPBD's springs, give the same cloth on every SIMD level within
 /// float32 round-off, in each precision; and each precision's cloth is the float64
-/// one's within what float32 rounds off over the run. Double-float positions are
-/// checked 300 m from the origin, where they are needed: their low parts' arithmetic
-/// in both passes is what keeps the cloth there, and in the wind, the drag's
+/// one's within what float32 rounds off over the run. Fixed-point positions are
+/// checked 300 m from the origin, where they are needed: their exact differences
+/// in both passes are what keep the cloth there, and in the wind, the drag's
 /// (its triangles' edges are the springs' vectors, accurate to their own size).
 #[test]
 fn every_simd_level_runs_the_spring_passes_alike() {
@@ -255,8 +255,8 @@ fn every_simd_level_runs_the_spring_passes_alike() {
             d.fold(0.0, f64::max)
         };
         // Float32 positions round each move to 2^-24 of the 1 m cloth's
-        // coordinates; double-float ones keep it, and leave the float32
-        // arithmetic's 2^-24 of each correction.
+        // coordinates; fixed-point ones to half their unit (4e-9 m), and leave the
+        // float32 arithmetic's 2^-24 of each correction.
         for (precision, x0, bound) in [
             (Precision::Single, 0.0, 1e-5),
             (Precision::Mixed, 300.0, 1e-6),
@@ -332,4 +332,82 @@ fn the_runaway_scan_finds_the_largest_speed_and_distance_and_any_nan() {
         assert_eq!(broken(37, DVec3::ZERO, DVec3::new(0.0, inf, 0.0)).0, inf);
         assert_eq!(broken(200, DVec3::new(0.0, -inf, 0.0), DVec3::ZERO).1, inf);
     }
+}
+
+/// Positions and velocities of a cloth.
+fn state(cloth: &GridCloth) -> (Vec<DVec3>, Vec<DVec3>) {
+    let (mut p, mut v) = (
+        vec![DVec3::ZERO; cloth.len()],
+        vec![DVec3::ZERO; cloth.len()],
+    );
+    cloth.positions_into(&mut p);
+    cloth.velocities_into(&mut v);
+    (p, v)
+}
+
+#[test]
+fn recentring_fixed_point_positions_changes_nothing() {
+    // The peers' cloth unpinned, on fixed-point positions, falling 2 s in a side
+    // wind (it tumbles and flaps): about 11 m, several times the room its frame
+    // holds (2 to 4 times its 0.7 m radius), so the kernel recentres the frame on
+    // it again and again (a frame left behind would wrap the integers round, and
+    // tear the cloth apart by 2^32 units). A second cloth, the same, has its frame moved as well
+    // after the first second (its state set again: a frame around where it is
+    // then). Recentring shifts the stored integers by whole units, so the two must
+    // step alike to the last bit of their integers: their positions differ only
+    // by the float64 rounding of reading them back (1e-15 of 20 m).
+    let mut spec = GridSpec::peer_bench(32, true);
+    spec.pinned.clear();
+    spec.wind = [2.0, 0.0, 5.0];
+    spec.precision = Precision::Mixed;
+    let (mut a, mut b) = (GridCloth::new(spec.clone()), GridCloth::new(spec));
+    let start = state(&a).0;
+    for cloth in [&mut a, &mut b] {
+        cloth.steps(DT, 960);
+    }
+    let (p, v) = state(&b);
+    b.set_state(&p, &v);
+    for cloth in [&mut a, &mut b] {
+        cloth.steps(DT, 960);
+    }
+    let (pa, pb) = (state(&a).0, state(&b).0);
+    let fell = start[0].y - pa[0].y;
+    let apart = pa
+        .iter()
+        .zip(&pb)
+        .map(|(p, q)| p.distance(*q))
+        .fold(0.0, f64::max);
+    let shape = pa.iter().map(|p| p.distance(pa[0])).fold(0.0, f64::max);
+    println!("fell {fell:.2} m, {shape:.3} m across; the two {apart:.3e} m apart");
+    assert!(fell > 10.0, "fell {fell} m");
+    assert!(shape > 0.5 && shape < 1.5, "{shape} m across");
+    assert!(pa.iter().all(|p| p.is_finite()));
+    assert!(apart < 1e-13, "{apart:e} m apart");
+}
+
+#[test]
+fn a_particle_dragged_far_away_widens_the_frame_and_the_cloth_goes_on() {
+    // Fixed-point positions hold a few cloth sizes about the cloth. A particle
+    // dragged 5 km off (a grab) no longer fits: the kernel doubles its unit until
+    // it does. Every particle then reads back where it was put, to half the new
+    // unit, and the cloth steps on without a NaN.
+    let mut spec = GridSpec::peer_bench(32, false);
+    spec.precision = Precision::Mixed;
+    let mut cloth = GridCloth::new(spec);
+    cloth.steps(DT, 100);
+    let (before, _) = state(&cloth);
+    let far = DVec3::new(5000.0, -3000.0, 1000.0);
+    cloth.set_particle(500, far, DVec3::ZERO);
+    let (after, _) = state(&cloth);
+    // A frame holding 5.9 km around the cloth has a unit of about 2^-16 m or less.
+    let half_unit = 2f64.powi(-17);
+    assert!(after[500].distance(far) <= half_unit, "{:?}", after[500]);
+    for (p, (q, r)) in before.iter().zip(&after).enumerate() {
+        if p != 500 {
+            assert!(q.distance(*r) <= half_unit, "particle {p}: {q} -> {r}");
+        }
+    }
+    cloth.set_pinned(500, true);
+    cloth.steps(DT, 100);
+    assert!(state(&cloth).0.iter().all(|p| p.is_finite()));
 }

@@ -120,10 +120,9 @@ fn the_fast_engine_agrees_with_the_f64_engine_under_the_limit() {
 #[test]
 fn far_from_the_origin_the_limit_still_sees_every_spring_over_it() {
     // 1 km out, float32 positions resolve only 6e-5 m, so the engine keeps
-    // double-float ones (`grid-mixed`) and tests a block's springs on their high
-    // parts first, with a margin for the low parts. A margin too small would skip
-    // springs barely over the limit; the cloth would then part from the f64
-    // engine's by far more than near the origin.
+    // fixed-point ones (`grid-mixed`) in a frame on the cloth, whose differences
+    // are exact: a spring barely over the limit is seen over it, and the cloth
+    // keeps as close to the f64 engine's as near the origin.
     let far = |fast: bool| {
         let mut system = build(
             "bench",

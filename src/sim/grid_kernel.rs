@@ -29,21 +29,23 @@
 //! to the velocity, as in `super::constraints`.
 //!
 //! # Precision
-//! * Positions are double-floats: a high and a low part, so that `x += h v` keeps
-//!   every bit however small the move against the position. Plain float32
-//!   positions lost the move's low bits each step, and the lost bits times `k` were
-//!   force noise that heated stiff cloth (0.15 J in 200 steps of a k = 1e7 N/m
-//!   cloth that the f64 engine keeps at 2e-6 J). A spring's `d` subtracts high and
-//!   low parts separately, so it is accurate to its own length.
-//! * The arithmetic is float32 ([`Precision::Single`]) when the noise of float32
-//!   spring lengths, about `2^-23 L` per spring, times `k / m` summed over a
+//! * Float32 positions lose the low bits of each move `x += h v`, and the lost bits
+//!   times `k` are force noise that heats stiff cloth (0.15 J in 200 steps of a k =
+//!   1e7 N/m cloth that the f64 engine keeps at 2e-6 J). Where that noise, summed
+//!   over a particle's springs ([`Precision::needed`]), would pass 1% of gravity,
+//!   positions are fixed point ([`Precision::Mixed`], [`frame`]): 32-bit integers
+//!   in a unit chosen from the cloth's size, in a frame that follows the cloth. A
+//!   spring's `d` is then exact before its conversion to float, and a move loses
+//!   at most half a unit.
+//! * The arithmetic is float32 when the noise of float32 spring lengths, about
+//!   `2^-23 L` per spring, and of the positions, times `k / m` summed over a
 //!   particle's springs, stays under 1% of gravity; otherwise the same code runs in
 //!   float64 ([`Precision::Double`]), at half the lanes. `tests/fast_engine.rs`
 //!   shows both: float32 heats the stiff cloth, and the engine's choice follows
 //!   the f64 engine's kinetic energy to 1% from k = 1e3 to 1e9 N/m.
 //!
 //! # How it is fast
-//! * Structure of arrays (`x`, `y`, `z` and their low parts, `vx`, `vy`, `vz`,
+//! * Structure of arrays (`x`, `y`, `z`, `vx`, `vy`, `vz`,
 //!   inverse mass, and Verlet's `u`),
 //!   rows padded to a multiple of 16 floats plus 16 ghost columns, and two ghost rows
 //!   below the cloth: every loop runs over whole SIMD blocks with no scalar tail.
@@ -90,6 +92,7 @@ use super::constraints;
 use super::duo::{Duo, run_in_pool};
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
+use frame::{Frame, FrameRule};
 
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
@@ -196,8 +199,9 @@ pub enum Precision {
     /// largest coordinate.
     #[default]
     Single,
-    /// Float32 arithmetic on double-float positions (a high and a low float, `x +=
-    /// h v` exact, a spring's `d` accurate to its length): noise `~ k 2^-23 L / m`.
+    /// Float32 arithmetic on fixed-point positions ([`frame`]: 32-bit integers in a
+    /// frame that follows the cloth, a spring's `d` exact before its conversion,
+    /// `x += h v` rounded to the unit): noise `~ k (2^-23 L + unit / 2) / m`.
     Mixed,
     /// Float64 positions and arithmetic (the same code at half the lanes).
     Double,
@@ -217,7 +221,7 @@ impl Precision {
     }
 
     /// The cheapest level whose float32 noise (`noise(Some(reach))` with float32
-    /// positions, `noise(None)` with double-float ones) stays under the limit.
+    /// positions, `noise(None)` with fixed-point ones) stays under the limit.
     pub fn cheapest(noise: impl Fn(Option<f64>) -> f64, reach: f64) -> Self {
         if noise(Some(reach)) <= Self::NOISE_LIMIT {
             Self::Single
@@ -229,21 +233,25 @@ impl Precision {
     }
 
     /// The acceleration noise (m/s²) of float32 on `spec`'s cloth stepped at `dt`
-    /// s, `sum_kinds 4 k 2^-23 r / m` (a particle has up to 4 springs of each
-    /// kind), with `r` the position's size `reach` for float32 positions, or each
-    /// kind's rest length for double-float positions (`None`); for XPBD see
-    /// [`Precision::spring_noise`].
+    /// s, `sum_kinds 4 k r / m` (a particle has up to 4 springs of each kind),
+    /// with `r` the float32 rounding of the position's size `reach`, `2^-23 reach`,
+    /// for float32 positions, or for fixed-point positions (`None`) that of each
+    /// kind's rest length plus the rounding of a move to half its unit; for XPBD
+    /// see [`Precision::spring_noise`].
     pub fn float32_noise(spec: &GridSpec, reach: Option<f64>, dt: f64) -> f64 {
         let h = spec.spacing.abs();
         let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
         let kinds = [spec.structural, spec.shear, spec.bend];
         let springs = (kinds.iter().zip(rests)).map(|(kind, rest)| (kind.k, 4.0, rest));
         let xpbd = (spec.integrator == Integrator::Xpbd).then_some(dt);
-        Self::spring_noise(springs, spec.particle_mass, reach, xpbd)
+        let positions = reach.ok_or(spec.fixed_unit());
+        Self::spring_noise(springs, spec.particle_mass, positions, xpbd)
     }
 
-    /// `sum count k 2^-23 r / m` over a particle's springs, given as `(k, count,
-    /// rest length)` of each kind, with `r` as in [`Precision::float32_noise`].
+    /// `sum count k r / m` over a particle's springs, given as `(k, count, rest
+    /// length)` of each kind, with `r` the rounding of a length: `2^-23 reach` for
+    /// float32 positions (`Ok(reach)`), `2^-23 rest + unit / 2` for fixed-point
+    /// ones (`Err(unit)`, see [`frame`]).
     ///
     /// With XPBD at steps of `h` s (`xpbd`), a spring's round-off moves its ends
     /// as a spring of stiffness `k / (1 + 2 k h² / m)` would (XPBD's compliance,
@@ -251,12 +259,12 @@ impl Precision {
     /// one, whose correction takes out the whole round-off in one step. So XPBD's
     /// precision follows its step as well as `k`. (The jelly 8 m up, at h = 1.4 ms
     /// and k = 1e5 N/m: kinetic energy 2.7% from the f64 engine's after 1.4 s on
-    /// float32 positions, 2.3% on double-float ones with float32 arithmetic, the
-    /// same to 5 digits in float64, which this picks.)
+    /// float32 positions, 2.3% on double-float ones (before fixed point) with
+    /// float32 arithmetic, the same to 5 digits in float64, which this picks.)
     pub fn spring_noise(
         springs: impl Iterator<Item = (f64, f64, f64)>,
         mass: f64,
-        reach: Option<f64>,
+        positions: Result<f64, f64>,
         xpbd: Option<f64>,
     ) -> f64 {
         if mass <= 0.0 {
@@ -267,8 +275,12 @@ impl Precision {
             Some(h) => k / (1.0 + 2.0 * k * h * h / mass),
             None => k,
         };
+        let rounding = |rest: f64| match positions {
+            Ok(reach) => ulp * reach.abs(),
+            Err(unit) => ulp * rest.abs() + 0.5 * unit,
+        };
         let noise: f64 = springs
-            .map(|(k, count, rest)| count * stiffness(k.abs()) * ulp * reach.unwrap_or(rest).abs())
+            .map(|(k, count, rest)| count * stiffness(k.abs()) * rounding(rest))
             .sum();
         noise / mass
     }
@@ -311,6 +323,27 @@ impl GridSpec {
             integrator: Integrator::SymplecticEuler,
             present: [true; 3],
             precision: Precision::Single,
+        }
+    }
+
+    /// Radius (m) of the cloth laid flat: half its diagonal.
+    pub fn extent(&self) -> f64 {
+        let (w, h) = (self.width.max(1) - 1, self.height.max(1) - 1);
+        0.5 * self.spacing.abs() * ((w * w + h * h) as f64).sqrt()
+    }
+
+    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`]).
+    pub fn fixed_unit(&self) -> f64 {
+        self.frame_rule().unit()
+    }
+
+    /// How its positions are stored: fixed point with [`Precision::Mixed`].
+    fn frame_rule(&self) -> FrameRule<'_> {
+        FrameRule {
+            fixed: self.precision == Precision::Mixed,
+            extent: self.extent(),
+            ground: self.ground.as_ref(),
+            sphere: self.sphere.as_ref(),
         }
     }
 
@@ -409,6 +442,18 @@ trait Real:
     fn from_bits(bits: Self::Bits) -> Self;
     /// `self * a + b`, fused where the build target has FMA (aarch64 always does).
     fn mul_add(self, a: Self, b: Self) -> Self;
+    /// The integer `n` as a fixed-point coordinate in the float's bits
+    /// ([`frame`]).
+    fn fixed_from(n: i64) -> Self;
+    /// The fixed-point coordinate in the float's bits, as f64.
+    fn fixed_value(self) -> f64;
+    /// The least and the greatest of the fixed-point coordinates `xs` (a plain
+    /// integer reduction, for the compiler to vectorise).
+    fn fixed_range(xs: &[Self]) -> (i64, i64);
+    /// Fixed-point `a - b` (exact, wrapping) as a float.
+    fn fixed_sub(a: Self, b: Self) -> Self;
+    /// Fixed-point `x` moved by `t` units, rounded to the nearest.
+    fn fixed_add(x: Self, t: Self) -> Self;
     /// Runs one band of a step, with the best code this CPU has for this type.
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
     /// Runs one band of a lattice's step, likewise.
@@ -419,7 +464,7 @@ trait Real:
 
 /// `Real` for a float type: its constants and the row functions of each SIMD level.
 macro_rules! real {
-    ($t:ident, bits: $bits:ty, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
+    ($t:ident, bits: $bits:ty, int: $int:ty, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
      lattice: $lattice512:ident, $lattice2:ident, springs: $springs512:ident, $springs2:ident) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
@@ -451,6 +496,29 @@ macro_rules! real {
                 } else {
                     self * a + b
                 }
+            }
+            fn fixed_from(n: i64) -> Self {
+                $t::from_bits(n as $int as $bits)
+            }
+            fn fixed_range(xs: &[Self]) -> (i64, i64) {
+                let (lo, hi) = xs.iter().fold((<$int>::MAX, <$int>::MIN), |(lo, hi), x| {
+                    let n = x.to_bits() as $int;
+                    (lo.min(n), hi.max(n))
+                });
+                (lo as i64, hi as i64)
+            }
+            fn fixed_value(self) -> f64 {
+                self.to_bits() as $int as f64
+            }
+            #[inline(always)]
+            fn fixed_sub(a: Self, b: Self) -> Self {
+                (a.to_bits() as $int).wrapping_sub(b.to_bits() as $int) as $t
+            }
+            #[inline(always)]
+            fn fixed_add(x: Self, t: Self) -> Self {
+                $t::from_bits(
+                    (x.to_bits() as $int).wrapping_add(t.round_ties_even() as $int) as $bits,
+                )
             }
             fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
                 match ctx.simd {
@@ -509,8 +577,8 @@ macro_rules! real {
                         _ => spring_sweep::<_, LO>(Portable::<$t>::default(), out, base, lines),
                     }
                 }
-                // Positions with low parts (`compensated`) or without.
-                if lines.sweep.compensated() {
+                // Positions in fixed point or floats.
+                if lines.sweep.fixed() {
                     at::<true>(simd, out, base, lines)
                 } else {
                     at::<false>(simd, out, base, lines)
@@ -522,10 +590,10 @@ macro_rules! real {
 
 // Float32: the intrinsics of `x86`. Float64: the portable lanes compiled for each
 // level's features.
-real!(f32, bits: u32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
+real!(f32, bits: u32, int: i32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
       lattice: lattice_band_avx512, lattice_band_avx2,
       springs: spring_sweep_avx512, spring_sweep_avx2);
-real!(f64, bits: u64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
+real!(f64, bits: u64, int: i64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
       lattice: lattice_band_avx512_f64, lattice_band_avx2_f64,
       springs: spring_sweep_avx512_f64, spring_sweep_avx2_f64);
 
@@ -599,7 +667,8 @@ struct Params<E> {
     dt: E,
     /// `-c` of the air damping `-c v`.
     neg_air: E,
-    /// Ground height, penalty stiffness and damping (height `f32::MIN`: no ground).
+    /// Ground height (as positions are stored), penalty stiffness per unit of
+    /// depth and damping.
     ground: [E; 3],
     /// 1 for explicit Euler (positions move with the old velocity), else 0.
     explicit: E,
@@ -607,24 +676,41 @@ struct Params<E> {
     verlet_half_dt: E,
     /// Whether the velocity of the last position update `u` is its own array (Verlet).
     verlet: bool,
-    /// Whether positions have low parts ([`Precision::Mixed`]).
-    compensated: bool,
-    /// Sphere centre, radius and squared radius, projected onto inside the fused step.
+    /// Whether positions are fixed point ([`Precision::Mixed`], [`frame`]).
+    fixed: bool,
+    /// Metres per unit of the positions (1 unless fixed point), and units per metre.
+    unit: E,
+    inv_unit: E,
+    /// Whether there is a ground.
+    ground_on: bool,
+    /// Sphere centre (as positions are stored), radius and squared radius (in
+    /// units), projected onto inside the fused step.
     sphere: Option<([E; 3], E, E)>,
 }
 
 impl<E: Real> Params<E> {
+    /// These constants with the step (`dt`, and Verlet's `h/2`) of `old`.
+    fn with_step_of(self, old: &Self) -> Self {
+        Params {
+            dt: old.dt,
+            verlet_half_dt: old.verlet_half_dt,
+            ..self
+        }
+    }
+
     /// Symplectic Euler with no air damping, ground or sphere in the step.
     fn is_plain(&self) -> bool {
         !self.verlet
             && self.explicit == E::ZERO
             && self.neg_air == E::ZERO
-            && self.ground[0] == E::LOWEST
+            && !self.ground_on
             && self.sphere.is_none()
     }
 
-    /// The constants of `spec` (the step `dt` is set by each run).
-    fn of(spec: &GridSpec) -> Self {
+    /// The constants of `spec` with positions in `frame` (the step `dt` is set by
+    /// each run). Lengths are in the frame's units: a spring's `k` per unit, the
+    /// drag's `ρ C_d` per unit².
+    fn of(spec: &GridSpec, frame: &Frame) -> Self {
         let hs = spec.spacing;
         // XPBD's springs are constraints (`constrain`), not forces: the fused pass
         // predicts with every other force.
@@ -649,18 +735,18 @@ impl<E: Real> Params<E> {
             (force(spec.bend), 2.0 * hs),
             (force(spec.shear), hs * std::f64::consts::SQRT_2),
         ];
+        let unit = frame.unit;
         Params {
-            ks: kinds.map(|(kind, _)| E::of(kind.k)),
+            ks: kinds.map(|(kind, _)| E::of(kind.k * unit)),
             kls: kinds.map(|(kind, rest)| E::of(kind.k * rest)),
             bs: kinds.map(|(kind, _)| E::of(kind.b)),
             gravity: spec.gravity.map(E::of),
             wind: spec.wind.map(E::of),
-            drag: E::of(spec.air_density * spec.drag_coefficient / 12.0),
+            drag: E::of(spec.air_density * spec.drag_coefficient / 12.0 * unit * unit),
             dt: E::ZERO,
             neg_air: E::of(-spec.air_damping),
-            ground: spec.ground.map_or([E::LOWEST, E::ZERO, E::ZERO], |g| {
-                [g.height, g.stiffness, g.damping].map(E::of)
-            }),
+            ground: ground_constants(spec.ground.as_ref(), frame),
+            ground_on: spec.ground.is_some(),
             explicit: if spec.integrator == Integrator::ExplicitEuler {
                 E::ONE
             } else {
@@ -668,18 +754,30 @@ impl<E: Real> Params<E> {
             },
             verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
-            compensated: spec.precision == Precision::Mixed,
+            fixed: frame.fixed,
+            unit: E::of(unit),
+            inv_unit: E::of(1.0 / unit),
             // With a stretch limit or XPBD the sphere comes after them, in the
             // constraint pass, and so with friction (the sphere's or the ground's:
             // the pass resolves both, in the f64 engine's order).
             sphere: spec
                 .sphere
                 .filter(|_| spec.stretch_limit.is_none() && !xpbd && !frictional)
-                .map(|s| {
-                    let r = E::of(s.radius);
-                    (s.center.to_array().map(E::of), r, r * r)
-                }),
+                .and_then(|s| frame.sphere(&s)),
         }
+    }
+}
+
+/// A ground's height (as positions are stored), penalty stiffness per unit of
+/// depth and damping in `frame`; with no ground, the lowest height.
+fn ground_constants<E: Real>(ground: Option<&Ground>, frame: &Frame) -> [E; 3] {
+    match ground {
+        Some(g) => [
+            frame.ground_height(g.height),
+            E::of(g.stiffness * frame.unit),
+            E::of(g.damping),
+        ],
+        None => [E::LOWEST, E::ZERO, E::ZERO],
     }
 }
 
@@ -715,14 +813,11 @@ fn make_bands<E: Real>(grid: &Grid, n: usize) -> Vec<Band<E>> {
         .collect()
 }
 
-/// Cloth state in padded f32 structure-of-arrays form. A position is the unevaluated
-/// sum `x + xl` of two floats (a "double-float"), so that `x += h v` loses nothing
-/// to round-off (see the module doc, "Precision").
+/// Cloth state in padded structure-of-arrays form: positions as the kernel's
+/// [`Frame`] stores them (floats in metres, or fixed point), velocities in m/s.
 #[derive(Clone, Debug)]
 struct State<E> {
     x: [Buf<E>; 3],
-    /// Low parts of the positions.
-    xl: [Buf<E>; 3],
     v: [Buf<E>; 3],
     /// Position Verlet's velocity of the last position update, `(x - x_prev) / h`
     /// (empty for the Euler methods, whose positions move with `v`).
@@ -730,24 +825,52 @@ struct State<E> {
 }
 
 impl<E: Real> State<E> {
+    /// [`FrameRule::refit`] of these positions (real particles at the indices
+    /// `rows`), stored in `frame`.
+    fn refit(
+        &self,
+        frame: &Frame,
+        rule: FrameRule,
+        rows: impl Iterator<Item = std::ops::Range<usize>>,
+        time: f64,
+    ) -> Option<Frame> {
+        let state = (
+            self.x.each_ref().map(Buf::as_slice),
+            self.v.each_ref().map(Buf::as_slice),
+        );
+        rule.refit(frame, state, rows, time)
+    }
+
+    /// Re-encodes the positions (real particles at `rows`) from `frame` to `new`,
+    /// which becomes the frame.
+    fn reframe(
+        &mut self,
+        frame: &mut Frame,
+        new: Frame,
+        rows: impl Iterator<Item = std::ops::Range<usize>> + Clone,
+    ) {
+        frame::reencode(frame, &new, self.x.each_mut().map(Buf::as_mut_slice), rows);
+        *frame = new;
+    }
+
     /// Every array, whole (ghost rows included), as [`Out`] rows from row 0.
     fn rows(&mut self) -> Out<'_, E> {
-        let State { x, xl, v, u } = self;
-        let [[x0, x1, x2], [l0, l1, l2], [v0, v1, v2], [u0, u1, u2]] =
-            [x, xl, v, u].map(|a| a.each_mut().map(Buf::as_mut_slice));
-        Out([x0, x1, x2, l0, l1, l2, v0, v1, v2, u0, u1, u2])
+        let State { x, v, u } = self;
+        let [[x0, x1, x2], [v0, v1, v2], [u0, u1, u2]] =
+            [x, v, u].map(|a| a.each_mut().map(Buf::as_mut_slice));
+        Out([x0, x1, x2, v0, v1, v2, u0, u1, u2])
     }
 }
 
-/// Output rows of a band (or of several consecutive bands): `x`, `y`, `z`, their
-/// low parts, `vx`, `vy`, `vz`, and (Verlet only, else empty) `ux`, `uy`, `uz`, each
-/// starting at the band's first row.
-struct Out<'a, E>([&'a mut [E]; 12]);
+/// Output rows of a band (or of several consecutive bands): `x`, `y`, `z`, `vx`,
+/// `vy`, `vz`, and (Verlet only, else empty) `ux`, `uy`, `uz`, each starting at the
+/// band's first row.
+struct Out<'a, E>([&'a mut [E]; 9]);
 
 impl<'a, E> Out<'a, E> {
     fn split_at(self, at: usize) -> (Out<'a, E>, Out<'a, E>) {
-        let mut lo: [&'a mut [E]; 12] = Default::default();
-        let mut hi: [&'a mut [E]; 12] = Default::default();
+        let mut lo: [&'a mut [E]; 9] = Default::default();
+        let mut hi: [&'a mut [E]; 9] = Default::default();
         for (i, a) in self.0.into_iter().enumerate() {
             let at = at.min(a.len());
             (lo[i], hi[i]) = a.split_at_mut(at);
@@ -760,6 +883,8 @@ impl<'a, E> Out<'a, E> {
 struct Kernel<E: Real> {
     spec: GridSpec,
     grid: Grid,
+    /// How the position arrays map to metres.
+    frame: Frame,
     params: Params<E>,
     cur: State<E>,
     next: State<E>,
@@ -925,24 +1050,23 @@ impl<E: Real> Kernel<E> {
         let verlet = spec.integrator == Integrator::Verlet;
         let mut cur = State {
             x: std::array::from_fn(|_| Buf::zeros(grid.len())),
-            xl: std::array::from_fn(|_| Buf::zeros(grid.len())),
             v: std::array::from_fn(|_| Buf::zeros(grid.len())),
             u: std::array::from_fn(|_| Buf::zeros(if verlet { grid.len() } else { 0 })),
         };
-        for p in 0..grid.w * grid.h {
+        let start = |p: usize| {
             let (r, c) = (p / grid.w, p % grid.w);
-            let i = grid.index(p);
-            let start = [
+            DVec3::new(
                 spec.origin[0] + c as f64 * spec.spacing,
                 spec.origin[1] - r as f64 * spec.spacing,
                 spec.origin[2],
-            ];
-            for (a, q) in start.into_iter().enumerate() {
-                let hi = E::of(q);
-                cur.x[a].as_mut_slice()[i] = hi;
-                if spec.precision == Precision::Mixed {
-                    cur.xl[a].as_mut_slice()[i] = E::of(q - hi.f64());
-                }
+            )
+        };
+        let corners = [start(0), start(grid.w * grid.h - 1)];
+        let frame = (spec.frame_rule().frame(frame::bounds(&corners), 0.0)).unwrap_or(Frame::FLOAT);
+        for p in 0..grid.w * grid.h {
+            let i = grid.index(p);
+            for (a, q) in start(p).to_array().into_iter().enumerate() {
+                cur.x[a].as_mut_slice()[i] = frame.encode(q, a);
             }
         }
         let mut inv_mass = Buf::zeros(grid.len());
@@ -965,9 +1089,10 @@ impl<E: Real> Kernel<E> {
             col_mask.as_mut_slice()[grid.stride + c] =
                 if c + 2 < grid.w { E::ONE } else { E::ZERO };
         }
-        let params = Params::of(&spec);
+        let params = Params::of(&spec, &frame);
         let drag_on = params.drag != E::ZERO;
         Kernel {
+            frame,
             params,
             next: cur.clone(),
             cur,
@@ -999,9 +1124,7 @@ impl<E: Real> Kernel<E> {
         if !same_shape || spec.integrator != self.spec.integrator {
             return false;
         }
-        let dt = (self.params.dt, self.params.verlet_half_dt);
-        self.params = Params::of(&spec);
-        (self.params.dt, self.params.verlet_half_dt) = dt;
+        self.params = Params::of(&spec, &self.frame).with_step_of(&self.params);
         self.drag_on = self.params.drag != E::ZERO;
         let inv_m = if spec.particle_mass > 0.0 {
             E::of(1.0 / spec.particle_mass)
@@ -1119,6 +1242,9 @@ impl<E: Real> Kernel<E> {
             && !self.has_pooled_constraints();
         let run = |duo: Option<&Duo>| {
             for i in 0..n {
+                if i % frame::CHECK_STEPS == 0 {
+                    self.keep_in_frame(frame::CHECK_STEPS.min(n - i) as f64 * dt);
+                }
                 if let Some((t0, wind)) = wind {
                     self.set_wind(wind.at(t0 + i as f64 * dt));
                 }
@@ -1141,7 +1267,6 @@ impl<E: Real> Kernel<E> {
             grid: self.grid,
             p: self.params,
             x: self.cur.x.each_ref().map(Buf::as_slice),
-            xl: self.cur.xl.each_ref().map(Buf::as_slice),
             v: self.cur.v.each_ref().map(Buf::as_slice),
             u: self.cur.u.each_ref().map(Buf::as_slice),
             inv_mass: self.inv_mass.as_slice(),
@@ -1168,10 +1293,10 @@ impl<E: Real> Kernel<E> {
                 &mut a[..len]
             })
         }
-        let State { x, xl, v, u } = &mut self.next;
-        let ([x0, x1, x2], [l0, l1, l2]) = (rows(x, real), rows(xl, real));
-        let ([v0, v1, v2], [u0, u1, u2]) = (rows(v, real), rows(u, real));
-        let out = Out([x0, x1, x2, l0, l1, l2, v0, v1, v2, u0, u1, u2]);
+        let State { x, v, u } = &mut self.next;
+        let ([x0, x1, x2], [v0, v1, v2], [u0, u1, u2]) =
+            (rows(x, real), rows(v, real), rows(u, real));
+        let out = Out([x0, x1, x2, v0, v1, v2, u0, u1, u2]);
         if let Some(duo) = duo {
             run_two_bands(&ctx, &mut self.par_bands, out, duo);
         } else if parallel && self.par_bands.len() > 1 {
@@ -1282,26 +1407,21 @@ impl<E: Real> Kernel<E> {
     /// a fixed order, so the breaks do not depend on the threads.
     fn tear_pass(&mut self, tau: f64, parallel: bool, duo: Option<&Duo>) {
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let compensated = self.params.compensated;
-        // A row whose high parts alone show every spring shorter than the scan
-        // bound less this needs no look at its low parts.
-        let slack = self.high_parts_slack();
-        // Per direction: first column, columns, rows, rest length, scan bounds
-        // (with both parts; with the high parts alone).
+        let fixed = self.frame.fixed;
+        // Per direction: first column, columns, rows, rest length, scan bound (in
+        // the positions' units).
         let lines = self.stencil().map(|((dr, dc), rest, present, _)| {
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
-            let longest = (1.0 + tau) * rest;
+            let longest = self.frame.units((1.0 + tau) * rest);
             // f32 lengths are good to about 1e-6 of themselves: the scan's margin.
             let scan2 = E::of(longest * longest * (1.0 - 1e-4));
-            let near = (longest - slack).max(0.0);
-            let near2 = E::of(near * near * (1.0 - 1e-4));
             let rows = if present && len > 0 {
                 h.saturating_sub(dr)
             } else {
                 0
             };
-            (c0, len, rows, rest, (scan2, near2))
+            (c0, len, rows, rest, scan2)
         });
         let mut flags = std::mem::take(&mut self.tear_rows);
         flags.clear();
@@ -1312,7 +1432,7 @@ impl<E: Real> Kernel<E> {
             // read stay in cache.
             let scan = |k: usize, flag: &mut bool| {
                 let (d, r) = (k % 6, k / 6);
-                let (c0, len, rows, _, (scan2, near2)) = lines[d];
+                let (c0, len, rows, _, scan2) = lines[d];
                 if r >= rows {
                     return;
                 }
@@ -1320,10 +1440,7 @@ impl<E: Real> Kernel<E> {
                 let (a, b) = (r * st + c0, ((r + dr) * st + c0).wrapping_add_signed(dc));
                 let alive = torn.map(|t| &t.springs[d].as_slice()[a..a + len]);
                 let ends = (a, b, len);
-                // The high parts first; with double-float positions, both parts
-                // only where the high parts come near the bound.
-                *flag = row_may_tear_dispatch(simd, cur, false, ends, alive, near2)
-                    && (!compensated || row_may_tear_dispatch(simd, cur, true, ends, alive, scan2));
+                *flag = row_may_tear_dispatch(simd, cur, fixed, ends, alive, scan2);
             };
             let large = w * h >= PARALLEL_MIN_PARTICLES;
             let scan_all = |from: usize, flags: &mut [bool]| {
@@ -1406,11 +1523,11 @@ impl<E: Real> Kernel<E> {
         let parallel = parallel && n >= super::self_collision::PARALLEL_MIN_PARTICLES;
         let mut x = std::mem::take(&mut self.self_collision_scratch);
         x.resize(n, DVec3::ZERO);
-        let (hi, lo) = (&self.cur.x, &self.cur.xl);
+        let (positions, frame) = (&self.cur.x, &self.frame);
         // Blocks of 8 rows, each row's arrays read as slices.
         let copy = |(k, out): (usize, &mut [DVec3])| {
             for (r, out) in out.chunks_exact_mut(width).enumerate() {
-                row_to_f64(out, hi, lo, (8 * k + r) * st);
+                row_to_f64(out, frame, positions, (8 * k + r) * st);
             }
         };
         if parallel {
@@ -1439,13 +1556,10 @@ impl<E: Real> Kernel<E> {
         };
         // Each particle's position at the start of the step (the other state
         // buffer, after the swap) and inverse mass.
-        let (start, start_lo, inv_mass) = (&self.next.x, &self.next.xl, &self.inv_mass);
+        let (start, inv_mass) = (self.next.x.each_ref().map(Buf::as_slice), &self.inv_mass);
         let particle = |i: usize| {
             let g = (i / width) * st + i % width;
-            let start = DVec3::from_array(std::array::from_fn(|a| {
-                start[a].as_slice()[g].f64() + start_lo[a].as_slice()[g].f64()
-            }));
-            (start, inv_mass.as_slice()[g].f64())
+            (frame.decode3(&start, g), inv_mass.as_slice()[g].f64())
         };
         let (friction, pass) = (self.spec.friction, &mut self.self_collision);
         pass.apply(&mut x, particle, h_c, friction, joined, parallel);
@@ -1479,7 +1593,36 @@ impl<E: Real> Kernel<E> {
 
     fn extremes(&self, center: DVec3) -> (f64, f64) {
         let x = self.cur.x.each_ref().map(Buf::as_slice);
-        runaway_scan(x, self.cur.v.each_ref().map(Buf::as_slice), center)
+        runaway_scan(
+            &self.frame,
+            x,
+            self.cur.v.each_ref().map(Buf::as_slice),
+            center,
+        )
+    }
+
+    /// The real particles' array indices, row by row.
+    fn real_rows(&self) -> impl Iterator<Item = std::ops::Range<usize>> + Clone + use<E> {
+        let Grid { w, h, stride, .. } = self.grid;
+        (0..h).map(move |r| r * stride..r * stride + w)
+    }
+
+    /// Keeps fixed-point positions in range for `time` s more ([`frame`]): when
+    /// the particles, moved at their top speed for that long, would leave the
+    /// frame's range (or the spec asks for another unit), re-encodes them in a
+    /// frame that fits them.
+    fn keep_in_frame(&mut self, time: f64) {
+        let rule = self.spec.frame_rule();
+        if let Some(frame) = self.cur.refit(&self.frame, rule, self.real_rows(), time) {
+            self.adopt(frame);
+        }
+    }
+
+    /// Re-encodes the positions in `frame`, and the constants with them.
+    fn adopt(&mut self, frame: Frame) {
+        let rows = self.real_rows();
+        self.cur.reframe(&mut self.frame, frame, rows);
+        self.params = Params::of(&self.spec, &frame).with_step_of(&self.params);
     }
 
     fn read_into(&self, arrays: &[Buf<E>; 3], out: &mut [DVec3]) {
@@ -1490,20 +1633,26 @@ impl<E: Real> Kernel<E> {
         }
     }
 
-    /// Position of array index `i` in f64 (high plus low part).
+    /// Position (m) of array index `i`.
     fn position_at(&self, i: usize) -> DVec3 {
-        let (x, xl) = (&self.cur.x, &self.cur.xl);
-        DVec3::from_array(std::array::from_fn(|a| {
-            x[a].as_slice()[i].f64() + xl[a].as_slice()[i].f64()
-        }))
+        self.frame
+            .decode3(&self.cur.x.each_ref().map(Buf::as_slice), i)
     }
 
-    /// Sets the position of array index `i` from f64, split into high and low parts.
+    /// Sets the position (m) of array index `i`, refitting the frame first if it
+    /// does not hold it.
     fn set_position_at(&mut self, i: usize, q: DVec3) {
+        if self.frame.fixed && !self.frame.holds((q.into(), q.into()), 0.0) {
+            let x = self.cur.x.each_ref().map(Buf::as_slice);
+            let v = self.cur.v.each_ref().map(Buf::as_slice);
+            let ((lo, hi), _) = frame::span(&self.frame, x, v, self.real_rows());
+            let bounds = (q.min(lo.into()).into(), q.max(hi.into()).into());
+            if let Some(frame) = self.spec.frame_rule().frame(bounds, 0.0) {
+                self.adopt(frame);
+            }
+        }
         for a in 0..3 {
-            let (hi, lo) = position_parts(q[a], self.params.compensated);
-            self.cur.x[a].as_mut_slice()[i] = hi;
-            self.cur.xl[a].as_mut_slice()[i] = lo;
+            self.cur.x[a].as_mut_slice()[i] = self.frame.encode(q[a], a);
         }
     }
 
@@ -1549,10 +1698,12 @@ impl<E: Real> Kernel<E> {
 
     /// The padded position arrays `[x, y, z]` in m (see [`GridCloth::row_stride`]).
     pub fn raw_positions(&self) -> [Vec<f64>; 3] {
-        self.cur
-            .x
-            .each_ref()
-            .map(|b| b.as_slice().iter().map(|x| x.f64()).collect())
+        let frame = &self.frame;
+        let mut axis = 0..3;
+        self.cur.x.each_ref().map(|b| {
+            let a = axis.next().unwrap_or_default();
+            b.as_slice().iter().map(|&x| frame.decode(x, a)).collect()
+        })
     }
 
     /// The padded velocity arrays `[vx, vy, vz]` in m/s.
@@ -1581,6 +1732,14 @@ impl<E: Real> Kernel<E> {
     /// Overwrite positions and velocities of particles `0..len` from f64 vectors
     /// (extra entries are ignored, missing ones left unchanged).
     pub fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
+        if self.frame.fixed && positions.len() >= self.len() {
+            // A frame around the new positions.
+            let bounds = frame::bounds(&positions[..self.len()]);
+            let frame = self.spec.frame_rule().frame(bounds, 0.0);
+            if let Some(frame) = frame.filter(|f| *f != self.frame) {
+                self.adopt(frame);
+            }
+        }
         for (p, &q) in positions.iter().enumerate().take(self.len()) {
             self.set_position_at(self.grid.index(p), q);
         }
@@ -1661,6 +1820,7 @@ macro_rules! forward {
 
 // After `forward!`, which the lattice kernel uses too.
 mod contact;
+pub mod frame;
 pub mod lattice;
 mod row;
 mod simd;
@@ -1670,11 +1830,11 @@ mod x86;
 
 use contact::{ContactRows, Reach};
 use row::{
-    Ctx, Particle, StepLanes, add_double, band_rows, integrate, project_out_of_sphere,
-    row_portable, row_variant, run_bands, run_two_bands, spring,
+    Ctx, Particle, StepLanes, band_rows, integrate, project_out_of_sphere, row_portable,
+    row_variant, run_bands, run_two_bands, spring,
 };
 use simd::{Portable, Simd};
-use spring_passes::{SpringRule, SweepLines, largest_magnitude_bits, spring_sweep};
+use spring_passes::{SpringRule, SweepLines, spring_sweep};
 
 impl GridCloth {
     /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the
@@ -1805,7 +1965,7 @@ impl GridCloth {
         fn row_stride(&self) -> usize
     );
     forward!(
-        /// The padded arrays of the positions' high parts `[x, y, z]` in m, copied
+        /// The padded position arrays `[x, y, z]` in m, copied
         /// to f64 (exactly) for inspection (see [`GridCloth::row_stride`]).
         fn raw_positions(&self) -> [Vec<f64>; 3]
     );
@@ -1879,18 +2039,43 @@ fn any_faster<E: Real>([vx, vy, vz]: [&[E]; 3], limit2: E) -> bool {
 /// NaN's above infinity's (a NaN with the sign bit set above all): integer maxima,
 /// which the compiler vectorises, give the largest squares and whether any is NaN
 /// at once.
-fn runaway_scan<E: Real>(
+fn runaway_scan<E: Real>(frame: &Frame, x: [&[E]; 3], v: [&[E]; 3], center: DVec3) -> (f64, f64) {
+    if frame.fixed {
+        extremes_in::<E, true>(frame, x, v, center)
+    } else {
+        extremes_in::<E, false>(frame, x, v, center)
+    }
+}
+
+/// [`runaway_scan`] with positions in fixed point (`FIXED`) or floats.
+#[inline(always)]
+fn extremes_in<E: Real, const FIXED: bool>(
+    frame: &Frame,
     [x, y, z]: [&[E]; 3],
     [vx, vy, vz]: [&[E]; 3],
     center: DVec3,
 ) -> (f64, f64) {
-    let [cx, cy, cz] = center.to_array().map(E::of);
+    // A coordinate less the centre: `n unit + (frame centre - center)` in fixed
+    // point, `x - center` for floats.
+    let offset: [E; 3] = std::array::from_fn(|a| E::of(frame.centre[a] - center[a]));
+    let unit = E::of(frame.unit);
+    let from_center = |p: E, a: usize| {
+        if FIXED {
+            E::fixed_sub(p, E::ZERO) * unit + offset[a]
+        } else {
+            p + offset[a]
+        }
+    };
     let n = x.len();
     let (y, z, vx, vy, vz) = (&y[..n], &z[..n], &vx[..n], &vy[..n], &vz[..n]);
     let (mut speed2, mut dist2) = (E::ZERO.bits(), E::ZERO.bits());
     for i in 0..n {
         let v2 = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-        let (dx, dy, dz) = (x[i] - cx, y[i] - cy, z[i] - cz);
+        let (dx, dy, dz) = (
+            from_center(x[i], 0),
+            from_center(y[i], 1),
+            from_center(z[i], 2),
+        );
         let d2 = dx * dx + dy * dy + dz * dz;
         speed2 = speed2.max(v2.bits());
         dist2 = dist2.max(d2.bits());
@@ -1904,15 +2089,15 @@ fn runaway_scan<E: Real>(
 
 /// [`runaway_scan`] of the mesh engine's float64 arrays.
 pub(crate) fn runaway_scan_f64(x: [&[f64]; 3], v: [&[f64]; 3], center: DVec3) -> (f64, f64) {
-    runaway_scan(x, v, center)
+    runaway_scan(&Frame::FLOAT, x, v, center)
 }
 
 /// Whether any spring from `a .. a + len` to `b .. b + len` (array indices in
 /// `state`) that `alive` keeps (all without a mask) is longer than `sqrt(scan2)`,
-/// in the state's precision, with (`LO`) or without the positions' low parts.
-/// Written as a plain loop over slices for the compiler to vectorise.
+/// in the state's precision and units, with positions in fixed point (`FIXED`) or
+/// floats. Written as a plain loop over slices for the compiler to vectorise.
 #[inline(always)]
-fn row_may_tear<E: Real, const LO: bool>(
+fn row_may_tear<E: Real, const FIXED: bool>(
     state: &State<E>,
     (a, b, len): (usize, usize, usize),
     alive: Option<&[E]>,
@@ -1924,28 +2109,22 @@ fn row_may_tear<E: Real, const LO: bool>(
     }
     let ends = |p| ends(p, a, b, len);
     let [(xa, xb), (ya, yb), (za, zb)] = state.x.each_ref().map(ends);
-    // Without low parts these are the high parts again, never read.
-    let [(la, lb), (ma, mb), (na, nb)] = if LO {
-        state.xl.each_ref().map(ends)
-    } else {
-        [(xa, xb), (ya, yb), (za, zb)]
-    };
     // Every slice `len` long, in the compiler's sight, so the loops below carry no
     // bounds checks and vectorise; the verdict is an integer OR. (A macro, not a
     // closure: a closure is not inlined into the AVX2 entry point.)
     let [xa, xb, ya, yb, za, zb] = [xa, xb, ya, yb, za, zb].map(|s| &s[..len]);
-    let [la, lb, ma, mb, na, nb] = [la, lb, ma, mb, na, nb].map(|s| &s[..len]);
     macro_rules! l2 {
         ($j:expr) => {{
             let j = $j;
-            let (mut dx, mut dy, mut dz) = (xa[j] - xb[j], ya[j] - yb[j], za[j] - zb[j]);
-            if LO {
-                (dx, dy, dz) = (
-                    dx + (la[j] - lb[j]),
-                    dy + (ma[j] - mb[j]),
-                    dz + (na[j] - nb[j]),
-                );
-            }
+            let (dx, dy, dz) = if FIXED {
+                (
+                    E::fixed_sub(xa[j], xb[j]),
+                    E::fixed_sub(ya[j], yb[j]),
+                    E::fixed_sub(za[j], zb[j]),
+                )
+            } else {
+                (xa[j] - xb[j], ya[j] - yb[j], za[j] - zb[j])
+            };
             dx * dx + dy * dy + dz * dz
         }};
     }
@@ -1965,29 +2144,16 @@ fn row_may_tear<E: Real, const LO: bool>(
     over != 0
 }
 
-/// A coordinate (m) as the kernel stores it: its high part, and the rest as a low
-/// part when the positions are double-float (`compensated`), else zero.
-fn position_parts<E: Real>(q: f64, compensated: bool) -> (E, E) {
-    let hi = E::of(q);
-    let lo = if compensated {
-        E::of(q - hi.f64())
-    } else {
-        E::ZERO
-    };
-    (hi, lo)
-}
-
-/// One row of positions as f64 (high plus low part), from array index `start`
-/// on, into `out` (as many particles as it holds).
-fn row_to_f64<E: Real>(out: &mut [DVec3], hi: &[Buf<E>; 3], lo: &[Buf<E>; 3], start: usize) {
+/// One row of positions (m) in `frame` from array index `start` on, into `out`
+/// (as many particles as it holds).
+fn row_to_f64<E: Real>(out: &mut [DVec3], frame: &Frame, x: &[Buf<E>; 3], start: usize) {
     let at = start..start + out.len();
-    let [x, y, z] = hi.each_ref().map(|a| &a.as_slice()[at.clone()]);
-    let [xl, yl, zl] = lo.each_ref().map(|a| &a.as_slice()[at.clone()]);
+    let [x, y, z] = x.each_ref().map(|a| &a.as_slice()[at.clone()]);
     for (c, p) in out.iter_mut().enumerate() {
         *p = DVec3::new(
-            x[c].f64() + xl[c].f64(),
-            y[c].f64() + yl[c].f64(),
-            z[c].f64() + zl[c].f64(),
+            frame.decode(x[c], 0),
+            frame.decode(y[c], 1),
+            frame.decode(z[c], 2),
         );
     }
 }
@@ -1996,7 +2162,7 @@ fn row_to_f64<E: Real>(out: &mut [DVec3], hi: &[Buf<E>; 3], lo: &[Buf<E>; 3], st
 fn row_may_tear_dispatch<E: Real>(
     simd: SimdLevel,
     state: &State<E>,
-    compensated: bool,
+    fixed: bool,
     ends: (usize, usize, usize),
     alive: Option<&[E]>,
     scan2: E,
@@ -2019,11 +2185,7 @@ fn row_may_tear_dispatch<E: Real>(
             }
         };
     }
-    if compensated {
-        scan!(true)
-    } else {
-        scan!(false)
-    }
+    if fixed { scan!(true) } else { scan!(false) }
 }
 
 /// One stencil direction: (row, column) offset, rest length, whether the kind

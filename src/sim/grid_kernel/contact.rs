@@ -7,7 +7,7 @@ use super::super::duo::Duo;
 use super::super::lanes::{F64s, V3};
 #[cfg(target_arch = "x86_64")]
 use super::x86;
-use super::{Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
+use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
 
 impl<E: Real> Kernel<E> {
     /// The colliders' contact of every free particle that touches one, as the f64
@@ -29,9 +29,9 @@ impl<E: Real> Kernel<E> {
             width: w,
             stride: st,
             inv_mass: self.inv_mass.as_slice(),
-            reach: Reach::of(contact),
+            reach: Reach::of(contact, &self.frame),
             contact,
-            compensated: self.params.compensated,
+            frame: self.frame,
             verlet: self.params.verlet,
         };
         let out = self.cur.rows();
@@ -59,7 +59,8 @@ pub(super) struct ContactRows<'a, E> {
     pub(super) inv_mass: &'a [E],
     pub(super) reach: Reach<E>,
     pub(super) contact: &'a constraints::Contact,
-    pub(super) compensated: bool,
+    /// How the positions are stored.
+    pub(super) frame: Frame,
     pub(super) verlet: bool,
 }
 
@@ -98,16 +99,32 @@ impl<E: Real> ContactRows<'_, E> {
         first: usize,
         rows: std::ops::Range<usize>,
     ) {
+        if self.frame.fixed {
+            self.resolve_rows_in::<true>(out, first, rows)
+        } else {
+            self.resolve_rows_in::<false>(out, first, rows)
+        }
+    }
+
+    /// [`ContactRows::resolve_rows`] with positions in fixed point (`FIXED`) or
+    /// floats.
+    #[inline(always)]
+    fn resolve_rows_in<const FIXED: bool>(
+        &self,
+        out: &mut Out<E>,
+        first: usize,
+        rows: std::ops::Range<usize>,
+    ) {
         const N: usize = CONTACT_LANES;
-        let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
+        let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
         let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
-        let lows = [xl, yl, zl];
+        let frame = &self.frame;
         for r in rows {
             let start = r * self.stride;
             let row = (r - first) * self.stride..(r - first) * self.stride + self.width;
             let coordinates = [&pos[0][row.clone()], &pos[1][row.clone()], &pos[2][row]];
             let masses = &self.inv_mass[start..start + self.width];
-            if !row_may_touch(coordinates, masses, &self.reach) {
+            if !row_may_touch::<E, FIXED>(coordinates, masses, &self.reach) {
                 continue;
             }
             for c in (0..self.width).step_by(N) {
@@ -120,8 +137,8 @@ impl<E: Real> ContactRows<'_, E> {
                 for l in 0..N {
                     let real = (c + l < self.width) & (w[l] > E::ZERO);
                     let at = [px[l], py[l], pz[l]];
-                    sphere[l] = real & self.reach.near_sphere(at);
-                    touch[l] = sphere[l] | (real & self.reach.below_ground(at));
+                    sphere[l] = real & self.reach.near_sphere::<FIXED>(at);
+                    touch[l] = sphere[l] | (real & self.reach.below_ground::<FIXED>(at));
                 }
                 if !touch.contains(&true) {
                     continue;
@@ -136,7 +153,12 @@ impl<E: Real> ContactRows<'_, E> {
                     z: lanes(vel[2]),
                 };
                 let mass = F64s::<N>(std::array::from_fn(|l| w[l].f64()));
-                let height = || lanes(pos[1]) + lanes(lows[1]);
+                // Coordinate `a` of the lanes in metres.
+                let coordinate = |a: usize| {
+                    let p = &pos[a][j..j + N];
+                    F64s::<N>(std::array::from_fn(|l| frame.decode(p[l], a)))
+                };
+                let height = || coordinate(1);
                 let v_new = if !sphere.contains(&true) {
                     // None near the sphere: only the ground's friction, which
                     // leaves the positions as they are (`resolve_lanes` gives the
@@ -144,9 +166,9 @@ impl<E: Real> ContactRows<'_, E> {
                     self.contact.ground_friction_lanes(height(), v, mass)
                 } else {
                     let at = V3 {
-                        x: lanes(pos[0]) + lanes(lows[0]),
+                        x: coordinate(0),
                         y: height(),
-                        z: lanes(pos[2]) + lanes(lows[2]),
+                        z: coordinate(2),
                     };
                     let (to, v_new) = self.contact.resolve_lanes(at, v, mass);
                     // Back into the lanes that moved, all lanes at once: a
@@ -157,26 +179,14 @@ impl<E: Real> ContactRows<'_, E> {
                         touch[l] & ((x != at.x.0[l]) | (y != at.y.0[l]) | (z != at.z.0[l]))
                     });
                     for (a, to) in [to.x, to.y, to.z].into_iter().enumerate() {
-                        let (p, q) = (&mut pos[a][j..j + N], &mut lows[a][j..j + N]);
-                        // Both parts of every lane, with one branch on
-                        // `compensated`, and both arrays read before either is
-                        // written: with a branch in each lane, or `p` and `q` read
-                        // and written in turn (two arrays that may overlap, to the
-                        // compiler), it wrote lane by lane.
-                        let hi: [E; N] = std::array::from_fn(|l| E::of(to.0[l]));
-                        let lo: [E; N] = if self.compensated {
-                            std::array::from_fn(|l| E::of(to.0[l] - hi[l].f64()))
-                        } else {
-                            [E::ZERO; N]
-                        };
-                        let (old_hi, old_lo): ([E; N], [E; N]) =
-                            (std::array::from_fn(|l| p[l]), std::array::from_fn(|l| q[l]));
-                        let hi: [E; N] =
-                            std::array::from_fn(|l| if moved[l] { hi[l] } else { old_hi[l] });
-                        let lo: [E; N] =
-                            std::array::from_fn(|l| if moved[l] { lo[l] } else { old_lo[l] });
-                        p.copy_from_slice(&hi);
-                        q.copy_from_slice(&lo);
+                        let p = &mut pos[a][j..j + N];
+                        // Every lane, read before any is written (a branch in each
+                        // lane wrote lane by lane).
+                        let new: [E; N] = std::array::from_fn(|l| frame.encode(to.0[l], a));
+                        let old: [E; N] = std::array::from_fn(|l| p[l]);
+                        let new: [E; N] =
+                            std::array::from_fn(|l| if moved[l] { new[l] } else { old[l] });
+                        p.copy_from_slice(&new);
                     }
                     v_new
                 };
@@ -207,26 +217,29 @@ impl<E: Real> ContactRows<'_, E> {
     }
 }
 
-/// Where a particle may touch a collider, in the kernel's precision: below the
-/// ground's height, or within the sphere's radius plus a margin (`1e-4` of it plus
-/// 1 µm, far above the rounding of a position's high part) of its centre.
+/// Where a particle may touch a collider, in the kernel's precision and the
+/// positions' frame: at or below the ground's height (as stored), or within the
+/// sphere's radius plus a margin (`1e-4` of it plus 1 µm, far above the rounding of
+/// a float32 coordinate or a fixed-point unit) of its centre.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Reach<E> {
     ground: E,
-    /// The sphere's centre and squared reach (a negative reach: no sphere).
+    /// The sphere's centre (as stored) and squared reach in units² (a negative
+    /// reach: no sphere).
     center: [E; 3],
     reach2: E,
 }
 
 impl<E: Real> Reach<E> {
-    pub(super) fn of(contact: &constraints::Contact) -> Self {
-        let ground = contact.ground.map_or(E::LOWEST, |g| E::of(g.height));
+    pub(super) fn of(contact: &constraints::Contact, frame: &Frame) -> Self {
+        // No ground: below every particle.
+        let ground = frame.ground_height(contact.ground.map_or(f64::NEG_INFINITY, |g| g.height));
         match contact.sphere {
             Some(s) => {
-                let reach = s.radius * (1.0 + 1e-4) + 1e-6;
+                let reach = frame.units(s.radius * (1.0 + 1e-4) + 1e-6);
                 Self {
                     ground,
-                    center: s.center.to_array().map(E::of),
+                    center: std::array::from_fn(|a| frame.encode(s.center[a], a)),
                     reach2: E::of(reach * reach),
                 }
             }
@@ -238,28 +251,32 @@ impl<E: Real> Reach<E> {
         }
     }
 
-    /// Whether a particle at `[x, y, z]` (high parts) with inverse mass `w` is free
-    /// and may touch a collider.
+    /// Whether a particle at `[x, y, z]` (as stored, in fixed point with `FIXED`)
+    /// with inverse mass `w` is free and may touch a collider.
     #[inline(always)]
-    fn may_touch(&self, at: [E; 3], w: E) -> bool {
+    fn may_touch<const FIXED: bool>(&self, at: [E; 3], w: E) -> bool {
         // `&` and `|`, not `&&` and `||`: no branches, for the compiler to vectorise.
-        (w > E::ZERO) & (self.below_ground(at) | self.near_sphere(at))
+        (w > E::ZERO) & (self.below_ground::<FIXED>(at) | self.near_sphere::<FIXED>(at))
     }
 
-    /// Whether a particle at `[x, y, z]` (high parts) may be inside the sphere.
+    /// Whether a particle at `[x, y, z]` may be inside the sphere.
     #[inline(always)]
-    fn near_sphere(&self, [x, y, z]: [E; 3]) -> bool {
+    fn near_sphere<const FIXED: bool>(&self, [x, y, z]: [E; 3]) -> bool {
         let [cx, cy, cz] = self.center;
-        let (dx, dy, dz) = (x - cx, y - cy, z - cz);
+        let d = |p: E, c: E| if FIXED { E::fixed_sub(p, c) } else { p - c };
+        let (dx, dy, dz) = (d(x, cx), d(y, cy), d(z, cz));
         dx * dx + dy * dy + dz * dz < self.reach2
     }
 
-    /// Whether a particle at `[_, y, _]` (high parts) may be below the ground:
-    /// `<=`, since a height just below the ground's may have a high part equal to
-    /// the ground's height in the kernel's precision (and a negative low part).
+    /// Whether a particle at `[_, y, _]` may be below the ground (`<=`: one at the
+    /// ground's height as stored may be just below it).
     #[inline(always)]
-    fn below_ground(&self, [_, y, _]: [E; 3]) -> bool {
-        y <= self.ground
+    fn below_ground<const FIXED: bool>(&self, [_, y, _]: [E; 3]) -> bool {
+        if FIXED {
+            E::fixed_sub(y, self.ground) <= E::ZERO
+        } else {
+            y <= self.ground
+        }
     }
 }
 
@@ -267,11 +284,15 @@ impl<E: Real> Reach<E> {
 /// collider ([`Reach::may_touch`]). A plain loop over slices for the compiler to
 /// vectorise; the verdict is an integer OR.
 #[inline(always)]
-fn row_may_touch<E: Real>([x, y, z]: [&[E]; 3], w: &[E], reach: &Reach<E>) -> bool {
+fn row_may_touch<E: Real, const FIXED: bool>(
+    [x, y, z]: [&[E]; 3],
+    w: &[E],
+    reach: &Reach<E>,
+) -> bool {
     let (y, z, w) = (&y[..x.len()], &z[..x.len()], &w[..x.len()]);
     let mut any = 0u8;
     for j in 0..x.len() {
-        any |= u8::from(reach.may_touch([x[j], y[j], z[j]], w[j]));
+        any |= u8::from(reach.may_touch::<FIXED>([x[j], y[j], z[j]], w[j]));
     }
     any != 0
 }
@@ -282,37 +303,50 @@ mod tests {
     use crate::sim::{Ground, Sphere};
     use glam::DVec3;
 
-    /// A particle below the ground or inside the sphere by less than its high
-    /// part's rounding may touch: its double-float height just under the ground's
-    /// (whose float32 rounds to the same float as the ground's height), and a point
-    /// just inside the sphere.
+    /// A particle below the ground or inside the sphere by less than its
+    /// coordinates' rounding may touch, with float32 or fixed-point positions: its
+    /// height just under the ground's (which rounds to the ground's height as
+    /// stored), and a point just inside the sphere.
     #[test]
     fn particles_just_inside_a_collider_may_touch() {
         let (height, radius) = (-0.9, 0.5);
+        let ground = Ground {
+            height,
+            stiffness: 200.0,
+            damping: 0.05,
+            friction: 0.5,
+        };
+        let sphere = Sphere {
+            center: DVec3::new(0.0, 0.3, 0.0),
+            radius,
+        };
         let contact = constraints::Contact {
-            sphere: Some(Sphere {
-                center: DVec3::new(0.0, 0.3, 0.0),
-                radius,
-            }),
-            ground: Some(Ground {
-                height,
-                stiffness: 200.0,
-                damping: 0.05,
-                friction: 0.5,
-            }),
+            sphere: Some(sphere),
+            ground: Some(ground),
             friction: 0.5,
             dt: 1e-3,
         };
-        let reach = Reach::<f32>::of(&contact);
-        for below in [1e-12, 1e-10, 1e-9, 1e-7] {
-            let y = height - below;
-            let hi = y as f32;
-            assert!(reach.may_touch([3.0, hi, 3.0], 1.0), "{below} m below");
-            assert!(!reach.may_touch([3.0, hi, 3.0], 0.0), "pinned");
+        let unit = super::super::frame::fixed_unit(4.0);
+        let bounds = ([-4.0, -1.0, -4.0], [4.0, 1.0, 4.0]);
+        let fixed = Frame::fitting(unit, bounds, 0.0, Some(&ground), Some(&sphere)).unwrap();
+        for frame in [Frame::FLOAT, fixed] {
+            let reach = Reach::<f32>::of(&contact, &frame);
+            let may_touch = |[x, y, z]: [f64; 3], w: f32| {
+                let at = [frame.encode(x, 0), frame.encode(y, 1), frame.encode(z, 2)];
+                if frame.fixed {
+                    reach.may_touch::<true>(at, w)
+                } else {
+                    reach.may_touch::<false>(at, w)
+                }
+            };
+            for below in [1e-12, 1e-10, 1e-9, 1e-7] {
+                let y = height - below;
+                assert!(may_touch([3.0, y, 3.0], 1.0), "{below} m below");
+                assert!(!may_touch([3.0, y, 3.0], 0.0), "pinned");
+            }
+            assert!(!may_touch([3.0, height + 1e-6, 3.0], 1.0));
+            assert!(may_touch([0.0, 0.3 + radius - 1e-9, 0.0], 1.0));
+            assert!(!may_touch([0.0, 0.3 + radius * 1.01, 0.0], 1.0));
         }
-        assert!(!reach.may_touch([3.0, (height + 1e-6) as f32, 3.0], 1.0));
-        let inside = (0.3 + radius - 1e-9) as f32;
-        assert!(reach.may_touch([0.0, inside, 0.0], 1.0));
-        assert!(!reach.may_touch([0.0, (0.3 + radius * 1.01) as f32, 0.0], 1.0));
     }
 }

@@ -16,7 +16,7 @@
 //!
 //! # Layout
 //! Structure of arrays in the grid kernel's precision levels: float32 arithmetic
-//! on float32 or double-float positions ([`Precision::Single`],
+//! on float32 or fixed-point positions ([`Precision::Single`],
 //! [`Precision::Mixed`]), or float64 throughout ([`Precision::Double`], the same
 //! code at half the lanes), as [`Precision::cheapest`] finds for the lattice's
 //! springs ([`LatticeSpec::float32_noise`]). Particle `(x, y, z)` is at
@@ -58,12 +58,12 @@ use glam::DVec3;
 
 use super::spring_passes::{
     ColourClass, Multipliers, RowColour, SpringRule, Sweep, SweepLines, SweepMultipliers,
-    SweepRules, SweepSprings, high_parts_slack, step_start,
+    SweepRules, SweepSprings, step_start,
 };
 use super::{
-    BLOCK, Buf, ContactRows, Out, Params, Particle, Precision, Reach, Real, Simd, SimdLevel,
-    SpringCoefficients, State, StepLanes, integrate, position_parts, project_out_of_sphere,
-    runaway_scan, spring,
+    BLOCK, Buf, ContactRows, Frame, FrameRule, Out, Params, Particle, Precision, Reach, Real, Simd,
+    SimdLevel, SpringCoefficients, State, StepLanes, frame, ground_constants, integrate,
+    project_out_of_sphere, runaway_scan, spring,
 };
 use crate::sim::constraints::{Contact, xpbd_sweeps_back};
 use crate::sim::duo::{Duo, run_in_pool};
@@ -222,7 +222,34 @@ impl LatticeSpec {
         let springs =
             (self.kinds.iter().zip(springs)).map(|(kind, (count, rest))| (kind.k, count, rest));
         let xpbd = (self.integrator == Integrator::Xpbd).then_some(dt);
-        Precision::spring_noise(springs, self.particle_mass, reach, xpbd)
+        let positions = reach.ok_or(self.fixed_unit());
+        Precision::spring_noise(springs, self.particle_mass, positions, xpbd)
+    }
+
+    /// Radius (m) of the lattice at rest: half its diagonal.
+    pub fn extent(&self) -> f64 {
+        let LatticeShape {
+            width,
+            height,
+            depth,
+        } = self.shape;
+        let cells = [width, height, depth].map(|n| n.max(1) as f64 - 1.0);
+        0.5 * self.spacing.abs() * cells.iter().map(|c| c * c).sum::<f64>().sqrt()
+    }
+
+    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`]).
+    pub fn fixed_unit(&self) -> f64 {
+        self.frame_rule().unit()
+    }
+
+    /// How its positions are stored: fixed point with [`Precision::Mixed`].
+    fn frame_rule(&self) -> FrameRule<'_> {
+        FrameRule {
+            fixed: self.precision == Precision::Mixed,
+            extent: self.extent(),
+            ground: self.ground.as_ref(),
+            sphere: self.sphere.as_ref(),
+        }
     }
 
     /// Whether the kernel models an integrator.
@@ -334,7 +361,6 @@ pub(super) struct Ctx<'a, E> {
     p: Params<E>,
     geometry: Geometry,
     x: [&'a [E]; 3],
-    xl: [&'a [E]; 3],
     v: [&'a [E]; 3],
     u: [&'a [E]; 3],
     real: &'a [E],
@@ -343,7 +369,7 @@ pub(super) struct Ctx<'a, E> {
 }
 
 /// The fast engine for a lattice (see the module doc): float32 arithmetic on
-/// float32 or double-float positions, or float64 throughout, as the spec's
+/// float32 or fixed-point positions, or float64 throughout, as the spec's
 /// precision says.
 #[derive(Debug)]
 pub struct LatticeKernel(Kernels);
@@ -423,7 +449,7 @@ impl LatticeKernel {
         fn set_update_velocities(&mut self, u: &[DVec3])
     );
     forward!(
-        /// Positions in m (high plus low part), in model order.
+        /// Positions in m, in model order.
         fn positions_into(&self, out: &mut [DVec3])
     );
     forward!(
@@ -450,6 +476,8 @@ impl LatticeKernel {
 struct Lattice<E: Real> {
     spec: LatticeSpec,
     geometry: Geometry,
+    /// How the position arrays map to metres.
+    frame: Frame,
     params: Params<E>,
     cur: State<E>,
     next: State<E>,
@@ -480,7 +508,6 @@ impl<E: Real> Lattice<E> {
         let verlet = spec.integrator == Integrator::Verlet;
         let cur = State {
             x: std::array::from_fn(|_| Buf::zeros(len)),
-            xl: std::array::from_fn(|_| Buf::zeros(len)),
             v: std::array::from_fn(|_| Buf::zeros(len)),
             u: std::array::from_fn(|_| Buf::zeros(if verlet { len } else { 0 })),
         };
@@ -488,8 +515,11 @@ impl<E: Real> Lattice<E> {
         for p in 0..spec.shape.len() {
             real.as_mut_slice()[geometry.index(p)] = E::ONE;
         }
+        // Fixed-point positions get their frame with the state (`set_state`).
+        let frame = (spec.frame_rule().frame(([0.0; 3], [0.0; 3]), 0.0)).unwrap_or(Frame::FLOAT);
         let mut kernel = Lattice {
-            params: Self::params(&spec),
+            params: Self::params(&spec, &frame),
+            frame,
             geometry,
             next: cur.clone(),
             cur,
@@ -505,9 +535,10 @@ impl<E: Real> Lattice<E> {
         kernel
     }
 
-    /// The per-step constants of `spec` (the step `dt` is set by each run). The
-    /// kinds are indexed 0 axis, 1 face diagonal, 2 body diagonal.
-    fn params(spec: &LatticeSpec) -> Params<E> {
+    /// The per-step constants of `spec` with positions in `frame` (the step `dt` is
+    /// set by each run), lengths in its units. The kinds are indexed 0 axis, 1
+    /// face diagonal, 2 body diagonal.
+    fn params(spec: &LatticeSpec, frame: &Frame) -> Params<E> {
         let rests = Self::rests(spec);
         // XPBD's springs are constraints (`constrain`), not forces: the step
         // predicts with every other force.
@@ -516,7 +547,7 @@ impl<E: Real> Lattice<E> {
             .kinds
             .map(|kind| if xpbd { Default::default() } else { kind });
         Params {
-            ks: kinds.map(|kind| E::of(kind.k)),
+            ks: kinds.map(|kind| E::of(kind.k * frame.unit)),
             kls: std::array::from_fn(|i| E::of(kinds[i].k * rests[i])),
             bs: kinds.map(|kind| E::of(kind.b)),
             gravity: spec.gravity.map(E::of),
@@ -524,9 +555,8 @@ impl<E: Real> Lattice<E> {
             drag: E::ZERO,
             dt: E::ZERO,
             neg_air: E::of(-spec.air_damping),
-            ground: spec.ground.map_or([E::LOWEST, E::ZERO, E::ZERO], |g| {
-                [g.height, g.stiffness, g.damping].map(E::of)
-            }),
+            ground: ground_constants(spec.ground.as_ref(), frame),
+            ground_on: spec.ground.is_some(),
             explicit: if spec.integrator == Integrator::ExplicitEuler {
                 E::ONE
             } else {
@@ -534,7 +564,9 @@ impl<E: Real> Lattice<E> {
             },
             verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
-            compensated: spec.precision == Precision::Mixed,
+            fixed: frame.fixed,
+            unit: E::of(frame.unit),
+            inv_unit: E::of(1.0 / frame.unit),
             // With friction the sphere is resolved after the step, with the
             // ground's friction, in the f64 engine's order (`resolve_contact`),
             // and so with XPBD or a stretch limit, after their passes.
@@ -542,10 +574,7 @@ impl<E: Real> Lattice<E> {
                 .sphere
                 .filter(|_| !Self::contact(spec, 0.0).has_friction())
                 .filter(|_| !xpbd && spec.stretch_limit.is_none())
-                .map(|s| {
-                    let r = E::of(s.radius);
-                    (s.center.to_array().map(E::of), r, r * r)
-                }),
+                .and_then(|s| frame.sphere(&s)),
         }
     }
 
@@ -588,9 +617,7 @@ impl<E: Real> Lattice<E> {
         if !same {
             return false;
         }
-        let dt = (self.params.dt, self.params.verlet_half_dt);
-        self.params = Self::params(&spec);
-        (self.params.dt, self.params.verlet_half_dt) = dt;
+        self.params = Self::params(&spec, &self.frame).with_step_of(&self.params);
         self.spec = spec;
         self.reset_masses();
         true
@@ -663,7 +690,14 @@ impl<E: Real> Lattice<E> {
 
     /// Sets positions (m) and velocities (m/s) of the model's particles.
     fn set_state(&mut self, positions: &[DVec3], velocities: &[DVec3]) {
-        let compensated = self.params.compensated;
+        if self.frame.fixed && positions.len() >= self.len() {
+            // A frame around the new positions.
+            let bounds = frame::bounds(&positions[..self.len()]);
+            let frame = self.spec.frame_rule().frame(bounds, 0.0);
+            if let Some(frame) = frame.filter(|f| *f != self.frame) {
+                self.adopt(frame);
+            }
+        }
         for (p, (q, v)) in positions
             .iter()
             .zip(velocities)
@@ -672,9 +706,7 @@ impl<E: Real> Lattice<E> {
         {
             let i = self.geometry.index(p);
             for a in 0..3 {
-                let (hi, lo) = position_parts::<E>(q[a], compensated);
-                self.cur.x[a].as_mut_slice()[i] = hi;
-                self.cur.xl[a].as_mut_slice()[i] = lo;
+                self.cur.x[a].as_mut_slice()[i] = self.frame.encode(q[a], a);
                 self.cur.v[a].as_mut_slice()[i] = E::of(v[a]);
             }
         }
@@ -694,13 +726,11 @@ impl<E: Real> Lattice<E> {
         }
     }
 
-    /// Positions in m (high plus low part), in model order.
+    /// Positions in m, in model order.
     fn positions_into(&self, out: &mut [DVec3]) {
+        let x = self.cur.x.each_ref().map(Buf::as_slice);
         for (p, o) in out.iter_mut().enumerate().take(self.len()) {
-            let i = self.geometry.index(p);
-            *o = DVec3::from_array(std::array::from_fn(|a| {
-                self.cur.x[a].as_slice()[i].f64() + self.cur.xl[a].as_slice()[i].f64()
-            }));
+            *o = self.frame.decode3(&x, self.geometry.index(p));
         }
     }
 
@@ -733,7 +763,32 @@ impl<E: Real> Lattice<E> {
         let blocks = self.geometry.blocks;
         let x = self.cur.x.each_ref().map(|a| &a.as_slice()[..blocks]);
         let v = self.cur.v.each_ref().map(|a| &a.as_slice()[..blocks]);
-        runaway_scan(x, v, center)
+        runaway_scan(&self.frame, x, v, center)
+    }
+
+    /// The real particles' array indices, row by row.
+    fn real_rows(&self) -> impl Iterator<Item = Range<usize>> + Clone + use<E> {
+        let (shape, row) = (self.geometry.shape, self.geometry.row);
+        let rows = (shape.height + 1) * shape.depth;
+        (0..rows)
+            .filter(move |r| r % (shape.height + 1) < shape.height)
+            .map(move |r| r * row..r * row + shape.width)
+    }
+
+    /// Keeps fixed-point positions in range for `time` s more, as the grid kernel
+    /// does (`Kernel::keep_in_frame`).
+    fn keep_in_frame(&mut self, time: f64) {
+        let rule = self.spec.frame_rule();
+        if let Some(frame) = self.cur.refit(&self.frame, rule, self.real_rows(), time) {
+            self.adopt(frame);
+        }
+    }
+
+    /// Re-encodes the positions in `frame`, and the constants with them.
+    fn adopt(&mut self, frame: Frame) {
+        let rows = self.real_rows();
+        self.cur.reframe(&mut self.frame, frame, rows);
+        self.params = Self::params(&self.spec, &frame).with_step_of(&self.params);
     }
 
     /// Advances `n` steps of `dt` seconds (inside the thread pool once).
@@ -746,7 +801,10 @@ impl<E: Real> Lattice<E> {
         let parallel = pool.is_some();
         let two_bands = self.bands.len() == 2;
         let run = |duo: Option<&Duo>| {
-            for _ in 0..n {
+            for i in 0..n {
+                if i % frame::CHECK_STEPS == 0 {
+                    self.keep_in_frame(frame::CHECK_STEPS.min(n - i) as f64 * dt);
+                }
                 self.one_step(parallel, duo);
                 self.constrain(dt, duo);
                 self.resolve_contact(dt);
@@ -792,8 +850,7 @@ impl<E: Real> Lattice<E> {
         let rules = SweepRules {
             rule,
             dt,
-            slack: high_parts_slack(self.params.compensated, self.simd, &self.cur.x),
-            compensated: self.params.compensated,
+            frame: self.frame,
         };
         let rests = Self::rests(&self.spec);
         let sweeps: [Option<Sweep<E>>; 2 * FORWARD.len()] = std::array::from_fn(|k| {
@@ -900,7 +957,7 @@ impl<E: Real> Lattice<E> {
         if !contact.is_active() || self.params.sphere.is_some() {
             return;
         }
-        let reach = Reach::of(&contact);
+        let reach = Reach::of(&contact, &self.frame);
         let g = self.geometry;
         let rows = (g.shape.height + 1) * g.shape.depth;
         let width = g.shape.width;
@@ -912,7 +969,7 @@ impl<E: Real> Lattice<E> {
             inv_mass,
             reach,
             contact: &contact,
-            compensated: self.params.compensated,
+            frame: self.frame,
             verlet: self.params.verlet,
         };
         rows_of.resolve(&mut cur.rows(), 0, 0..rows);
@@ -923,7 +980,6 @@ impl<E: Real> Lattice<E> {
             p: self.params,
             geometry: self.geometry,
             x: self.cur.x.each_ref().map(Buf::as_slice),
-            xl: self.cur.xl.each_ref().map(Buf::as_slice),
             v: self.cur.v.each_ref().map(Buf::as_slice),
             u: self.cur.u.each_ref().map(Buf::as_slice),
             real: self.real.as_slice(),
@@ -969,7 +1025,7 @@ fn run_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, parallel
 /// [`band_steps`] for the spec's integrator terms and precision.
 #[inline(always)]
 pub(super) fn band_modes<S: Simd>(s: S, ctx: &Ctx<S::E>, band: &mut Band<S::E>, out: Out<S::E>) {
-    match (ctx.p.is_plain(), ctx.p.compensated) {
+    match (ctx.p.is_plain(), ctx.p.fixed) {
         (true, true) => band_steps::<S, true, true>(s, ctx, band, out),
         (true, false) => band_steps::<S, true, false>(s, ctx, band, out),
         (false, true) => band_steps::<S, false, true>(s, ctx, band, out),
@@ -984,7 +1040,6 @@ struct Lanes<S: Simd> {
     /// `[-k, k L, -b]` of the axis springs, face and body diagonals.
     kinds: [[S::V; 3]; 3],
     x: [*const S::E; 3],
-    xl: [*const S::E; 3],
     v: [*const S::E; 3],
     real: *const S::E,
     inv_mass: *const S::E,
@@ -997,13 +1052,12 @@ struct Lanes<S: Simd> {
 }
 
 impl<S: Simd> Lanes<S> {
-    /// Positions (high and low parts, or zeros without `LO`) and velocities of the
-    /// particles at `i .. i + LANES`.
+    /// Positions (as stored) and velocities of the particles at `i .. i + LANES`.
     ///
     /// # Safety
     /// `i + LANES` must be within the arrays.
     #[inline(always)]
-    unsafe fn particle<const LO: bool>(&self, i: usize) -> Lanes3<S::V> {
+    unsafe fn particle<const FIXED: bool>(&self, i: usize) -> Lanes3<S::V> {
         let s = self.s;
         // SAFETY: caller's contract.
         let ld = |p: [*const S::E; 3]| unsafe {
@@ -1013,8 +1067,7 @@ impl<S: Simd> Lanes<S> {
                 s.load(p[2].add(i)),
             ]
         };
-        let low = if LO { ld(self.xl) } else { [self.step.zero; 3] };
-        (ld(self.x), low, ld(self.v))
+        (ld(self.x), ld(self.v))
     }
 
     /// Forces of the springs of `kind` from the particles `a` (whose `real` is
@@ -1023,7 +1076,7 @@ impl<S: Simd> Lanes<S> {
     /// # Safety
     /// As for [`Lanes::particle`] at `b`.
     #[inline(always)]
-    unsafe fn spring_to<const LO: bool>(
+    unsafe fn spring_to<const FIXED: bool>(
         &self,
         a: Particle<S::V>,
         real_a: S::V,
@@ -1032,14 +1085,14 @@ impl<S: Simd> Lanes<S> {
     ) -> [S::V; 3] {
         let s = self.s;
         // SAFETY: caller's contract.
-        let ((bx, bxl, bv), real_b) = unsafe { (self.particle::<LO>(b), s.load(self.real.add(b))) };
+        let ((bx, bv), real_b) = unsafe { (self.particle::<FIXED>(b), s.load(self.real.add(b))) };
         let mask = s.mul(real_a, real_b);
-        spring::<S, LO>(s, a, (&bx, &bxl, &bv), self.kinds[kind], Some(mask)).0
+        spring::<S, FIXED>(s, a, (&bx, &bv), self.kinds[kind], Some(mask)).0
     }
 }
 
-/// A block's positions, their low parts and velocities.
-type Lanes3<V> = ([V; 3], [V; 3], [V; 3]);
+/// A block's positions and velocities.
+type Lanes3<V> = ([V; 3], [V; 3]);
 
 /// Forces of the previous block carried to the next: the `+1` run's, and the
 /// second and third springs of each run of three.
@@ -1050,7 +1103,7 @@ struct Carry<V> {
 
 /// The band's blocks: those before `start` only for their springs, then its own.
 #[inline(always)]
-fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
+fn band_steps<S: Simd, const PLAIN: bool, const FIXED: bool>(
     s: S,
     ctx: &Ctx<S::E>,
     band: &mut Band<S::E>,
@@ -1062,13 +1115,7 @@ fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
     assert!(S::LANES <= BLOCK && band.start.is_multiple_of(S::LANES));
     assert!(band.end <= g.blocks && band.end.is_multiple_of(S::LANES));
     assert!(band.from.is_multiple_of(S::LANES) && band.from <= band.start);
-    for a in ctx
-        .x
-        .iter()
-        .chain(&ctx.xl)
-        .chain(&ctx.v)
-        .chain([&ctx.real, &ctx.inv_mass])
-    {
+    for a in ctx.x.iter().chain(&ctx.v).chain([&ctx.real, &ctx.inv_mass]) {
         assert!(a.len() >= g.blocks + reach + S::LANES);
     }
     for a in &band.acc {
@@ -1078,7 +1125,7 @@ fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
     if verlet {
         assert!(ctx.u.iter().all(|u| u.len() >= g.blocks));
     }
-    for o in &out.0[..if verlet { 12 } else { 9 }] {
+    for o in &out.0[..if verlet { 9 } else { 6 }] {
         assert!(o.len() >= band.end - band.start);
     }
     for a in &mut band.acc {
@@ -1091,7 +1138,6 @@ fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
         step: StepLanes::new(s, p, ctx.u, ctx.v, &mut out),
         kinds: [kind(0), kind(1), kind(2)],
         x: ctx.x.map(<[S::E]>::as_ptr),
-        xl: ctx.xl.map(<[S::E]>::as_ptr),
         v: ctx.v.map(<[S::E]>::as_ptr),
         real: ctx.real.as_ptr(),
         inv_mass: ctx.inv_mass.as_ptr(),
@@ -1108,12 +1154,12 @@ fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
     let mut at = band.from;
     while at < band.start {
         // SAFETY: `at` is a multiple of LANES below `blocks`; bounds asserted above.
-        unsafe { block::<S, false, PLAIN, LO>(&k, at, &mut carry) };
+        unsafe { block::<S, false, PLAIN, FIXED>(&k, at, &mut carry) };
         at += S::LANES;
     }
     while at < band.end {
         // SAFETY: as above.
-        unsafe { block::<S, true, PLAIN, LO>(&k, at, &mut carry) };
+        unsafe { block::<S, true, PLAIN, FIXED>(&k, at, &mut carry) };
         at += S::LANES;
     }
 }
@@ -1125,20 +1171,20 @@ fn band_steps<S: Simd, const PLAIN: bool, const LO: bool>(
 /// `from <= at < blocks`, a multiple of `LANES`, with the bounds of
 /// [`band_steps`]; with `OWN`, `at >= start`.
 #[inline(always)]
-unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const LO: bool>(
+unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
     k: &Lanes<S>,
     at: usize,
     carry: &mut Carry<S::V>,
 ) {
     let s = k.s;
     // SAFETY: `at` is inside the arrays (caller's contract).
-    let (ax, axl, av) = unsafe { k.particle::<LO>(at) };
-    let a = (&ax, &axl, &av);
+    let (ax, av) = unsafe { k.particle::<FIXED>(at) };
+    let a = (&ax, &av);
     // SAFETY: as above.
     let real_a = unsafe { s.load(k.real.add(at)) };
     // SAFETY: every forward neighbour of `at` is inside the arrays (as above).
     let to =
-        |offset: usize, kind: usize| unsafe { k.spring_to::<LO>(a, real_a, at + offset, kind) };
+        |offset: usize, kind: usize| unsafe { k.spring_to::<FIXED>(a, real_a, at + offset, kind) };
     let along = to(1, 0);
     let mut own = along;
     let shifted: [S::V; 3] = std::array::from_fn(|i| s.shift1(carry.along[i], along[i]));
@@ -1178,12 +1224,12 @@ unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const LO: bool>(
             unsafe {
                 let earlier = s.load(k.acc[i].add(at - k.from));
                 let force = s.sub(s.add(earlier, own[i]), shifted[i]);
-                integrate::<S, PLAIN, LO>(&k.step, at, at - k.start, i, w, a, force);
+                integrate::<S, PLAIN, FIXED>(&k.step, at, at - k.start, i, w, a, force);
             }
         }
         if !PLAIN && k.step.sphere.is_some() {
             // SAFETY: as above, after `integrate` ran for all three components.
-            unsafe { project_out_of_sphere::<S, LO>(&k.step, at - k.start, w) };
+            unsafe { project_out_of_sphere::<S, FIXED>(&k.step, at - k.start, w) };
         }
     }
 }

@@ -9,8 +9,8 @@ use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, Si
 pub(super) struct Ctx<'a, E> {
     pub(super) grid: Grid,
     pub(super) p: Params<E>,
+    /// Positions as the kernel's [`super::Frame`] stores them.
     pub(super) x: [&'a [E]; 3],
-    pub(super) xl: [&'a [E]; 3],
     pub(super) v: [&'a [E]; 3],
     /// Verlet's update velocities (empty for the Euler methods).
     pub(super) u: [&'a [E]; 3],
@@ -57,13 +57,14 @@ pub(super) fn run_two_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: O
 }
 
 /// One row of the fused pass in one mode ([`row_step`]'s constants: drag, whether
-/// the row is integrated, plain, low parts), for one SIMD level and precision.
+/// the row is integrated, plain, fixed-point positions), for one SIMD level and
+/// precision.
 /// Each level compiles each mode as a function of its own: in one function
 /// holding all twelve, how each came out moved with unrelated changes (the plain
 /// cloth's step once ran 1.3x slower after code moved between files).
 pub(super) trait RowMode<E> {
     /// [`row_step`] in this mode.
-    fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+    fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
         self,
         ctx: &Ctx<E>,
         band: &mut Band<E>,
@@ -79,7 +80,7 @@ struct PortableRows;
 
 impl<E: Real> RowMode<E> for PortableRows {
     #[inline(never)]
-    fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+    fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
         self,
         ctx: &Ctx<E>,
         band: &mut Band<E>,
@@ -87,7 +88,7 @@ impl<E: Real> RowMode<E> for PortableRows {
         out: &mut Out<E>,
         lo: usize,
     ) {
-        row_step::<_, DRAG, OWN, PLAIN, LO>(Portable::<E>::default(), ctx, band, row, out, lo);
+        row_step::<_, DRAG, OWN, PLAIN, FIXED>(Portable::<E>::default(), ctx, band, row, out, lo);
     }
 }
 
@@ -103,7 +104,7 @@ pub(super) fn row_portable<E: Real>(
     row_variant(PortableRows, ctx, band, row, out, lo, own);
 }
 
-/// [`row_step`] in the mode for the scene (drag, plain, low parts), integrating
+/// [`row_step`] in the mode for the scene (drag, plain, fixed point), integrating
 /// the row if `own`.
 #[inline(always)]
 pub(super) fn row_variant<E: Real>(
@@ -119,20 +120,26 @@ pub(super) fn row_variant<E: Real>(
     // version of the step without them.
     let plain = ctx.p.is_plain();
     macro_rules! modes {
-        ($lo:literal) => {
+        ($fixed:literal) => {
             match (ctx.drag, own, plain) {
-                (true, true, true) => mode.row::<true, true, true, $lo>(ctx, band, row, out, lo),
-                (true, true, false) => mode.row::<true, true, false, $lo>(ctx, band, row, out, lo),
-                (false, true, true) => mode.row::<false, true, true, $lo>(ctx, band, row, out, lo),
-                (false, true, false) => {
-                    mode.row::<false, true, false, $lo>(ctx, band, row, out, lo)
+                (true, true, true) => mode.row::<true, true, true, $fixed>(ctx, band, row, out, lo),
+                (true, true, false) => {
+                    mode.row::<true, true, false, $fixed>(ctx, band, row, out, lo)
                 }
-                (true, false, _) => mode.row::<true, false, true, $lo>(ctx, band, row, out, lo),
-                (false, false, _) => mode.row::<false, false, true, $lo>(ctx, band, row, out, lo),
+                (false, true, true) => {
+                    mode.row::<false, true, true, $fixed>(ctx, band, row, out, lo)
+                }
+                (false, true, false) => {
+                    mode.row::<false, true, false, $fixed>(ctx, band, row, out, lo)
+                }
+                (true, false, _) => mode.row::<true, false, true, $fixed>(ctx, band, row, out, lo),
+                (false, false, _) => {
+                    mode.row::<false, false, true, $fixed>(ctx, band, row, out, lo)
+                }
             }
         };
     }
-    if ctx.p.compensated {
+    if ctx.p.fixed {
         modes!(true)
     } else {
         modes!(false)
@@ -161,29 +168,46 @@ pub(super) fn band_rows<E: Real>(
     }
 }
 
-/// A particle's position (high and low parts) and velocity, one per lane.
-pub(super) type Particle<'a, V> = (&'a [V; 3], &'a [V; 3], &'a [V; 3]);
+/// A particle's position (as stored) and velocity, one per lane.
+pub(super) type Particle<'a, V> = (&'a [V; 3], &'a [V; 3]);
+
+/// `a - b` of two stored coordinates, in the positions' units: an exact integer
+/// difference converted to float for fixed point (`FIXED`), else a float one.
+#[inline(always)]
+pub(super) fn difference<S: Simd, const FIXED: bool>(s: S, a: S::V, b: S::V) -> S::V {
+    if FIXED {
+        s.fixed_sub(a, b)
+    } else {
+        s.sub(a, b)
+    }
+}
+
+/// The stored coordinate `x` moved by `scale t` units (rounded to a whole unit
+/// for fixed point).
+#[inline(always)]
+pub(super) fn moved<S: Simd, const FIXED: bool>(s: S, x: S::V, scale: S::V, t: S::V) -> S::V {
+    if FIXED {
+        s.fixed_add(x, s.mul(scale, t))
+    } else {
+        s.mul_add(scale, t, x)
+    }
+}
 
 /// Forces on the first ends of springs `i`-`j`, one per lane, times `mask` (if
 /// any): `f = (k L / l - k - b (d·dv) / l²) d = ((-b (d·dv) / l + k L) / l - k) d`
-/// with `d = x_i - x_j` (high parts and low parts subtracted separately, so that `d`
-/// is accurate to its own size, not to that of the positions), `dv = v_i - v_j`.
-/// `kind` is `[-k, k L, -b]`. Returns the forces and `d`.
+/// with `d = x_i - x_j` ([`difference`]: accurate to its own size with fixed-point
+/// positions, not only to that of the positions) in the positions' units,
+/// `dv = v_i - v_j`. `kind` is `[-k, k L, -b]` (`k` per unit). Returns the
+/// forces and `d`.
 #[inline(always)]
-pub(super) fn spring<S: Simd, const LO: bool>(
+pub(super) fn spring<S: Simd, const FIXED: bool>(
     s: S,
-    (xi, xli, vi): Particle<S::V>,
-    (xj, xlj, vj): Particle<S::V>,
+    (xi, vi): Particle<S::V>,
+    (xj, vj): Particle<S::V>,
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
 ) -> ([S::V; 3], [S::V; 3]) {
-    let d: [S::V; 3] = std::array::from_fn(|a| {
-        if LO {
-            s.add(s.sub(xi[a], xj[a]), s.sub(xli[a], xlj[a]))
-        } else {
-            s.sub(xi[a], xj[a])
-        }
-    });
+    let d: [S::V; 3] = std::array::from_fn(|a| difference::<S, FIXED>(s, xi[a], xj[a]));
     let u = [
         s.sub(vi[0], vj[0]),
         s.sub(vi[1], vj[1]),
@@ -242,7 +266,6 @@ struct RowKernel<S: Simd> {
     down: S::V,
     down2: S::V,
     x: [*const S::E; 3],
-    xl: [*const S::E; 3],
     v: [*const S::E; 3],
     inv_mass: *const S::E,
     col_mask: *const S::E,
@@ -265,21 +288,26 @@ pub(super) struct StepLanes<S: Simd> {
     pub(super) s: S,
     pub(super) gravity: [S::V; 3],
     pub(super) dt: S::V,
+    /// The step in units of the positions per m/s: `h / unit`.
+    pub(super) dt_units: S::V,
     pub(super) zero: S::V,
     pub(super) one: S::V,
-    /// `-c` (air damping), ground height, `k_c`, damping, `explicit`, `h/2` (Verlet).
+    /// `-c` (air damping), ground height, `k_c` (per unit), damping, `explicit`,
+    /// `h/2` (Verlet).
     pub(super) neg_air: S::V,
     pub(super) ground: [S::V; 3],
     pub(super) explicit: S::V,
     pub(super) verlet_half_dt: S::V,
+    /// Velocity per unit moved in a step: `unit / h`.
     pub(super) inv_dt: S::V,
-    /// Sphere centre, radius and squared radius (when the step projects onto it).
+    /// Sphere centre, radius and squared radius (in units; when the step projects
+    /// onto it).
     pub(super) sphere: Option<SphereLanes<S::V>>,
     pub(super) verlet: bool,
     /// Verlet's update velocities (the velocities for the other methods).
     pub(super) u: [*const S::E; 3],
-    /// [`Out`]'s twelve arrays.
-    pub(super) out: [*mut S::E; 12],
+    /// [`Out`]'s nine arrays.
+    pub(super) out: [*mut S::E; 9],
 }
 
 impl<S: Simd> StepLanes<S> {
@@ -297,13 +325,14 @@ impl<S: Simd> StepLanes<S> {
             s,
             gravity: p.gravity.map(|w| s.splat(w)),
             dt: s.splat(p.dt),
+            dt_units: s.splat(p.dt * p.inv_unit),
             zero: s.splat(S::E::ZERO),
             one: s.splat(S::E::ONE),
             neg_air: s.splat(p.neg_air),
             ground: p.ground.map(|g| s.splat(g)),
             explicit: s.splat(p.explicit),
             verlet_half_dt: s.splat(p.verlet_half_dt),
-            inv_dt: s.splat(S::E::ONE / p.dt),
+            inv_dt: s.splat(p.unit / p.dt),
             sphere: p
                 .sphere
                 .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
@@ -336,7 +365,7 @@ pub(super) fn row_step<
     const DRAG: bool,
     const OWN: bool,
     const PLAIN: bool,
-    const LO: bool,
+    const FIXED: bool,
 >(
     s: S,
     ctx: &Ctx<S::E>,
@@ -357,7 +386,7 @@ pub(super) fn row_step<
         // Read up to one past the row's last block (the other diagonal's).
         assert!(mask.len() > b[0] + nv);
     }
-    for a in ctx.x.iter().chain(&ctx.xl).chain(&ctx.v) {
+    for a in ctx.x.iter().chain(&ctx.v) {
         assert_eq!(a.len(), g.len());
     }
     let verlet = ctx.p.verlet;
@@ -367,7 +396,7 @@ pub(super) fn row_step<
         }
     }
     if OWN {
-        for o in &out.0[..if verlet { 12 } else { 9 }] {
+        for o in &out.0[..if verlet { 9 } else { 6 }] {
             assert!(lo + nv <= o.len());
         }
     }
@@ -384,7 +413,6 @@ pub(super) fn row_step<
         down: s.splat(if row + 1 < g.h { S::E::ONE } else { S::E::ZERO }),
         down2: s.splat(if row + 2 < g.h { S::E::ONE } else { S::E::ZERO }),
         x: ctx.x.map(<[S::E]>::as_ptr),
-        xl: ctx.xl.map(<[S::E]>::as_ptr),
         v: ctx.v.map(<[S::E]>::as_ptr),
         inv_mass: ctx.inv_mass.as_ptr(),
         col_mask: ctx.col_mask.as_ptr(),
@@ -407,12 +435,12 @@ pub(super) fn row_step<
     let mut c = 0;
     while c < c_mask {
         // SAFETY: c < nv, a multiple of LANES; bounds asserted above.
-        unsafe { block::<S, DRAG, OWN, false, PLAIN, LO>(&k, c, &mut carry) };
+        unsafe { block::<S, DRAG, OWN, false, PLAIN, FIXED>(&k, c, &mut carry) };
         c += S::LANES;
     }
     while c < nv {
         // SAFETY: as above.
-        unsafe { block::<S, DRAG, OWN, true, PLAIN, LO>(&k, c, &mut carry) };
+        unsafe { block::<S, DRAG, OWN, true, PLAIN, FIXED>(&k, c, &mut carry) };
         c += S::LANES;
     }
 }
@@ -429,7 +457,7 @@ unsafe fn block<
     const OWN: bool,
     const MASK: bool,
     const PLAIN: bool,
-    const LO: bool,
+    const FIXED: bool,
 >(
     k: &RowKernel<S>,
     c: usize,
@@ -446,14 +474,12 @@ unsafe fn block<
         ]
     };
     let [b0, b1, b2] = k.b;
-    // The positions' low parts, or zeros without them.
-    let ldl = |i: usize| if LO { ld(k.xl, i) } else { [zero; 3] };
-    let p00 = (&ld(k.x, b0 + c), &ldl(b0 + c), &ld(k.v, b0 + c));
-    let p01 = (&ld(k.x, b0 + c + 1), &ldl(b0 + c + 1), &ld(k.v, b0 + c + 1));
-    let p02 = (&ld(k.x, b0 + c + 2), &ldl(b0 + c + 2), &ld(k.v, b0 + c + 2));
-    let p10 = (&ld(k.x, b1 + c), &ldl(b1 + c), &ld(k.v, b1 + c));
-    let p11 = (&ld(k.x, b1 + c + 1), &ldl(b1 + c + 1), &ld(k.v, b1 + c + 1));
-    let p20 = (&ld(k.x, b2 + c), &ldl(b2 + c), &ld(k.v, b2 + c));
+    let p00 = (&ld(k.x, b0 + c), &ld(k.v, b0 + c));
+    let p01 = (&ld(k.x, b0 + c + 1), &ld(k.v, b0 + c + 1));
+    let p02 = (&ld(k.x, b0 + c + 2), &ld(k.v, b0 + c + 2));
+    let p10 = (&ld(k.x, b1 + c), &ld(k.v, b1 + c));
+    let p11 = (&ld(k.x, b1 + c + 1), &ld(k.v, b1 + c + 1));
+    let p20 = (&ld(k.x, b2 + c), &ld(k.v, b2 + c));
     // Masks of the springs right, two right, down, down-right, the other diagonal,
     // two down, and of the two triangles.
     let masks: Option<[S::V; 8]> = if MASK {
@@ -479,15 +505,15 @@ unsafe fn block<
     };
     let mask = |m: usize| masks.map(|masks| masks[m]);
     let [structural, bend, shear] = k.kinds;
-    let (right, e_right) = spring::<S, LO>(s, p00, p01, structural, mask(0));
-    let (right2, _) = spring::<S, LO>(s, p00, p02, bend, mask(1));
-    let (d, e_down) = spring::<S, LO>(s, p00, p10, structural, mask(2));
-    let (dr, e_diagonal) = spring::<S, LO>(s, p00, p11, shear, mask(3));
-    let (anti, e_anti) = spring::<S, LO>(s, p01, p10, shear, mask(4));
-    let (d2, _) = spring::<S, LO>(s, p00, p20, bend, mask(5));
+    let (right, e_right) = spring::<S, FIXED>(s, p00, p01, structural, mask(0));
+    let (right2, _) = spring::<S, FIXED>(s, p00, p02, bend, mask(1));
+    let (d, e_down) = spring::<S, FIXED>(s, p00, p10, structural, mask(2));
+    let (dr, e_diagonal) = spring::<S, FIXED>(s, p00, p11, shear, mask(3));
+    let (anti, e_anti) = spring::<S, FIXED>(s, p01, p10, shear, mask(4));
+    let (d2, _) = spring::<S, FIXED>(s, p00, p20, bend, mask(5));
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
-        let (va, vb, vd, ve) = (p00.2, p01.2, p10.2, p11.2);
+        let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
         let bd: [S::V; 3] = std::array::from_fn(|i| s.add(vb[i], vd[i]));
         let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
         let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
@@ -550,7 +576,7 @@ unsafe fn block<
             // SAFETY: as above; outputs hold `lo + nv` floats.
             unsafe {
                 let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
-                integrate::<S, PLAIN, LO>(&k.step, k.b[0] + c, k.lo + c, i, w, p00, force);
+                integrate::<S, PLAIN, FIXED>(&k.step, k.b[0] + c, k.lo + c, i, w, p00, force);
             }
         }
         carry[0][i] = l;
@@ -559,7 +585,7 @@ unsafe fn block<
     }
     if OWN && !PLAIN && k.step.sphere.is_some() {
         // SAFETY: as above.
-        unsafe { project_out_of_sphere::<S, LO>(&k.step, k.lo + c, w) };
+        unsafe { project_out_of_sphere::<S, FIXED>(&k.step, k.lo + c, w) };
     }
 }
 
@@ -573,13 +599,13 @@ unsafe fn block<
 ///
 /// `PLAIN`: symplectic Euler with no air damping or ground (see `Params::is_plain`).
 #[inline(always)]
-pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
+pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const FIXED: bool>(
     k: &StepLanes<S>,
     at: usize,
     o: usize,
     i: usize,
     w: S::V,
-    (x, xl, v): Particle<S::V>,
+    (x, v): Particle<S::V>,
     force: S::V,
 ) {
     let s = k.s;
@@ -588,14 +614,8 @@ pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
         let vn = s.keep_if_positive(w, s.mul_add(k.dt, a, v[i]));
         // SAFETY: outputs hold `lo + nv` floats.
         unsafe {
-            if LO {
-                let (xn, xnl) = add_double(s, (x[i], xl[i]), s.mul(k.dt, vn));
-                s.store(k.out[i].add(o), xn);
-                s.store(k.out[3 + i].add(o), xnl);
-            } else {
-                s.store(k.out[i].add(o), s.mul_add(k.dt, vn, x[i]));
-            }
-            s.store(k.out[6 + i].add(o), vn);
+            s.store(k.out[i].add(o), moved::<S, FIXED>(s, x[i], k.dt_units, vn));
+            s.store(k.out[3 + i].add(o), vn);
         }
         return;
     }
@@ -609,7 +629,7 @@ pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
     if i == 1 {
         // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
         let [height, kc, cg] = k.ground;
-        let depth = s.sub(height, x[1]);
+        let depth = difference::<S, FIXED>(s, height, x[1]);
         let push = s.mul_sub(kc, depth, s.mul(cg, v[1]));
         force = s.add(force, s.keep_if_positive(depth, push));
     }
@@ -617,33 +637,27 @@ pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const LO: bool>(
     let un = s.keep_if_positive(w, s.mul_add(k.dt, a, u));
     // Explicit Euler moves with the old velocity, the others with the new one.
     let moving = s.mul_add(k.explicit, s.sub(u, un), un);
-    let (xn, xnl) = if LO {
-        add_double(s, (x[i], xl[i]), s.mul(k.dt, moving))
-    } else {
-        (s.mul_add(k.dt, moving, x[i]), k.zero)
-    };
+    let xn = moved::<S, FIXED>(s, x[i], k.dt_units, moving);
     let vn = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un));
     // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
     unsafe {
         s.store(k.out[i].add(o), xn);
-        if LO {
-            s.store(k.out[3 + i].add(o), xnl);
-        }
-        s.store(k.out[6 + i].add(o), vn);
+        s.store(k.out[3 + i].add(o), vn);
         if k.verlet {
-            s.store(k.out[9 + i].add(o), un);
+            s.store(k.out[6 + i].add(o), un);
         }
     }
 }
 
 /// Projects the just integrated particles at output index `o` that are inside
-/// the sphere (and free) onto its surface, `center + radius d / |d|`; the move `δ`
-/// also changes their velocities by `δ / h`.
+/// the sphere (and free) onto its surface, `center + radius d / |d|` (in the
+/// positions' units); the move `δ` (as computed: fixed-point positions take it
+/// rounded to a unit, see `spring_line`) also changes their velocities by `δ / h`.
 ///
 /// # Safety
 /// As for [`integrate`], after it ran for all three components.
 #[inline(always)]
-pub(super) unsafe fn project_out_of_sphere<S: Simd, const LO: bool>(
+pub(super) unsafe fn project_out_of_sphere<S: Simd, const FIXED: bool>(
     k: &StepLanes<S>,
     o: usize,
     w: S::V,
@@ -655,40 +669,22 @@ pub(super) unsafe fn project_out_of_sphere<S: Simd, const LO: bool>(
     // SAFETY: the outputs just written (caller's contract).
     let out = |j: usize| unsafe { s.load(k.out[j].add(o)) };
     let xn: [S::V; 3] = std::array::from_fn(out);
-    let d: [S::V; 3] = std::array::from_fn(|i| s.sub(xn[i], center[i]));
+    let d: [S::V; 3] = std::array::from_fn(|i| difference::<S, FIXED>(s, xn[i], center[i]));
     let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
     let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
     let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
     for i in 0..3 {
-        let onto = s.mul_add(d[i], scale, center[i]);
-        let dx = s.mul(inside, s.sub(onto, xn[i]));
-        let xnl = if LO { out(3 + i) } else { k.zero };
-        let dl = s.mul(inside, xnl);
-        let dv = s.mul(s.sub(dx, dl), k.inv_dt);
+        // The move onto the surface, `d scale - d`.
+        let dx = s.mul(inside, s.mul_sub(d[i], scale, d[i]));
+        let to = moved::<S, FIXED>(s, xn[i], k.one, dx);
+        let dv = s.mul(dx, k.inv_dt);
         // SAFETY: as above.
         unsafe {
-            s.store(k.out[i].add(o), s.add(xn[i], dx));
-            if LO {
-                s.store(k.out[3 + i].add(o), s.sub(xnl, dl));
-            }
-            s.store(k.out[6 + i].add(o), s.add(out(6 + i), dv));
+            s.store(k.out[i].add(o), to);
+            s.store(k.out[3 + i].add(o), s.add(out(3 + i), dv));
             if k.verlet {
-                s.store(k.out[9 + i].add(o), s.add(out(9 + i), dv));
+                s.store(k.out[6 + i].add(o), s.add(out(6 + i), dv));
             }
         }
     }
-}
-
-/// `(hi, lo) + t` as a new double-float `(hi', lo')` with `|lo'| <= ulp(hi') / 2`:
-/// Dekker's fast two-sum of `hi + t` (exact when `|t| <= |hi|`, a step's move
-/// against a position; otherwise `hi` is within a step of the origin and float
-/// round-off there is already below `ulp(t)`), its error added to `lo`, then
-/// renormalised.
-#[inline(always)]
-pub(super) fn add_double<S: Simd>(s: S, (hi, lo): (S::V, S::V), t: S::V) -> (S::V, S::V) {
-    let sum = s.add(hi, t);
-    let error = s.sub(t, s.sub(sum, hi));
-    let lo = s.add(lo, error);
-    let hi = s.add(sum, lo);
-    (hi, s.sub(lo, s.sub(hi, sum)))
 }

@@ -33,6 +33,10 @@ pub(super) trait Simd: Copy {
     fn div(self, a: Self::V, b: Self::V) -> Self::V;
     /// Whether any lane of `m` is positive.
     fn any_positive(self, m: Self::V) -> bool;
+    /// Fixed-point positions (integers held in the floats' bits): `a - b` as a float.
+    fn fixed_sub(self, a: Self::V, b: Self::V) -> Self::V;
+    /// Fixed-point position `x` moved by `t` units (rounded to the nearest).
+    fn fixed_add(self, x: Self::V, t: Self::V) -> Self::V;
     /// Lanes moved up by one: `[prev[LANES-1], cur[0], .., cur[LANES-2]]`.
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V;
     /// Lanes moved up by two: `[prev[LANES-2], prev[LANES-1], cur[0], ..]`.
@@ -106,6 +110,14 @@ impl<E: Real> Simd for Portable<E> {
     #[inline(always)]
     fn any_positive(self, m: Self::V) -> bool {
         m.iter().fold(false, |any, &m| any | (m > E::ZERO))
+    }
+    #[inline(always)]
+    fn fixed_sub(self, a: Self::V, b: Self::V) -> Self::V {
+        std::array::from_fn(|i| E::fixed_sub(a[i], b[i]))
+    }
+    #[inline(always)]
+    fn fixed_add(self, x: Self::V, t: Self::V) -> Self::V {
+        std::array::from_fn(|i| E::fixed_add(x[i], t[i]))
     }
     #[inline(always)]
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V {

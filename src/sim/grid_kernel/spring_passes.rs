@@ -10,11 +10,9 @@ use std::ops::Range;
 use super::super::constraints::XpbdSpring;
 use super::super::duo::Duo;
 use super::super::forces::EPSILON_LENGTH;
-#[cfg(target_arch = "x86_64")]
-use super::x86;
+use super::row::{difference, moved};
 use super::{
-    BLOCK, Buf, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SimdLevel, SpringCoefficients,
-    State, add_double,
+    BLOCK, Buf, Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SpringCoefficients, State,
 };
 
 /// What a [`Kernel::spring_pass`] does to each spring.
@@ -31,11 +29,6 @@ pub(super) enum SpringRule {
 }
 
 impl<E: Real> Kernel<E> {
-    /// [`high_parts_slack`] of the kernel's positions.
-    pub(super) fn high_parts_slack(&self) -> f64 {
-        high_parts_slack(self.params.compensated, self.simd, &self.cur.x)
-    }
-
     /// One pass of `rule` over the springs (see [`Self::constrain`]), in the
     /// colour classes of [`crate::sim::springs::constraint_order`], the f64
     /// engine's order. No two springs of a class share a particle, so a class's
@@ -54,8 +47,7 @@ impl<E: Real> Kernel<E> {
         let rules = SweepRules {
             rule,
             dt,
-            slack: self.high_parts_slack(),
-            compensated: self.params.compensated,
+            frame: self.frame,
         };
         // The sweeps in their order: each direction's two colour classes.
         let stencil = self.stencil();
@@ -169,36 +161,21 @@ impl<E: Real> Kernel<E> {
 }
 
 /// What `rule` reads of the positions at the start of the step, `state` (the
-/// kernel's other state buffer, after the step's swap): XPBD the whole arrays,
-/// high parts then low parts; the stretch limit nothing.
-pub(super) fn step_start<E: Real>(rule: SpringRule, state: &State<E>) -> [&[E]; 6] {
+/// kernel's other state buffer, after the step's swap): XPBD the whole arrays;
+/// the stretch limit nothing.
+pub(super) fn step_start<E: Real>(rule: SpringRule, state: &State<E>) -> [&[E]; 3] {
     match rule {
-        SpringRule::Xpbd => {
-            let [x, y, z] = state.x.each_ref().map(Buf::as_slice);
-            let [xl, yl, zl] = state.xl.each_ref().map(Buf::as_slice);
-            [x, y, z, xl, yl, zl]
-        }
+        SpringRule::Xpbd => state.x.each_ref().map(Buf::as_slice),
         SpringRule::StretchLimit(_) => Default::default(),
     }
 }
 
-/// What a [`SpringLine`] does to its springs, in the kernel's float type.
+/// What a [`SpringLine`] does to its springs, in the kernel's float type and the
+/// positions' units.
 #[derive(Clone, Copy)]
 enum LineRule<E> {
     /// The stretch limit: springs longer than `longest` are shortened to it.
-    Limit {
-        longest: E,
-        /// With double-float positions, a squared length under which the high
-        /// parts' difference shows a spring shorter than `longest` whatever the
-        /// low parts: a low part is at most half an ulp of its high part, so the
-        /// two ends' low parts and the high parts' subtraction put the difference
-        /// at most `4 R 2^-24` per coordinate from the spring's vector, for
-        /// coordinates of magnitude up to `R` (which a pass does not raise: it
-        /// moves a particle towards the other end of a spring). `near2` is
-        /// `(longest - 16 R 2^-23)²`, less 2^-16 of it for the float32 rounding of
-        /// the squared lengths.
-        near2: E,
-    },
+    Limit { longest: E },
     /// XPBD: every spring, of rest length `rest`, corrected with `α̃` and `γ`
     /// ([`XpbdSpring`]).
     Xpbd { rest: E, alpha: E, gamma: E },
@@ -213,8 +190,12 @@ struct SpringLine<E> {
     /// 1 for the lanes of a block in the class, else 0 (see [`SpringLine::class`]).
     class: [E; BLOCK],
     rule: LineRule<E>,
+    /// Velocity per unit moved: `unit / h`.
     inv_dt: E,
-    compensated: bool,
+    /// The squared length (units²) under which a spring has no direction.
+    tiny_length2: E,
+    /// Whether positions are fixed point.
+    fixed: bool,
 }
 
 impl<E: Real> SpringLine<E> {
@@ -230,13 +211,12 @@ impl<E: Real> SpringLine<E> {
     }
 }
 
-/// What the sweeps of one spring pass share: the rule, the step, and (for the
-/// stretch limit on double-float positions) [`high_parts_slack`].
+/// What the sweeps of one spring pass share: the rule, the step, and how the
+/// positions are stored.
 pub(super) struct SweepRules {
     pub(super) rule: SpringRule,
     pub(super) dt: f64,
-    pub(super) slack: f64,
-    pub(super) compensated: bool,
+    pub(super) frame: Frame,
 }
 
 /// The springs of one direction: from each particle to the one `dr` rows down and
@@ -305,18 +285,15 @@ impl<E: Real> Sweep<E> {
         if len == 0 || dr >= height {
             return None;
         }
+        let frame = &rules.frame;
         let rule = match rules.rule {
-            SpringRule::StretchLimit(tau) => {
-                let near = ((1.0 + tau) * rest - rules.slack).max(0.0);
-                LineRule::Limit {
-                    longest: E::of((1.0 + tau) * rest),
-                    near2: E::of(near * near * (1.0 - 1.0 / 65536.0)),
-                }
-            }
+            SpringRule::StretchLimit(tau) => LineRule::Limit {
+                longest: E::of(frame.units((1.0 + tau) * rest)),
+            },
             SpringRule::Xpbd => {
                 let spring = XpbdSpring::new(rest, kind.k, kind.b, rules.dt)?;
                 LineRule::Xpbd {
-                    rest: E::of(spring.rest),
+                    rest: E::of(frame.units(spring.rest)),
                     alpha: E::of(spring.alpha),
                     gamma: E::of(spring.gamma),
                 }
@@ -339,8 +316,9 @@ impl<E: Real> Sweep<E> {
                 len,
                 class: SpringLine::class(c0, along),
                 rule,
-                inv_dt: E::of(1.0 / rules.dt),
-                compensated: rules.compensated,
+                inv_dt: E::of(frame.unit / rules.dt),
+                tiny_length2: E::of(frame.units(EPSILON_LENGTH).powi(2)),
+                fixed: frame.fixed,
             },
         })
     }
@@ -365,9 +343,9 @@ impl<E: Real> Sweep<E> {
         self.dr
     }
 
-    /// Whether positions have low parts.
-    pub(super) fn compensated(&self) -> bool {
-        self.line.compensated
+    /// Whether positions are fixed point.
+    pub(super) fn fixed(&self) -> bool {
+        self.line.fixed
     }
 
     /// The line of row `r` (rows `stride` floats apart).
@@ -385,7 +363,7 @@ impl<E: Real> Sweep<E> {
 /// when springs tore ([`super::Torn`], indexed by first end), the mask of real
 /// particles when the arrays hold ghosts that springs reach (1 for particles, 0
 /// for ghosts: a lattice's), and for XPBD the positions at the start of the step
-/// (high parts, then low parts; empty for the stretch limit) and, when it sweeps
+/// (empty for the stretch limit) and, when it sweeps
 /// back as well (a lattice's, see [`crate::sim::constraints::xpbd_pass`]), the
 /// sweep's [`SweepMultipliers`], all whole arrays indexed from row 0.
 pub(super) struct SweepLines<'a, E> {
@@ -395,12 +373,13 @@ pub(super) struct SweepLines<'a, E> {
     pub(super) inv_mass: &'a [E],
     pub(super) alive: Option<&'a [E]>,
     pub(super) real: Option<&'a [E]>,
-    pub(super) start: [&'a [E]; 6],
+    pub(super) start: [&'a [E]; 3],
     pub(super) multipliers: Option<SweepMultipliers<E>>,
 }
 
 /// XPBD's multipliers of one sweep's springs, kept from a spring's first
-/// correction (the forward sweep) to its second (the backward one), as `α̃ λ` (m):
+/// correction (the forward sweep) to its second (the backward one), as `α̃ λ` (in
+/// the positions' units):
 /// one array per sweep, indexed by the springs' first ends as the state's arrays
 /// are (see [`crate::sim::constraints::xpbd_pass`]).
 #[derive(Default)]
@@ -449,7 +428,7 @@ unsafe impl<E: Sync> Sync for SweepMultipliers<E> {}
 /// [`spring_line`] on each line of `lines`, in order of rows (one call for a
 /// sweep, where a call per line cost its set-up every 8 blocks at 128 columns).
 #[inline(always)]
-pub(super) fn spring_sweep<S: Simd, const LO: bool>(
+pub(super) fn spring_sweep<S: Simd, const FIXED: bool>(
     s: S,
     out: &mut Out<S::E>,
     base: usize,
@@ -460,20 +439,20 @@ pub(super) fn spring_sweep<S: Simd, const LO: bool>(
         LineRule::Limit { .. } => {
             for r in rows {
                 let line = lines.sweep.line_at(r, lines.stride);
-                spring_line::<S, LO, false>(s, out, base, lines, &line);
+                spring_line::<S, FIXED, false>(s, out, base, lines, &line);
             }
         }
         LineRule::Xpbd { .. } => {
             for r in rows {
                 let line = lines.sweep.line_at(r, lines.stride);
-                spring_line::<S, LO, true>(s, out, base, lines, &line);
+                spring_line::<S, FIXED, true>(s, out, base, lines, &line);
             }
         }
     }
 }
 
 /// `[f(0), f(1), f(2)]` for `per_axis!(|k| f(k))`, written out: the closures of
-/// `std::array::from_fn` were not inlined into the double-float positions' SIMD
+/// `std::array::from_fn` were not inlined into the (then) double-float positions' SIMD
 /// code, so the vector operations in them ran as calls (3.4x slower for XPBD's
 /// pass).
 macro_rules! per_axis {
@@ -501,20 +480,24 @@ macro_rules! per_axis {
 /// once the moves of its first ends and of its second ends.
 ///
 /// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
-///   as [`crate::sim::constraints::length_correction`] does, and measures them
-///   (with double-float positions) from the high parts first, from both parts only
-///   when those come near the limit ([`LineRule::Limit::near2`]).
+///   as [`crate::sim::constraints::length_correction`] does.
 /// * XPBD corrects every spring as [`crate::sim::constraints::xpbd_correction`]
 ///   does, from the positions at the start of the step in `lines.start`.
 ///
 /// Each particle has at most one spring in a class, so the moves do not interact:
 /// a lane out of the class (or past the line, or a spring that tore: 0 in the
 /// direction's mask, when some did) gets a move of 0, which leaves its particle as
-/// it was. A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`). The lanes
+/// it was. A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`): the move
+/// as computed, where fixed-point positions take it rounded to a whole unit, so
+/// that the part of it under half a unit reaches the position through the
+/// velocity at the next step rather than never (a correction that stayed under
+/// half a unit step after step, as XPBD's small ones of a cloth do, was lost
+/// whole: XPBD's drape parted from the f64 engine by 9e-5 m over 320 steps, 3e-6
+/// m so). The lanes
 /// past `len` reach ghost columns inside the row's padding (rows are [`BLOCK`]
 /// floats longer than their blocks).
 #[inline(always)]
-fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
+fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
     s: S,
     out: &mut Out<S::E>,
     base: usize,
@@ -524,41 +507,38 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     let n = S::LANES;
     let &SpringLine { len, inv_dt, .. } = line;
     let (zero, one) = (S::E::ZERO, S::E::ONE);
-    let (longest, near2, rest, alpha, gamma) = match line.rule {
-        LineRule::Limit { longest, near2 } => (longest, near2, zero, zero, zero),
-        LineRule::Xpbd { rest, alpha, gamma } => (zero, zero, rest, alpha, gamma),
+    let (longest, rest, alpha, gamma) = match line.rule {
+        LineRule::Limit { longest } => (longest, zero, zero, zero),
+        LineRule::Xpbd { rest, alpha, gamma } => (zero, rest, alpha, gamma),
     };
     let (a, b) = (line.a - base, line.b - base);
     let lanes = len.next_multiple_of(n);
     let end = a.max(b) + lanes;
     let inv_mass = &lines.inv_mass[base..];
-    let [x, y, z, xl, yl, zl, vx, vy, vz, ux, uy, uz] = &mut out.0;
+    let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
     let verlet = !ux.is_empty();
     let fits = |arrays: [&[S::E]; 3], end: usize| arrays.iter().all(|p| p.len() >= end);
     // Every block below reads and writes inside these bounds.
     assert!(inv_mass.len() >= end && fits([x, y, z], end) && fits([vx, vy, vz], end));
-    assert!((!LO || fits([xl, yl, zl], end)) && (!verlet || fits([ux, uy, uz], end)));
-    let [sx, sy, sz, sxl, syl, szl] = lines.start;
+    assert!(!verlet || fits([ux, uy, uz], end));
+    let [sx, sy, sz] = lines.start;
     let start_end = line.a.max(line.b) + lanes;
-    assert!(!XPBD || fits([sx, sy, sz], start_end) && (!LO || fits([sxl, syl, szl], start_end)));
+    assert!(!XPBD || fits([sx, sy, sz], start_end));
     let multipliers = lines.multipliers.filter(|_| XPBD);
     assert!(multipliers.is_none_or(|m| m.len >= line.a + lanes));
     let alive = lines.alive.map(|m| &m[line.a..line.a + lanes]);
     let real = lines.real.map(|m| &m[base..]);
     assert!(real.is_none_or(|m| m.len() >= end));
     let pos = [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()];
-    let low = [xl.as_mut_ptr(), yl.as_mut_ptr(), zl.as_mut_ptr()];
     let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
     let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
     let start = [sx.as_ptr(), sy.as_ptr(), sz.as_ptr()];
-    let start_low = [sxl.as_ptr(), syl.as_ptr(), szl.as_ptr()];
     let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
-    let (near2, zero_v) = (s.splat(near2), s.splat(zero));
     let (longest_v, one_v) = (s.splat(longest), s.splat(one));
     let (rest_v, alpha_v) = (s.splat(rest), s.splat(alpha));
     let (gamma_v, one_gamma_v) = (s.splat(gamma), s.splat(one + gamma));
     let minus_alpha_v = s.splat(zero - alpha);
-    let tiny_length2 = S::E::of(EPSILON_LENGTH * EPSILON_LENGTH);
+    let tiny_length2 = line.tiny_length2;
     // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
     // `a + lanes` and `b + lanes` floats (asserted above; the starting positions
     // `line.a + lanes` and `line.b + lanes`).
@@ -572,13 +552,12 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     }
     // The block at `j`: its springs' vectors `d` (first end less second), their
     // squared lengths, positive where a spring is in the class (and for the
-    // stretch limit over the limit), and whether any is (for the stretch limit on
-    // double-float positions, the high parts' vectors and zeros when those alone
-    // show none near the limit).
+    // stretch limit over the limit), and whether any is.
     macro_rules! measure {
         ($j:expr) => {{
             let j = $j;
-            let high: [S::V; 3] = per_axis!(|k| s.sub(load(pos[k], a + j), load(pos[k], b + j)));
+            let d: [S::V; 3] =
+                per_axis!(|k| difference::<S, FIXED>(s, load(pos[k], a + j), load(pos[k], b + j)));
             let mut keep = load(line.class.as_ptr(), 0);
             if j + n > len {
                 let tail: [S::E; BLOCK] =
@@ -592,26 +571,14 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
                 let both = s.mul(load(m.as_ptr(), a + j), load(m.as_ptr(), b + j));
                 keep = s.mul(keep, both);
             }
-            if !XPBD && LO && !s.any_positive(s.mul_sub(length2!(high), keep, near2)) {
-                // The high parts alone show every spring within the limit.
-                (high, zero_v, zero_v, false)
+            let l2 = length2!(d);
+            // Positive where the spring is to be corrected.
+            let over = if XPBD {
+                keep
             } else {
-                let d: [S::V; 3] = if LO {
-                    per_axis!(|k| {
-                        s.add(high[k], s.sub(load(low[k], a + j), load(low[k], b + j)))
-                    })
-                } else {
-                    high
-                };
-                let l2 = length2!(d);
-                // Positive where the spring is to be corrected.
-                let over = if XPBD {
-                    keep
-                } else {
-                    s.mul_sub(l2, keep, longest2)
-                };
-                (d, l2, over, s.any_positive(over))
-            }
+                s.mul_sub(l2, keep, longest2)
+            };
+            (d, l2, over, s.any_positive(over))
         }};
     }
     // XPBD's `t = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)` for the block at `j` (`C
@@ -623,17 +590,10 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
             let (j, d, l2, w) = ($j, $d, $l2, $w);
             let moved: [S::V; 3] = per_axis!(|k| {
                 let (ia, ib) = (line.a + j, line.b + j);
-                let high = s.sub(
-                    s.sub(load(pos[k], a + j), load(start[k], ia)),
-                    s.sub(load(pos[k], b + j), load(start[k], ib)),
-                );
-                if LO {
-                    let low_a = s.sub(load(low[k], a + j), load(start_low[k], ia));
-                    let low_b = s.sub(load(low[k], b + j), load(start_low[k], ib));
-                    s.add(high, s.sub(low_a, low_b))
-                } else {
-                    high
-                }
+                s.sub(
+                    difference::<S, FIXED>(s, load(pos[k], a + j), load(start[k], ia)),
+                    difference::<S, FIXED>(s, load(pos[k], b + j), load(start[k], ib)),
+                )
             });
             let inv_l = s.rsqrt_or_zero(l2, tiny_length2);
             // n·Δ with n = d / l, and C + α̃ λ.
@@ -703,14 +663,8 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
                     let i = start + j;
                     // SAFETY: as above.
                     unsafe {
-                        if LO {
-                            let old = (load(pos[axis], i), load(low[axis], i));
-                            let (hi, lo) = add_double(s, old, t);
-                            s.store(pos[axis].add(i), hi);
-                            s.store(low[axis].add(i), lo);
-                        } else {
-                            s.store(pos[axis].add(i), s.add(load(pos[axis], i), t));
-                        }
+                        let new = moved::<S, FIXED>(s, load(pos[axis], i), one_v, t);
+                        s.store(pos[axis].add(i), new);
                         let v = s.mul_add(t, inv_dt_v, load(vel[axis], i));
                         s.store(vel[axis].add(i), v);
                         if verlet {
@@ -749,54 +703,4 @@ fn spring_line<S: Simd, const LO: bool, const XPBD: bool>(
     if j < lanes {
         blocks!(j; 0);
     }
-}
-
-/// With double-float positions (`compensated`), how far (m) the high parts'
-/// difference may be from a spring's vector, with room to spare: a low part is at
-/// most half an ulp of its high part, so for coordinates up to `R` the two ends'
-/// low parts and the high parts' subtraction put it at most `4 R 2^-24` per
-/// coordinate away; this is `16 R 2^-23`. A spring whose high parts alone show it
-/// shorter than a bound less this is shorter than the bound (the stretch limit's
-/// `LineRule::Limit::near2`, the tear scan's first look). 0 without low parts;
-/// infinite when a coordinate is not finite.
-pub(super) fn high_parts_slack<E: Real>(
-    compensated: bool,
-    simd: SimdLevel,
-    x: &[Buf<E>; 3],
-) -> f64 {
-    if compensated {
-        16.0 * largest_magnitude(simd, x) * f32::EPSILON as f64
-    } else {
-        0.0
-    }
-}
-
-/// The largest magnitude of the coordinates in `arrays` (infinite when one is not
-/// finite, and for float64 arrays, which have no low parts to bound).
-fn largest_magnitude<E: Real>(simd: SimdLevel, arrays: &[Buf<E>; 3]) -> f64 {
-    let mut bits = 0;
-    for a in arrays {
-        let Ok(a) = bytemuck::try_cast_slice::<E, u32>(a.as_slice()) else {
-            return f64::INFINITY;
-        };
-        bits = bits.max(match simd {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is AVX2 or AVX-512 only when the CPU has AVX2.
-            SimdLevel::Avx2 | SimdLevel::Avx512 => unsafe { x86::largest_magnitude_bits_avx2(a) },
-            _ => largest_magnitude_bits(a),
-        });
-    }
-    match f32::from_bits(bits) {
-        m if m.is_nan() => f64::INFINITY,
-        m => m as f64,
-    }
-}
-
-/// The largest of the float32 bit patterns `bits` with the sign bit cleared: the
-/// bits of the largest magnitude, as the bits of floats of one sign order as
-/// their magnitudes do (a NaN's above infinity's). A plain reduction for the
-/// compiler to vectorise.
-#[inline(always)]
-pub(super) fn largest_magnitude_bits(bits: &[u32]) -> u32 {
-    bits.iter().fold(0, |m, &b| m.max(b & !(1 << 31)))
 }

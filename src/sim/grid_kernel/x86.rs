@@ -4,8 +4,8 @@ use std::arch::x86_64::*;
 
 use super::row::{RowMode, row_step};
 use super::{
-    Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines, any_faster,
-    largest_magnitude_bits, lattice, row_may_tear, row_variant, spring_sweep,
+    Band, ContactRows, Ctx, Out, Portable, Real, Simd, State, SweepLines, any_faster, lattice,
+    row_may_tear, row_variant, spring_sweep,
 };
 
 /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -28,14 +28,14 @@ macro_rules! row_entries {
         /// The CPU must have the target features.
         #[target_feature(enable = $features)]
         #[inline(never)]
-        unsafe fn $modes<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+        unsafe fn $modes<const DRAG: bool, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
             ctx: &Ctx<$t>,
             band: &mut Band<$t>,
             row: usize,
             out: &mut Out<$t>,
             lo: usize,
         ) {
-            row_step::<_, DRAG, OWN, PLAIN, LO>($lanes, ctx, band, row, out, lo);
+            row_step::<_, DRAG, OWN, PLAIN, FIXED>($lanes, ctx, band, row, out, lo);
         }
 
         /// One row with these lanes and target features, in the scene's mode.
@@ -55,7 +55,7 @@ macro_rules! row_entries {
             struct Rows(());
             impl RowMode<$t> for Rows {
                 #[inline(always)]
-                fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const LO: bool>(
+                fn row<const DRAG: bool, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
                     self,
                     ctx: &Ctx<$t>,
                     band: &mut Band<$t>,
@@ -65,7 +65,7 @@ macro_rules! row_entries {
                 ) {
                     // SAFETY: a `Rows` exists only inside `$name`, whose caller
                     // promises the features.
-                    unsafe { $modes::<DRAG, OWN, PLAIN, LO>(ctx, band, row, out, lo) }
+                    unsafe { $modes::<DRAG, OWN, PLAIN, FIXED>(ctx, band, row, out, lo) }
                 }
             }
             row_variant(Rows(()), ctx, band, row, out, lo, own);
@@ -110,13 +110,13 @@ lattice_bands! {
 /// # Safety
 /// As for `row_avx2`.
 #[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn row_may_tear_avx2<E: Real, const LO: bool>(
+pub(super) unsafe fn row_may_tear_avx2<E: Real, const FIXED: bool>(
     state: &State<E>,
     ends: (usize, usize, usize),
     alive: Option<&[E]>,
     scan2: E,
 ) -> bool {
-    row_may_tear::<E, LO>(state, ends, alive, scan2)
+    row_may_tear::<E, FIXED>(state, ends, alive, scan2)
 }
 
 /// The tear scan's `row_may_tear`, compiled for AVX-512.
@@ -124,22 +124,13 @@ pub(super) unsafe fn row_may_tear_avx2<E: Real, const LO: bool>(
 /// # Safety
 /// As for `row_avx512`.
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-pub(super) unsafe fn row_may_tear_avx512<E: Real, const LO: bool>(
+pub(super) unsafe fn row_may_tear_avx512<E: Real, const FIXED: bool>(
     state: &State<E>,
     ends: (usize, usize, usize),
     alive: Option<&[E]>,
     scan2: E,
 ) -> bool {
-    row_may_tear::<E, LO>(state, ends, alive, scan2)
-}
-
-/// `largest_magnitude_bits`, compiled for AVX2.
-///
-/// # Safety
-/// As for `row_avx2`.
-#[target_feature(enable = "avx2,fma")]
-pub(super) unsafe fn largest_magnitude_bits_avx2(bits: &[u32]) -> u32 {
-    largest_magnitude_bits(bits)
+    row_may_tear::<E, FIXED>(state, ends, alive, scan2)
 }
 
 /// `any_faster`, compiled for AVX2.
@@ -191,12 +182,12 @@ macro_rules! spring_sweeps {
         /// The CPU must have the target features.
         #[target_feature(enable = $features)]
         #[inline(never)]
-        pub(super) unsafe fn $name<const LO: bool>(
+        pub(super) unsafe fn $name<const FIXED: bool>(
             out: &mut Out<$t>,
             base: usize,
             lines: &SweepLines<$t>,
         ) {
-            spring_sweep::<_, LO>($lanes, out, base, lines)
+            spring_sweep::<_, FIXED>($lanes, out, base, lines)
         }
     )*};
 }
@@ -271,6 +262,24 @@ impl Simd for Avx512 {
     #[inline(always)]
     fn any_positive(self, m: __m512) -> bool {
         unsafe { _mm512_cmp_ps_mask::<_CMP_GT_OQ>(m, _mm512_setzero_ps()) != 0 }
+    }
+    #[inline(always)]
+    fn fixed_sub(self, a: __m512, b: __m512) -> __m512 {
+        unsafe {
+            _mm512_cvtepi32_ps(_mm512_sub_epi32(
+                _mm512_castps_si512(a),
+                _mm512_castps_si512(b),
+            ))
+        }
+    }
+    #[inline(always)]
+    fn fixed_add(self, x: __m512, t: __m512) -> __m512 {
+        unsafe {
+            _mm512_castsi512_ps(_mm512_add_epi32(
+                _mm512_castps_si512(x),
+                _mm512_cvtps_epi32(t),
+            ))
+        }
     }
     #[inline(always)]
     fn shift1(self, prev: __m512, cur: __m512) -> __m512 {
@@ -356,6 +365,24 @@ impl Simd for Avx2 {
         unsafe {
             let ok = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_setzero_ps());
             _mm256_movemask_ps(ok) != 0
+        }
+    }
+    #[inline(always)]
+    fn fixed_sub(self, a: __m256, b: __m256) -> __m256 {
+        unsafe {
+            _mm256_cvtepi32_ps(_mm256_sub_epi32(
+                _mm256_castps_si256(a),
+                _mm256_castps_si256(b),
+            ))
+        }
+    }
+    #[inline(always)]
+    fn fixed_add(self, x: __m256, t: __m256) -> __m256 {
+        unsafe {
+            _mm256_castsi256_ps(_mm256_add_epi32(
+                _mm256_castps_si256(x),
+                _mm256_cvtps_epi32(t),
+            ))
         }
     }
     #[inline(always)]
