@@ -1,6 +1,6 @@
-//! Fixed-point positions ([`super::Precision::Mixed`]): a coordinate `q` (m) is kept as the
-//! 32-bit integer `n = round((q - centre) / unit)` in the bits of a float32, in a
-//! frame that follows the cloth.
+//! Fixed-point positions ([`super::Precision::Mixed`]): a coordinate `q` (m) is kept
+//! as the 32-bit integer `n = round((q - centre) / unit)` in the bits of a float32,
+//! in a frame that follows the body (a cloth or a lattice).
 //!
 //! * A spring's `d` is an integer subtraction, exact, then one conversion to float
 //!   (good to `2^-24` of the spring's own length, as float32 arithmetic on `d`
@@ -8,8 +8,11 @@
 //!   folded into the constants (a spring's `k`, the drag's `ρ C_d`, the step's `h /
 //!   unit`), so the kernels' arithmetic is the same code in units as in metres.
 //! * The rounding of each move, at most half a unit, is the only noise fixed point
-//!   adds; [`fixed_unit`] picks the unit from the cloth's size and
-//!   [`super::Precision::spring_noise`] counts it.
+//!   adds; [`fixed_unit`] picks the unit from the body's size and
+//!   [`super::Precision::spring_noise`] counts it. A constraint's or a collider's
+//!   move is rounded likewise, but the velocity gets the move as computed, so that
+//!   the part under half a unit reaches the position at the next step (rounded
+//!   away, it would be a dead zone: XPBD's small corrections were lost whole).
 //! * Particles are kept within [`RANGE`] units of the centre (a quarter of the
 //!   integers' range) and colliders' coordinates within [`COLLIDER_RANGE`] (half),
 //!   so that the difference of any two coordinates, or of a coordinate and a
