@@ -220,29 +220,38 @@ impl Contact {
     /// tablecloth ran 1.4x faster on one core once inlined).
     #[inline(always)]
     pub fn resolve(&self, x: DVec3, v: DVec3, w: f64) -> (DVec3, DVec3) {
-        let (x, v) = self.resolve_lanes(V3::from(x), V3::from(v), w);
-        (x.into(), v.into())
+        let near = Near {
+            from_centre: V3::from(x - self.sphere.map_or(DVec3::ZERO, |s| s.center)),
+            above_ground: x.y - self.ground.map_or(0.0, |g| g.height),
+        };
+        let (push, v) = self.resolve_lanes(near, V3::from(v), w);
+        (x + DVec3::from(push), v.into())
     }
 
-    /// [`Contact::resolve`] for one particle per lane (`f64`: one particle). A lane
-    /// of a free particle gets exactly what `resolve` gives its particle; the caller
-    /// leaves pinned particles (`w = 0`) alone.
+    /// [`Contact::resolve`] for one particle per lane (`f64`: one particle), given
+    /// where each is as the colliders see it: returns each lane's move (0 where it
+    /// does not move) and new velocity. A lane of a free particle gets exactly what
+    /// `resolve` gives its particle; the caller leaves pinned particles (`w = 0`)
+    /// alone.
     #[inline(always)]
-    pub(crate) fn resolve_lanes<T: Lanes>(&self, x: V3<T>, v: V3<T>, w: T) -> (V3<T>, V3<T>) {
-        let (x, v) = self.sphere_lanes(x, v);
-        (x, self.ground_friction_lanes(x.y, v, w))
+    pub(crate) fn resolve_lanes<T: Lanes>(&self, at: Near<T>, v: V3<T>, w: T) -> (V3<T>, V3<T>) {
+        let (push, v) = self.sphere_lanes(at.from_centre, v);
+        (
+            push,
+            self.ground_friction_lanes(at.above_ground + push.y, v, w),
+        )
     }
 
-    /// The sphere's part of [`Contact::resolve_lanes`]: particles inside are
-    /// projected out, with friction. Leaves `x` and `v` as they are, to the bit,
-    /// where no lane is within the sphere's radius.
+    /// The sphere's part of [`Contact::resolve_lanes`] for particles `d` from its
+    /// centre: those inside are projected out, with friction. Returns their moves
+    /// (0 elsewhere) and velocities; leaves `v` as it is, to the bit, where no lane
+    /// is within the sphere's radius.
     #[inline(always)]
-    fn sphere_lanes<T: Lanes>(&self, x: V3<T>, v: V3<T>) -> (V3<T>, V3<T>) {
+    fn sphere_lanes<T: Lanes>(&self, d: V3<T>, v: V3<T>) -> (V3<T>, V3<T>) {
         let h = T::splat(self.dt);
-        let (mut x, mut v) = (x, v);
+        let (mut moves, mut v) = (V3::splat(DVec3::ZERO), v);
         if let Some(sphere) = self.sphere {
-            let (center, radius) = (V3::splat(sphere.center), T::splat(sphere.radius));
-            let d = x - center;
+            let radius = T::splat(sphere.radius);
             let dist2 = d.dot(d);
             // The cheap test first: particles all farther than the radius by much
             // more than a square root's rounding are outside, without the root.
@@ -251,31 +260,32 @@ impl Contact {
                 let dist = dist2.sqrt();
                 let inside = dist.lt(radius);
                 if T::any(inside) {
-                    let outside = nearest_surface(d, dist, &sphere);
-                    let push = outside - x;
+                    let outside = surface_offset(d, dist, &sphere);
+                    let push = outside - d;
                     let mut pushed = v + push.over(h);
                     if self.friction > 0.0 {
-                        let normal = (outside - center).over(radius);
+                        let normal = outside.over(radius);
                         let most = T::splat(self.friction) * push.length() / h;
                         pushed = coulomb(pushed, normal, most);
                     }
-                    x = V3::select(inside, outside, x);
+                    moves = V3::select(inside, push, moves);
                     v = V3::select(inside, pushed, v);
                 }
             }
         }
-        (x, v)
+        (moves, v)
     }
 
     /// The ground's part of [`Contact::resolve_lanes`], after the sphere's: its
-    /// friction on particles at height `y` with velocity `v` and inverse mass `w`,
-    /// which changes only their velocity (the ground's push is its penalty force).
+    /// friction on particles `above` m above it with velocity `v` and inverse mass
+    /// `w`, which changes only their velocity (the ground's push is its penalty
+    /// force).
     #[inline(always)]
-    pub(crate) fn ground_friction_lanes<T: Lanes>(&self, y: T, v: V3<T>, w: T) -> V3<T> {
+    pub(crate) fn ground_friction_lanes<T: Lanes>(&self, above: T, v: V3<T>, w: T) -> V3<T> {
         let Some(ground) = self.ground.filter(|g| g.friction > 0.0) else {
             return v;
         };
-        let support = ground_support(&ground, y, v.y);
+        let support = ground_support(&ground, T::splat(0.0) - above, v.y);
         let on = support.gt(T::splat(0.0));
         if !T::any(on) {
             return v;
@@ -283,6 +293,17 @@ impl Contact {
         let most = T::splat(ground.friction) * T::splat(self.dt) * support * w;
         V3::select(on, coulomb(v, V3::splat(DVec3::Y), most), v)
     }
+}
+
+/// Where particles are as [`Contact`] sees them, one per lane: their offsets (m)
+/// from the sphere's centre and their heights (m) above the ground (each from 0
+/// for a collider that is absent). Offsets, not positions: a fast engine takes
+/// them exactly from its fixed-point integers, so that a body and its colliders
+/// moved by a whole number of units step exactly as they did.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Near<T> {
+    pub(crate) from_centre: V3<T>,
+    pub(crate) above_ground: T,
 }
 
 /// The factor a particle's velocity `v` is scaled by under the speed limit
@@ -313,18 +334,17 @@ fn coulomb<T: Lanes>(v: V3<T>, normal: V3<T>, most: T) -> V3<T> {
 pub(crate) fn out_of_sphere(x: DVec3, sphere: &Sphere) -> Option<DVec3> {
     let d = V3::from(x - sphere.center);
     let dist = d.length();
-    (dist < sphere.radius).then(|| nearest_surface(d, dist, sphere).into())
+    (dist < sphere.radius).then(|| sphere.center + DVec3::from(surface_offset(d, dist, sphere)))
 }
 
 /// The point of the surface of `sphere` nearest to a particle `d` from its centre,
-/// `dist` away (straight up from the centre for a particle at the centre), one
-/// particle per lane.
+/// `dist` away (straight up from the centre for a particle at the centre), as an
+/// offset from the centre, one particle per lane.
 #[inline(always)]
-fn nearest_surface<T: Lanes>(d: V3<T>, dist: T, sphere: &Sphere) -> V3<T> {
-    let (center, radius) = (V3::splat(sphere.center), T::splat(sphere.radius));
+fn surface_offset<T: Lanes>(d: V3<T>, dist: T, sphere: &Sphere) -> V3<T> {
     let off_center = dist.gt(T::splat(EPSILON_LENGTH));
     let normal = V3::select(off_center, d.over(dist), V3::splat(DVec3::Y));
-    center + normal.scale(radius)
+    normal.scale(T::splat(sphere.radius))
 }
 
 /// The correction `c` that brings particles at `xa` and `xb` (inverse masses `wa`,
@@ -503,7 +523,20 @@ mod tests {
                 y: lanes(p, 1),
                 z: lanes(p, 2),
             };
-            let (to, v_new) = contact.resolve_lanes(v3(&x), v3(&v), F64s(w));
+            let (centre, height) = (
+                contact.sphere.unwrap().center,
+                contact.ground.unwrap().height,
+            );
+            let near = Near {
+                from_centre: v3(&x.map(|x| x - centre)),
+                above_ground: F64s(x.map(|x| x.y - height)),
+            };
+            let (push, v_new) = contact.resolve_lanes(near, v3(&v), F64s(w));
+            let to = V3 {
+                x: F64s(std::array::from_fn(|l| x[l].x + push.x.0[l])),
+                y: F64s(std::array::from_fn(|l| x[l].y + push.y.0[l])),
+                z: F64s(std::array::from_fn(|l| x[l].z + push.z.0[l])),
+            };
             for l in 0..8 {
                 let (x1, v1) = contact.resolve(x[l], v[l], w[l]);
                 let lane = |p: &V3<F64s<8>>| DVec3::new(p.x.0[l], p.y.0[l], p.z.0[l]);

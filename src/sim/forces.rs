@@ -179,13 +179,13 @@ impl Model {
 /// v_y` at depth `d = height - y > 0`, else 0.
 #[inline]
 pub fn ground_force(ground: &super::Ground, x: DVec3, v: DVec3) -> f64 {
-    ground_support(ground, x.y, v.y)
+    ground_support(ground, ground.height - x.y, v.y)
 }
 
-/// [`ground_force`] of particles at heights `y` moving up at `vy`, one per lane.
+/// [`ground_force`] of particles `depth` m below the ground moving up at `vy`,
+/// one per lane.
 #[inline(always)]
-pub(crate) fn ground_support<T: super::lanes::Lanes>(ground: &super::Ground, y: T, vy: T) -> T {
-    let depth = T::splat(ground.height) - y;
+pub(crate) fn ground_support<T: super::lanes::Lanes>(ground: &super::Ground, depth: T, vy: T) -> T {
     let pressed = T::splat(ground.stiffness) * depth - T::splat(ground.damping) * vy;
     T::select(depth.gt(T::splat(0.0)), pressed, T::splat(0.0))
 }

@@ -3,6 +3,7 @@
 //! [`constraints::Contact::resolve_lanes`] on blocks of particles, in float64, on
 //! the rows that may touch.
 
+use super::super::constraints::Near;
 use super::super::duo::Duo;
 use super::super::lanes::{F64s, V3};
 #[cfg(target_arch = "x86_64")]
@@ -119,6 +120,7 @@ impl<E: Real> ContactRows<'_, E> {
         let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
         let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
         let frame = &self.frame;
+        let per_unit = 1.0 / frame.unit;
         for r in rows {
             let start = r * self.stride;
             let row = (r - first) * self.stride..(r - first) * self.stride + self.width;
@@ -153,39 +155,50 @@ impl<E: Real> ContactRows<'_, E> {
                     z: lanes(vel[2]),
                 };
                 let mass = F64s::<N>(std::array::from_fn(|l| w[l].f64()));
-                // Coordinate `a` of the lanes in metres.
-                let coordinate = |a: usize| {
+                // Offsets (m) of coordinate `a` of the lanes from a collider's
+                // `from` (as stored): exact in fixed point, then in metres.
+                let offset = |a: usize, from: E| {
                     let p = &pos[a][j..j + N];
-                    F64s::<N>(std::array::from_fn(|l| frame.decode(p[l], a)))
+                    F64s::<N>(std::array::from_fn(|l| {
+                        if FIXED {
+                            (p[l].fixed_value() - from.fixed_value()) * frame.unit
+                        } else {
+                            p[l].f64() - from.f64()
+                        }
+                    }))
                 };
-                let height = || coordinate(1);
+                let above_ground = offset(1, self.reach.ground);
                 let v_new = if !sphere.contains(&true) {
                     // None near the sphere: only the ground's friction, which
                     // leaves the positions as they are (`resolve_lanes` gives the
                     // same, its sphere part then changing nothing).
-                    self.contact.ground_friction_lanes(height(), v, mass)
+                    self.contact.ground_friction_lanes(above_ground, v, mass)
                 } else {
-                    let at = V3 {
-                        x: coordinate(0),
-                        y: height(),
-                        z: coordinate(2),
+                    let [cx, cy, cz] = self.reach.center;
+                    let near = Near {
+                        from_centre: V3 {
+                            x: offset(0, cx),
+                            y: offset(1, cy),
+                            z: offset(2, cz),
+                        },
+                        above_ground,
                     };
-                    let (to, v_new) = self.contact.resolve_lanes(at, v, mass);
-                    // Back into the lanes that moved, all lanes at once: a
-                    // particle that moved gets its new position (every axis). The
-                    // other lanes are written what they held.
-                    let moved: [bool; N] = std::array::from_fn(|l| {
-                        let (x, y, z) = (to.x.0[l], to.y.0[l], to.z.0[l]);
-                        touch[l] & ((x != at.x.0[l]) | (y != at.y.0[l]) | (z != at.z.0[l]))
-                    });
-                    for (a, to) in [to.x, to.y, to.z].into_iter().enumerate() {
+                    let (push, v_new) = self.contact.resolve_lanes(near, v, mass);
+                    // The touching lanes move by their push (rounded to a whole
+                    // unit in fixed point; their velocities take it as computed),
+                    // all lanes at once: the others are written what they held.
+                    for (a, push) in [push.x, push.y, push.z].into_iter().enumerate() {
                         let p = &mut pos[a][j..j + N];
-                        // Every lane, read before any is written (a branch in each
-                        // lane wrote lane by lane).
-                        let new: [E; N] = std::array::from_fn(|l| frame.encode(to.0[l], a));
-                        let old: [E; N] = std::array::from_fn(|l| p[l]);
-                        let new: [E; N] =
-                            std::array::from_fn(|l| if moved[l] { new[l] } else { old[l] });
+                        let new: [E; N] = std::array::from_fn(|l| {
+                            let (p, push) = (p[l], push.0[l]);
+                            let to = if FIXED {
+                                let units = (push * per_unit).round_ties_even();
+                                E::fixed_from((p.fixed_value() + units) as i64)
+                            } else {
+                                E::of(p.f64() + push)
+                            };
+                            if touch[l] & (push != 0.0) { to } else { p }
+                        });
                         p.copy_from_slice(&new);
                     }
                     v_new
