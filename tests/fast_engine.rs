@@ -22,6 +22,13 @@ fn motion(start: &[DVec3], end: &[DVec3]) -> f64 {
     max_distance(start, end)
 }
 
+/// Largest distance between a particle of `near` and the same one of `far`
+/// moved back by `shift`.
+fn apart_less(near: &[DVec3], far: &[DVec3], shift: DVec3) -> f64 {
+    let far: Vec<DVec3> = far.iter().map(|q| *q - shift).collect();
+    max_distance(near, &far)
+}
+
 /// The same system twice: one allowed the fast engine (and taking it), one exact.
 fn pair(name: &str, overrides: &[&str]) -> (System, System) {
     let mut fast = build(name, overrides);
@@ -400,11 +407,7 @@ fn far_from_the_origin_a_cloth_moves_as_it_does_at_the_origin() {
     let (start, near) = run("origin=\"0,1,0\"");
     let (_, far) = run("origin=\"10000,1,-5000\"");
     let shift = DVec3::new(10000.0, 0.0, -5000.0);
-    let d = near
-        .iter()
-        .zip(&far)
-        .map(|(p, q)| p.distance(*q - shift))
-        .fold(0.0, f64::max);
+    let d = apart_less(&near, &far, shift);
     let moved = motion(&start, &near);
     println!("{d:.3e} m apart after moving {moved:.3} m");
     assert!(moved > 0.01);
@@ -474,11 +477,7 @@ fn far_from_the_origin_colliders_and_a_jelly_act_exactly_as_at_the_origin() {
         };
         let (start, near, lowest) = run(DVec3::ZERO);
         let (_, far, _) = run(shift);
-        let d = near
-            .iter()
-            .zip(&far)
-            .map(|(p, q)| p.distance(*q - shift))
-            .fold(0.0, f64::max);
+        let d = apart_less(&near, &far, shift);
         let moved = motion(&start, &near);
         println!(
             "{scene}: {d:.3e} m apart after moving {moved:.3} m, lowest {lowest:.1e} m over its ground"
