@@ -70,22 +70,26 @@ done
 # kernel's target is at most 2x. 1,024 steps, with the engines' energy check among
 # them as often as in a long run (every 1,024 steps, as the bench's); runs of 200
 # steps lasted 50 ms, and their rate moved with whatever else the machine did then.
-best_rate() {
-  # Prints "spring-steps/s engine" of the fastest of RUNS runs of `cloth run $1`.
-  for _ in $(seq "$RUNS"); do
-    # shellcheck disable=SC2086
-    $CLOTH run $1 --warmup 16 --json 2>/dev/null | tail -1 || true
-  done | python3 -c "
-import json, sys
-runs = [json.loads(line) for line in sys.stdin if line.startswith('{')]
-best = max(runs, key=lambda d: d['spring_steps_per_second'])
-print(best['spring_steps_per_second'], best['engine'])"
-}
 echo
-jelly=$(best_rate "--scene jelly --set width=32 --set height=32 --set depth=32 --set origin=0,30,0 --steps 1024")
-bench=$(best_rate "--scene bench --set width=128 --set height=128 --steps $STEPS")
-python3 -c "
-import sys
-j, je, b = sys.argv[1].split()[0], sys.argv[1].split()[1], sys.argv[2].split()[0]
-print(f'jelly 32^3 on {je}: {float(j):.3e} spring-steps/s; bench 128: {float(b):.3e}; cost per spring-step {float(b)/float(j):.2f}x')
-" "$jelly" "$bench"
+JELLY="--scene jelly --set width=32 --set height=32 --set depth=32 --set origin=0,30,0 --steps 1024"
+BENCH="--scene bench --set width=128 --set height=128 --steps $STEPS"
+# RUNS rounds of a jelly run then a bench run (in turn, as above), each keeping
+# its fastest.
+for _ in $(seq "$RUNS"); do
+  for args in "$JELLY" "$BENCH"; do
+    # shellcheck disable=SC2086
+    echo "$args|$($CLOTH run $args --warmup 16 --json 2>/dev/null | tail -1 || true)"
+  done
+done | python3 -c "
+import json, sys
+best = {}
+for line in sys.stdin:
+    args, _, out = line.partition('|')
+    if out.startswith('{'):
+        d = json.loads(out)
+        if d['spring_steps_per_second'] > best.get(args, {}).get('spring_steps_per_second', 0):
+            best[args] = d
+j, b = best[sys.argv[1]], best[sys.argv[2]]
+rj, rb = j['spring_steps_per_second'], b['spring_steps_per_second']
+print(f\"jelly 32^3 on {j['engine']}: {rj:.3e} spring-steps/s; bench 128: {rb:.3e}; cost per spring-step {rb / rj:.2f}x\")
+" "$JELLY" "$BENCH"
