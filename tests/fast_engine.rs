@@ -417,7 +417,8 @@ fn far_from_the_origin_a_cloth_moves_as_it_does_at_the_origin() {
 #[test]
 fn far_from_the_origin_colliders_and_a_jelly_act_exactly_as_at_the_origin() {
     // The drape over its sphere onto a frictional ground (self-collision and all,
-    // through its buckling), and the jelly dropped onto its ground: each run at
+    // through its buckling), and the jelly dropped onto its ground, given friction
+    // there so that the lattice's contact pass runs too: each run at
     // the origin and again with the body and its colliders moved 10 km out and 3
     // km up, compared less the shift. The frame's centre moves by whole units (a
     // power of two, so the shift is a whole number of them), the colliders are
@@ -458,7 +459,7 @@ fn far_from_the_origin_colliders_and_a_jelly_act_exactly_as_at_the_origin() {
             let origin = format!("origin={}", at(origin, by));
             let height = format!("ground_height={}", ground + by.y);
             let sphere = sphere.map(|c| format!("sphere_center={}", at(c, by)));
-            let mut settings = vec![origin.as_str(), height.as_str()];
+            let mut settings = vec![origin.as_str(), height.as_str(), "friction=0.5"];
             settings.extend(sphere.as_deref());
             let mut system = build(scene, &settings);
             system.set_fast_path(true);

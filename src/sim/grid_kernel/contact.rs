@@ -6,6 +6,7 @@
 use super::super::constraints::Near;
 use super::super::duo::Duo;
 use super::super::lanes::{F64s, V3};
+use super::frame::whole_units;
 #[cfg(target_arch = "x86_64")]
 use super::x86;
 use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
@@ -121,6 +122,17 @@ impl<E: Real> ContactRows<'_, E> {
         let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
         let frame = &self.frame;
         let per_unit = 1.0 / frame.unit;
+        // The colliders' coordinates as stored and in metres (0 for an absent
+        // one, which `resolve_lanes` then leaves out).
+        let exact = self
+            .contact
+            .sphere
+            .map_or([0.0; 3], |s| s.center.to_array());
+        let centre: [(E, f64); 3] = std::array::from_fn(|a| (self.reach.center[a], exact[a]));
+        let ground = (
+            self.reach.ground,
+            self.contact.ground.map_or(0.0, |g| g.height),
+        );
         for r in rows {
             let start = r * self.stride;
             let row = (r - first) * self.stride..(r - first) * self.stride + self.width;
@@ -155,31 +167,32 @@ impl<E: Real> ContactRows<'_, E> {
                     z: lanes(vel[2]),
                 };
                 let mass = F64s::<N>(std::array::from_fn(|l| w[l].f64()));
-                // Offsets (m) of coordinate `a` of the lanes from a collider's
-                // `from` (as stored): exact in fixed point, then in metres.
-                let offset = |a: usize, from: E| {
+                // Offsets (m) of coordinate `a` of the lanes from a collider's,
+                // given as stored and in metres: in fixed point from the stored
+                // one, exact (both are whole units); in floats from the exact one
+                // (float32 rounds the stored one).
+                let offset = |a: usize, (stored, exact): (E, f64)| {
                     let p = &pos[a][j..j + N];
                     F64s::<N>(std::array::from_fn(|l| {
                         if FIXED {
-                            (p[l].fixed_value() - from.fixed_value()) * frame.unit
+                            (p[l].fixed_value() - stored.fixed_value()) * frame.unit
                         } else {
-                            p[l].f64() - from.f64()
+                            p[l].f64() - exact
                         }
                     }))
                 };
-                let above_ground = offset(1, self.reach.ground);
+                let above_ground = offset(1, ground);
                 let v_new = if !sphere.contains(&true) {
                     // None near the sphere: only the ground's friction, which
                     // leaves the positions as they are (`resolve_lanes` gives the
                     // same, its sphere part then changing nothing).
                     self.contact.ground_friction_lanes(above_ground, v, mass)
                 } else {
-                    let [cx, cy, cz] = self.reach.center;
                     let near = Near {
                         from_centre: V3 {
-                            x: offset(0, cx),
-                            y: offset(1, cy),
-                            z: offset(2, cz),
+                            x: offset(0, centre[0]),
+                            y: offset(1, centre[1]),
+                            z: offset(2, centre[2]),
                         },
                         above_ground,
                     };
@@ -192,8 +205,7 @@ impl<E: Real> ContactRows<'_, E> {
                         let new: [E; N] = std::array::from_fn(|l| {
                             let (p, push) = (p[l], push.0[l]);
                             let to = if FIXED {
-                                let units = (push * per_unit).round_ties_even();
-                                E::fixed_from((p.fixed_value() + units) as i64)
+                                whole_units(p.fixed_value() + (push * per_unit).round())
                             } else {
                                 E::of(p.f64() + push)
                             };

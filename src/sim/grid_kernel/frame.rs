@@ -55,6 +55,13 @@ pub fn fixed_unit(extent: f64) -> f64 {
     2f64.powi(wanted.log2().ceil() as i32)
 }
 
+/// The fixed-point coordinate of `n` units (a whole number), clamped to the
+/// integers' range.
+#[inline]
+pub(super) fn whole_units<E: Real>(n: f64) -> E {
+    E::fixed_from(n.clamp(-2.0 * COLLIDER_RANGE + 1.0, 2.0 * COLLIDER_RANGE - 1.0) as i64)
+}
+
 /// What a kernel's spec asks of its positions' frame: fixed point or floats, the
 /// unit ([`fixed_unit`] of the body's radius), and the colliders it must hold.
 #[derive(Clone, Copy, Debug)]
@@ -126,8 +133,7 @@ impl Frame {
     #[inline]
     pub(super) fn encode<E: Real>(&self, q: f64, axis: usize) -> E {
         if self.fixed {
-            let n = ((q - self.centre[axis]) / self.unit).round();
-            E::fixed_from(n.clamp(-2.0 * COLLIDER_RANGE + 1.0, 2.0 * COLLIDER_RANGE - 1.0) as i64)
+            whole_units(((q - self.centre[axis]) / self.unit).round())
         } else {
             E::of(q)
         }
