@@ -129,8 +129,9 @@ pub struct RunArgs {
     /// step below half the integrator's critical step (Gershgorin estimate).
     #[arg(long)]
     safe: bool,
-    /// Always use the general f64 engine (by default a plain grid cloth stepped by
-    /// symplectic Euler runs on the f32 grid kernel; results agree to round-off).
+    /// Always use the general f64 engine, the reference (by default every scene runs
+    /// on a fast engine, named by `--json` and `cloth info`, that agrees with it
+    /// within stated tolerances; RK2, RK4 and implicit Euler always run on this one).
     #[arg(long)]
     exact: bool,
     /// Untimed steps before the timed run, after which the start state is restored

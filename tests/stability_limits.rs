@@ -1,6 +1,7 @@
 //! Measured critical steps agree with theory (within 10%) for symplectic Euler,
 //! Verlet and RK4 on the undamped spring and chain; implicit Euler survives the stiff
-//! cloth at 100 times symplectic Euler's limit.
+//! cloth at 100 times symplectic Euler's limit; air damping alone sets the limit its
+//! decay derives for every explicit integrator, on both engines.
 
 use cloth_sandbox::report::stability::{
     Measured, Theory, critical_dt, is_stable, reference_energy,
@@ -8,6 +9,8 @@ use cloth_sandbox::report::stability::{
 use cloth_sandbox::report::{cloth_undamped, eigen};
 use cloth_sandbox::scene::{Resolved, Scene};
 use cloth_sandbox::sim::Integrator;
+
+mod common;
 
 fn scene(name: &str, overrides: &[&str]) -> Resolved {
     let mut scene = Scene::load(name).unwrap();
@@ -103,4 +106,86 @@ fn implicit_euler_is_stable_on_the_stiff_cloth_at_100x_the_symplectic_limit() {
         horizon,
         e
     ));
+}
+
+/// Checks that `overrides` of the spring scene, with `integrator`, stay finite for
+/// `steps` steps at 0.95 of the estimated critical step and diverge at 1.05, on the
+/// general and on the fast engine; returns the estimate and the free mass.
+fn check_limit_brackets(overrides: &[&str], integrator: Integrator, steps: u64) -> (f64, f64) {
+    use cloth_sandbox::sim::stability::estimate;
+    let integrator_set = format!("integrator=\"{integrator}\"");
+    let all: Vec<&str> = overrides
+        .iter()
+        .copied()
+        .chain([integrator_set.as_str()])
+        .collect();
+    let system = common::build("spring", &all);
+    let model = system.model();
+    let free = (model.inv_mass.iter().zip(&model.mass)).find(|(w, _)| **w > 0.0);
+    let m = *free.expect("a free particle").1;
+    let limit = estimate(model).dt_critical.expect("a stable step");
+    for fast in [false, true] {
+        for (factor, stable) in [(0.95, true), (1.05, false)] {
+            let mut system = common::build("spring", &all);
+            system.set_fast_path(fast);
+            let mut params = *system.params();
+            params.dt = factor * limit;
+            system.set_params(params);
+            let run = system.run(steps);
+            assert_eq!(
+                run.is_ok(),
+                stable,
+                "{overrides:?} {integrator} (fast engine: {fast}) at {factor} of {limit:e} s: {:?}",
+                run.err()
+            );
+        }
+    }
+    (limit, m)
+}
+
+/// Air damping alone: the spring scene with its spring's stiffness at 0 is a mass
+/// falling under gravity against the drag `-c v`, whose homogeneous part decays as
+/// `v' = -(c/m) v`. One step of `g = c h / m` multiplies it by `1 - g` (the Euler
+/// methods and XPBD's prediction), `1 - g + g²/2` (RK2) or the fourth-order Taylor
+/// polynomial at `-g` (RK4), which stay within 1 up to `g = 2`, 2 and 2.7853; position
+/// Verlet, whose velocity is `(x - x_prev)/h + h/2 a_prev`, only up to `g = 1` (its
+/// two-step recurrence reaches an eigenvalue of -1 there). The estimate must give
+/// those limits (it gave none: nothing oscillates), and each engine must stay finite
+/// for 3,000 steps at 0.95 of the limit and diverge at 1.05.
+#[test]
+fn air_damping_alone_sets_the_critical_step_of_each_integrator() {
+    let c = 1000.0;
+    for (integrator, g) in [
+        (Integrator::SymplecticEuler, 2.0),
+        (Integrator::ExplicitEuler, 2.0),
+        (Integrator::Xpbd, 2.0),
+        (Integrator::Rk2, 2.0),
+        (Integrator::Rk4, 2.785_293_563_405_282),
+        (Integrator::Verlet, 1.0),
+    ] {
+        let air = format!("air_damping={c}");
+        let (limit, m) = check_limit_brackets(&["stiffness=0", &air], integrator, 3000);
+        let expected = g * m / c;
+        assert!(
+            (limit / expected - 1.0).abs() < 1e-9,
+            "{integrator}: estimated {limit:e} s, derived {expected:e} s"
+        );
+    }
+}
+
+/// A heavily damped spring between two free masses (the Gershgorin bound is then
+/// the pair's own frequency, `2k/m`): position Verlet's damping sees the velocity
+/// half a step late, so its limit is about half symplectic Euler's (it had been
+/// estimated as equal, and diverged at 0.55 of it). Both estimates must bracket
+/// the runs: finite for 2,000 steps at 0.95, diverging at 1.05.
+#[test]
+fn damped_verlet_reaches_its_limit_before_symplectic_euler() {
+    let pair = ["pins=[]", "damping=100"];
+    let (symplectic, _) = check_limit_brackets(&pair, Integrator::SymplecticEuler, 2000);
+    let (verlet, _) = check_limit_brackets(&pair, Integrator::Verlet, 2000);
+    let ratio = verlet / symplectic;
+    assert!(
+        (0.45..0.55).contains(&ratio),
+        "Verlet / symplectic: {ratio}"
+    );
 }

@@ -8,7 +8,11 @@
 //! highest mode: spring damping gives `zeta = (b/k) omega / 2` (the smallest `b/k`
 //! over the springs), air damping `c / (2 m omega)`. Undamped, this gives
 //! symplectic Euler and Verlet `2/omega`, RK4 `2 sqrt 2 / omega`, and no stable step
-//! for explicit Euler and RK2; implicit Euler has no limit. XPBD's springs are
+//! for explicit Euler and RK2; implicit Euler has no limit. Damped, position Verlet
+//! reaches its limit sooner than symplectic Euler: its damping sees the velocity
+//! half a step late. Air damping also bounds the step on its own, through the decay
+//! `v' = -(c/m) v` of the lightest particle ([`decay_step`]), which is the whole
+//! limit where nothing oscillates (a rope of bars). XPBD's springs are
 //! constraints, not forces: its limit is symplectic Euler's (its prediction) on the
 //! forces it integrates, the ground's penalty, and none without one.
 
@@ -90,7 +94,8 @@ pub fn estimate(model: &Model) -> Stability {
         Integrator::Xpbd => Integrator::SymplecticEuler,
         integrator => integrator,
     };
-    let dt_critical = critical_step(stepper, omega_max, zeta);
+    let decay = decay_step(stepper, fastest_decay(model));
+    let dt_critical = critical_step(stepper, omega_max, zeta).map(|c| c.min(decay));
     let margin = match dt_critical {
         None => f64::INFINITY,
         Some(c) if c.is_infinite() => 0.0,
@@ -102,6 +107,42 @@ pub fn estimate(model: &Model) -> Stability {
         dt_critical,
         margin,
     }
+}
+
+/// Rate (1/s) of the fastest decay that air damping alone gives a free particle,
+/// `v' = -gamma v` with `gamma = c / m` of the lightest one (0 without air damping).
+pub fn fastest_decay(model: &Model) -> f64 {
+    if !model.terms.air_damping {
+        return 0.0;
+    }
+    let largest_inv_mass = (model.inv_mass.iter()).fold(0.0, |w: f64, &v| w.max(v));
+    model.params.air_damping * largest_inv_mass
+}
+
+/// Largest step (s) at which `integrator` lets the decay `v' = -gamma v` decay rather
+/// than grow: `2 / gamma` for the Euler methods and RK2, `2.785 / gamma` for RK4,
+/// `1 / gamma` for position Verlet (whose velocity lags half a step); infinite for
+/// implicit Euler and for `gamma = 0`. The oscillator of [`critical_step`] sees air
+/// damping only through its mode of `omega_max`, over the heaviest particle; with
+/// nothing oscillating (bars alone: the rope) this is the whole limit, and with
+/// springs the lighter of the two.
+pub fn decay_step(integrator: Integrator, gamma: f64) -> f64 {
+    let none = gamma.is_nan() || gamma <= 0.0;
+    if none || matches!(integrator, Integrator::ImplicitEuler | Integrator::Xpbd) {
+        return f64::INFINITY;
+    }
+    // The oscillator's step with no stiffness and damping `gamma h = g` is stable
+    // on `[0, g*]`; every method here is unstable by g = 8.
+    let (mut lo, mut hi) = (0.0, 8.0);
+    for _ in 0..80 {
+        let mid = 0.5 * (lo + hi);
+        if step_radius(integrator, 0.0, -mid) <= 1.0 + 1e-12 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo / gamma
 }
 
 /// Largest `h` such that `integrator` is stable for every step in `(0, h]` on the
@@ -154,24 +195,39 @@ pub fn critical_step(integrator: Integrator, omega: f64, zeta: f64) -> Option<f6
 
 /// Spectral radius of one step of size `h` (given as `omega h`) on the oscillator.
 pub fn spectral_radius(integrator: Integrator, omega_h: f64, zeta: f64) -> f64 {
-    let (y, z) = (omega_h, zeta);
+    step_radius(integrator, -omega_h * omega_h, -2.0 * zeta * omega_h)
+}
+
+/// Spectral radius of one step on `x'' = a = (k x + c v) / h²` (in units of the
+/// step: `k = -(omega h)²`, `c = -2 zeta omega h`, or `c = -gamma h` for a decay
+/// alone), in the state `(x, h v)` and, for Verlet, `h² a_prev`.
+fn step_radius(integrator: Integrator, k: f64, c: f64) -> f64 {
     match integrator {
-        Integrator::SymplecticEuler | Integrator::Verlet => {
-            // v' = (1 - 2 z y) v - y x (in units omega = 1, h = y); x' = x + y v'.
-            let (a11, a12) = (1.0 - y * y, y * (1.0 - 2.0 * z * y));
-            let (a21, a22) = (-y, 1.0 - 2.0 * z * y);
-            matrix_radius(a11, a12, a21, a22)
+        Integrator::SymplecticEuler => {
+            // h v' = h v + k x + c h v; x' = x + h v'.
+            matrix_radius(1.0 + k, 1.0 + c, k, 1.0 + c)
+        }
+        Integrator::Verlet => {
+            // Position Verlet damps its velocity estimate `v = u + h/2 a_prev` (`u =
+            // (x - x_prev) / h`), half a step behind: `h² a = k x + c (h u + h² a_prev
+            // / 2)`, `h u' = h u + h² a`, `x' = x + h u'`. Undamped, the last column
+            // is 0 and this is symplectic Euler's step.
+            cubic_radius([
+                [1.0 + k, 1.0 + c, 0.5 * c],
+                [k, 1.0 + c, 0.5 * c],
+                [k, c, 0.5 * c],
+            ])
         }
         Integrator::ImplicitEuler | Integrator::Xpbd => 0.0,
         Integrator::ExplicitEuler | Integrator::Rk2 | Integrator::Rk4 => {
-            // Eigenvalues of the continuous system, scaled by h.
-            let disc = z * z - 1.0;
+            // Eigenvalues of the continuous system times h: l² - c l - k = 0.
+            let disc = 0.25 * c * c + k;
             let roots = if disc < 0.0 {
                 let im = (-disc).sqrt();
-                [(-z * y, im * y), (-z * y, -im * y)]
+                [(0.5 * c, im), (0.5 * c, -im)]
             } else {
                 let r = disc.sqrt();
-                [((-z + r) * y, 0.0), ((-z - r) * y, 0.0)]
+                [(0.5 * c + r, 0.0), (0.5 * c - r, 0.0)]
             };
             let order = integrator.order();
             roots
@@ -180,6 +236,42 @@ pub fn spectral_radius(integrator: Integrator, omega_h: f64, zeta: f64) -> f64 {
                 .fold(0.0, f64::max)
         }
     }
+}
+
+/// Spectral radius of a 3x3 matrix: a real root of its characteristic polynomial
+/// `l³ - t l² + s l - d` by bisection, then the quadratic left.
+fn cubic_radius(m: [[f64; 3]; 3]) -> f64 {
+    let t = m[0][0] + m[1][1] + m[2][2];
+    let s = (m[0][0] * m[1][1] - m[0][1] * m[1][0])
+        + (m[0][0] * m[2][2] - m[0][2] * m[2][0])
+        + (m[1][1] * m[2][2] - m[1][2] * m[2][1]);
+    let d = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    let p = |l: f64| ((l - t) * l + s) * l - d;
+    // Every root lies within Cauchy's bound; p < 0 below it and > 0 above.
+    let bound = 1.0 + t.abs().max(s.abs()).max(d.abs());
+    let (mut lo, mut hi) = (-bound, bound);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if p(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let r = 0.5 * (lo + hi);
+    // p(l) = (l - r)(l² + b l + c).
+    let b = r - t;
+    let c = s + r * b;
+    let disc = 0.25 * b * b - c;
+    let pair = if disc >= 0.0 {
+        let root = disc.sqrt();
+        (-0.5 * b + root).abs().max((-0.5 * b - root).abs())
+    } else {
+        c.abs().sqrt()
+    };
+    r.abs().max(pair)
 }
 
 /// `|sum_{k=0}^{order} z^k / k!|` for complex `z = re + i im`: the amplification of an
