@@ -11,7 +11,7 @@
 //! for explicit Euler and RK2; implicit Euler has no limit. Damped, position Verlet
 //! reaches its limit sooner than symplectic Euler: its damping sees the velocity
 //! half a step late. Air damping also bounds the step on its own, through the decay
-//! `v' = -(c/m) v` of the lightest particle ([`decay_step`]), which is the whole
+//! `v' = -(c/m) v` of the lightest particle (`decay_step`), which is the whole
 //! limit where nothing oscillates (a rope of bars). XPBD's springs are
 //! constraints, not forces: its limit is symplectic Euler's (its prediction) on the
 //! forces it integrates, the ground's penalty, and none without one.
@@ -111,7 +111,7 @@ pub fn estimate(model: &Model) -> Stability {
 
 /// Rate (1/s) of the fastest decay that air damping alone gives a free particle,
 /// `v' = -gamma v` with `gamma = c / m` of the lightest one (0 without air damping).
-pub fn fastest_decay(model: &Model) -> f64 {
+fn fastest_decay(model: &Model) -> f64 {
     if !model.terms.air_damping {
         return 0.0;
     }
@@ -126,7 +126,7 @@ pub fn fastest_decay(model: &Model) -> f64 {
 /// damping only through its mode of `omega_max`, over the heaviest particle; with
 /// nothing oscillating (bars alone: the rope) this is the whole limit, and with
 /// springs the lighter of the two.
-pub fn decay_step(integrator: Integrator, gamma: f64) -> f64 {
+fn decay_step(integrator: Integrator, gamma: f64) -> f64 {
     let none = gamma.is_nan() || gamma <= 0.0;
     if none || matches!(integrator, Integrator::ImplicitEuler | Integrator::Xpbd) {
         return f64::INFINITY;
