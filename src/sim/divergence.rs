@@ -29,8 +29,8 @@ pub enum Divergence {
     /// The mechanical energy rose past anything the forces and the step could
     /// supply ([`super::energy_budget`]).
     #[error(
-        "the energy rose {ratio:.1}x as far as its budget allows at t = {time:.4} s (step {step}): {rise:.3e} J above the start or the last edit, where the forces and the step can add {allowed:.3e} J",
-        ratio = rise / allowed
+        "the energy rose {how_far} at t = {time:.4} s (step {step}): {rise:.3e} J above the start or the last edit, where the forces and the step can add {allowed:.3e} J",
+        how_far = past_budget(*rise, *allowed)
     )]
     EnergyGrowth {
         /// Simulated time in s.
@@ -144,4 +144,43 @@ pub fn bounding_sphere(points: &[DVec3]) -> (DVec3, f64) {
         .fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p)));
     let center = (lo + hi) * 0.5;
     (center, (hi - lo).length() * 0.5)
+}
+
+/// How far past its budget an energy rise of `rise` J went when `allowed` J were
+/// allowed: "8.5x as far as its budget allows", or "past its budget" where the
+/// ratio means nothing (a budget of 0 J: a body built at a point, with no size for
+/// gravity or the wind to work over).
+fn past_budget(rise: f64, allowed: f64) -> String {
+    let ratio = rise / allowed;
+    if allowed > 0.0 && ratio.is_finite() {
+        format!("{ratio:.1}x as far as its budget allows")
+    } else {
+        "past its budget".to_string()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The message gives the ratio where there is one, and no "inf" or "NaN" where
+    /// the budget was 0 J (the drape built at rest length 0 on XPBD read "rose infx").
+    #[test]
+    fn an_energy_growth_reads_as_a_ratio_or_past_a_budget_of_nothing() {
+        let growth = |rise, allowed| {
+            Divergence::EnergyGrowth {
+                time: 0.2,
+                step: 200,
+                rise,
+                allowed,
+            }
+            .to_string()
+        };
+        let some = growth(3.853e3, 1.478e2);
+        assert!(some.contains("26.1x as far as its budget allows"), "{some}");
+        for none in [growth(4.2e7, 0.0), growth(0.0, 0.0)] {
+            assert!(none.contains("rose past its budget"), "{none}");
+            assert!(!none.contains("inf") && !none.contains("NaN"), "{none}");
+        }
+    }
 }
