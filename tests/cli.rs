@@ -293,7 +293,10 @@ fn info_reports_counts_terms_parameters_and_stability() {
         v["constraints"][0].as_str().unwrap().contains("XPBD"),
         "{v}"
     );
-    assert_eq!(v["stability"]["dt_over_dt_critical"], 0.0);
+    // The springs at 1e9 N/m set no limit; the wind's drag on the 1 g particles
+    // does (a decay of about 17/s: 0.12 s), far above the step.
+    let margin = v["stability"]["dt_over_dt_critical"].as_f64().unwrap();
+    assert!(margin > 0.0 && margin < 0.01, "{v}");
 
     let chain = cloth(&["info", "--scene", "chain"]);
     let text = stdout(&chain);

@@ -167,6 +167,8 @@ fn the_hint_does_not_suggest_the_integrator_in_use() {
         "--set",
         "gravity=0,-1e4,0",
         "--set",
+        "air_density=0",
+        "--set",
         "dt=1",
         "--steps",
         "100",

@@ -189,3 +189,52 @@ fn damped_verlet_reaches_its_limit_before_symplectic_euler() {
         "Verlet / symplectic: {ratio}"
     );
 }
+
+/// The wind's drag on light particles. Implicit Euler solves for the springs but
+/// steps the drag explicitly, as XPBD's prediction does, and the estimate gave
+/// both no limit: the cloth at the panel's lightest mass, 1e-6 kg, ran away at
+/// its step with safe stepping taking one substep. The drag, linearised, is the
+/// decay `ρ C_d A s / m` plus `sqrt(2 ρ C_d A g / m)` (the fall through still air),
+/// with `A = L²` an inner particle's share of the grid's triangles and `s` the
+/// strongest wind, `|wind| + gust`; explicit Euler's step on it is stable up to
+/// `2 / gamma`. The estimate must give that; each integrator must run 5,000 steps
+/// at 0.95 of it and one simulated second at the substeps safe stepping takes, and
+/// run away at the scene's step.
+#[test]
+fn drag_on_light_particles_limits_implicit_euler_and_xpbd() {
+    use cloth_sandbox::sim::safe::{DEFAULT_SAFETY, safe_step};
+    use cloth_sandbox::sim::stability::estimate;
+    for integrator in [Integrator::ImplicitEuler, Integrator::Xpbd] {
+        let set = format!("integrator=\"{integrator}\"");
+        let light = || {
+            let mut system = common::build("cloth", &["particle_mass=1e-6", &set]);
+            system.set_fast_path(true);
+            system
+        };
+        let system = light();
+        let p = *system.params();
+        let rho_cd_a = p.air_density * p.drag_coefficient * 0.05 * 0.05;
+        let (wind, gust) = (glam::DVec3::new(0.5, 0.0, 2.0).length(), 1.0);
+        let gamma =
+            rho_cd_a * (wind + gust) / 1e-6 + (2.0 * rho_cd_a * p.gravity.length() / 1e-6).sqrt();
+        let limit = estimate(system.model()).dt_critical.expect("a stable step");
+        assert!(
+            (limit * gamma / 2.0 - 1.0).abs() < 1e-6,
+            "{integrator}: estimated {limit:e} s, derived {:e} s",
+            2.0 / gamma
+        );
+        let run = |dt: f64, steps: u64| {
+            let mut system = light();
+            let mut params = *system.params();
+            params.dt = dt;
+            system.set_params(params);
+            system.run(steps)
+        };
+        assert!(run(p.dt, 960).is_err(), "{integrator} at the scene's step");
+        run(0.95 * limit, 5000).unwrap_or_else(|e| panic!("{integrator} at 0.95: {e}"));
+        let safe = safe_step(system.model(), p.dt, DEFAULT_SAFETY, 100_000);
+        assert!(safe.safe && safe.substeps > 1, "{integrator}: {safe:?}");
+        let steps = (1.0 / safe.dt).ceil() as u64;
+        run(safe.dt, steps).unwrap_or_else(|e| panic!("{integrator} safe: {e}"));
+    }
+}

@@ -10,11 +10,12 @@
 //! symplectic Euler and Verlet `2/omega`, RK4 `2 sqrt 2 / omega`, and no stable step
 //! for explicit Euler and RK2; implicit Euler has no limit. Damped, position Verlet
 //! reaches its limit sooner than symplectic Euler: its damping sees the velocity
-//! half a step late. Air damping also bounds the step on its own, through the decay
-//! `v' = -(c/m) v` of the lightest particle (`decay_step`), which is the whole
-//! limit where nothing oscillates (a rope of bars). XPBD's springs are
-//! constraints, not forces: its limit is symplectic Euler's (its prediction) on the
-//! forces it integrates, the ground's penalty, and none without one.
+//! half a step late. Air damping and the aerodynamic drag also bound the step on
+//! their own, through the decay of a particle's velocity they cause (`decay_limit`):
+//! the whole limit where nothing oscillates (a rope of bars), and implicit Euler's
+//! only one, as it steps the drag explicitly. XPBD's springs are constraints, not
+//! forces: its limit is symplectic Euler's (its prediction) on the forces it
+//! integrates (the ground's penalty, air damping, drag), and none without them.
 
 use super::{Integrator, Model};
 
@@ -94,7 +95,7 @@ pub fn estimate(model: &Model) -> Stability {
         Integrator::Xpbd => Integrator::SymplecticEuler,
         integrator => integrator,
     };
-    let decay = decay_step(stepper, fastest_decay(model));
+    let decay = decay_limit(model, stepper);
     let dt_critical = critical_step(stepper, omega_max, zeta).map(|c| c.min(decay));
     let margin = match dt_critical {
         None => f64::INFINITY,
@@ -109,26 +110,45 @@ pub fn estimate(model: &Model) -> Stability {
     }
 }
 
-/// Rate (1/s) of the fastest decay that air damping alone gives a free particle,
-/// `v' = -gamma v` with `gamma = c / m` of the lightest one (0 without air damping).
-fn fastest_decay(model: &Model) -> f64 {
-    if !model.terms.air_damping {
-        return 0.0;
-    }
-    let largest_inv_mass = (model.inv_mass.iter()).fold(0.0, |w: f64, &v| w.max(v));
-    model.params.air_damping * largest_inv_mass
-}
-
-/// Largest step (s) at which `integrator` lets the decay `v' = -gamma v` decay rather
-/// than grow: `2 / gamma` for the Euler methods and RK2, `2.785 / gamma` for RK4,
-/// `1 / gamma` for position Verlet (whose velocity lags half a step); infinite for
-/// implicit Euler and for `gamma = 0`. The oscillator of [`critical_step`] sees air
-/// damping only through its mode of `omega_max`, over the heaviest particle; with
-/// nothing oscillating (bars alone: the rope) this is the whole limit, and with
-/// springs the lighter of the two.
-fn decay_step(integrator: Integrator, gamma: f64) -> f64 {
-    let none = gamma.is_nan() || gamma <= 0.0;
-    if none || matches!(integrator, Integrator::ImplicitEuler | Integrator::Xpbd) {
+/// Largest step (s) at which the velocity damping that `stepper` integrates
+/// explicitly decays rather than grows on the free particle it slows fastest: air
+/// damping, `c / m`, and the aerodynamic drag, linearised at the relative speed it
+/// may meet, `ρ C_d A s / m` ([`drag_areas`]; `s`: the strongest wind, plus the
+/// speed at which the particle would fall through still air). One step of the
+/// decay `v' = -gamma v`, `g = gamma h`, stays within 1 up to `g = 2` for the Euler
+/// methods and RK2, 2.785 for RK4 and 1 for position Verlet (whose velocity lags
+/// half a step). Implicit Euler solves for air damping but steps the drag
+/// explicitly, as explicit Euler would; XPBD predicts with symplectic Euler. The
+/// oscillator of [`critical_step`] sees the damping only through its mode of
+/// `omega_max`, over the heaviest particle; with nothing oscillating (bars alone:
+/// the rope) this is the whole limit, and with springs the lower of the two.
+/// Infinite when nothing damps explicitly.
+fn decay_limit(model: &Model, stepper: Integrator) -> f64 {
+    let air = if model.terms.air_damping {
+        model.params.air_damping
+    } else {
+        0.0
+    };
+    let (stepper, air) = match stepper {
+        Integrator::ImplicitEuler => (Integrator::ExplicitEuler, 0.0),
+        Integrator::Xpbd => (Integrator::SymplecticEuler, air),
+        stepper => (stepper, air),
+    };
+    let p = &model.params;
+    let (k, gravity) = (p.half_rho_cd(), p.gravity.length());
+    let wind = model.wind.base.length() + model.wind.gust.abs();
+    let areas = if model.terms.aero {
+        drag_areas(model)
+    } else {
+        vec![0.0; model.mass.len()]
+    };
+    let gamma = (model.inv_mass.iter().zip(&areas)).fold(0.0, |fastest: f64, (&w, &area)| {
+        // `ρ C_d A / m` times the wind, and times the speed of the fall through
+        // still air, `sqrt(2 m g / (ρ C_d A))`.
+        let drag = 2.0 * k * area * wind * w + (4.0 * k * area * gravity * w).sqrt();
+        fastest.max(air * w + drag)
+    });
+    if gamma.is_nan() || gamma <= 0.0 {
         return f64::INFINITY;
     }
     // The oscillator's step with no stiffness and damping `gamma h = g` is stable
@@ -136,13 +156,39 @@ fn decay_step(integrator: Integrator, gamma: f64) -> f64 {
     let (mut lo, mut hi) = (0.0, 8.0);
     for _ in 0..80 {
         let mid = 0.5 * (lo + hi);
-        if step_radius(integrator, 0.0, -mid) <= 1.0 + 1e-12 {
+        if step_radius(stepper, 0.0, -mid) <= 1.0 + 1e-12 {
             lo = mid;
         } else {
             hi = mid;
         }
     }
     lo / gamma
+}
+
+/// Each particle's share (m²) of the drag triangles' area at rest: a third of each
+/// of its triangles', taken as `L1 L2 / 2` for the two shortest of the triangle's
+/// edges that are springs (its area where they meet at a right angle, as on the
+/// grid; more otherwise), and 0 for a triangle with fewer than two.
+fn drag_areas(model: &Model) -> Vec<f64> {
+    let rest = |a: u32, b: u32| {
+        (model.adjacency.springs_of(a as usize))
+            .map(|(s, _)| &model.springs[s])
+            .find(|s| (s.a == b) || (s.b == b))
+            .map(|s| s.rest)
+    };
+    let mut areas = vec![0.0; model.mass.len()];
+    for &[a, b, c] in &model.triangles {
+        // Missing edges sort last.
+        let mut edges = [rest(a, b), rest(b, c), rest(c, a)].map(|l| l.unwrap_or(f64::INFINITY));
+        edges.sort_by(f64::total_cmp);
+        let share = edges[0] * edges[1] / 6.0;
+        if share.is_finite() {
+            for i in [a, b, c] {
+                areas[i as usize] += share;
+            }
+        }
+    }
+    areas
 }
 
 /// Largest `h` such that `integrator` is stable for every step in `(0, h]` on the
