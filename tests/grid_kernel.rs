@@ -77,6 +77,54 @@ fn every_simd_level_matches_reference() {
     }
 }
 
+/// Float64 lanes, at every SIMD level this CPU has, give the NumPy float64
+/// reference to its printed 9 decimals (half a unit of the last, 5e-10 m, plus
+/// the float64 round-off of two codes summing the same forces in other orders:
+/// bound 1e-9 m), and agree with each other to float64 round-off.
+#[test]
+fn float64_lanes_match_the_reference_on_every_simd_level() {
+    for (wind, mean_ref, bottom_ref) in [
+        (false, -0.064685755, -0.656037594),
+        (true, 0.528073639, 0.193166128),
+    ] {
+        let mut portable = Vec::new();
+        for level in [SimdLevel::Baseline, SimdLevel::Avx2, SimdLevel::Avx512] {
+            let mut spec = GridSpec::peer_bench(32, wind);
+            spec.precision = Precision::Double;
+            let mut cloth = GridCloth::new(spec);
+            cloth.set_simd_level(level);
+            cloth.steps(DT, 960);
+            let (mean, bottom) = metrics(&cloth, 32);
+            let mut x = vec![DVec3::ZERO; cloth.len()];
+            cloth.positions_into(&mut x);
+            if level == SimdLevel::Baseline {
+                portable = x.clone();
+            }
+            let apart = x
+                .iter()
+                .zip(&portable)
+                .map(|(a, b)| a.distance(*b))
+                .fold(0.0, f64::max);
+            println!(
+                "{:?} wind={wind}: mean y {:+.2e}, bottom-middle y {:+.2e} from NumPy; {apart:e} m from the portable lanes",
+                cloth.simd_level(),
+                mean - mean_ref,
+                bottom - bottom_ref
+            );
+            assert!(
+                (mean - mean_ref).abs() < 1e-9 && (bottom - bottom_ref).abs() < 1e-9,
+                "{:?} wind={wind}: {mean} {bottom}",
+                cloth.simd_level()
+            );
+            assert!(
+                apart < 1e-12,
+                "{:?} wind={wind}: {apart:e} m",
+                cloth.simd_level()
+            );
+        }
+    }
+}
+
 /// Band splitting changes nothing: the gather order per particle is fixed, so two
 /// and three threads give bit-identical states to one thread (tolerance 0).
 #[test]

@@ -436,6 +436,21 @@ fn every_simd_level_agrees() {
                 ..spec(shape, Integrator::SymplecticEuler)
             },
         ),
+        (
+            "springs in float64",
+            LatticeSpec {
+                precision: Precision::Double,
+                ..spec(shape, Integrator::SymplecticEuler)
+            },
+        ),
+        (
+            "stretch limit in float64",
+            LatticeSpec {
+                precision: Precision::Double,
+                stretch_limit: Some(0.001),
+                ..spec(shape, Integrator::SymplecticEuler)
+            },
+        ),
     ];
     for (label, spec) in specs {
         let (reference, _) = kernel_run(&spec, 1, SimdLevel::Baseline, 200);
@@ -449,9 +464,15 @@ fn every_simd_level_agrees() {
             // by a few ulp of the 1 m spacing, once a step for each of its springs
             // corrected, without the springs' forces to pull the difference back:
             // up to `200 steps x 4 x 2^-23 m`.
+            // In float64 (whose lanes differ in where a product and a sum are
+            // fused) the same holds at float64's epsilon, 2^-29 of float32's.
             let bound = match spec.stretch_limit {
                 Some(_) => 200.0 * 4.0 * f32::EPSILON as f64,
                 None => 1e-5,
+            };
+            let bound = match spec.precision {
+                Precision::Double => bound * f64::EPSILON / f32::EPSILON as f64,
+                _ => bound,
             };
             assert!(
                 d < bound,

@@ -588,8 +588,8 @@ macro_rules! real {
     };
 }
 
-// Float32: the intrinsics of `x86`. Float64: the portable lanes compiled for each
-// level's features.
+// Both types: the intrinsics of `x86` at AVX2 and AVX-512, the portable lanes
+// below those.
 real!(f32, bits: u32, int: i32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
       lattice: lattice_band_avx512, lattice_band_avx2,
       springs: spring_sweep_avx512, spring_sweep_avx2);
