@@ -208,44 +208,60 @@ spring_sweeps! {
     spring_sweep_avx512_f64: "avx512f,avx512vl,avx2,fma", f64, Avx512F64(());
 }
 
-// SAFETY (all intrinsics below): an `Avx512` / `Avx2` value exists only inside
-// the entry points above, which run only on CPUs with those features.
+/// The members of a [`Simd`] impl that are one intrinsic each: the lane type,
+/// vector type and count, then the intrinsics for `splat`, `load`, `store`,
+/// `add`, `sub`, `mul`, `mul_add`, `mul_sub` and `div`.
+macro_rules! lanes {
+    ($e:ty, $v:ty, $lanes:expr; $set1:ident, $load:ident, $store:ident, $add:ident, $sub:ident,
+     $mul:ident, $fmadd:ident, $fmsub:ident, $div:ident) => {
+        type E = $e;
+        type V = $v;
+        const LANES: usize = $lanes;
+        #[inline(always)]
+        fn splat(self, a: $e) -> $v {
+            unsafe { $set1(a) }
+        }
+        #[inline(always)]
+        unsafe fn load(self, p: *const $e) -> $v {
+            unsafe { $load(p) }
+        }
+        #[inline(always)]
+        unsafe fn store(self, p: *mut $e, v: $v) {
+            unsafe { $store(p, v) }
+        }
+        #[inline(always)]
+        fn add(self, a: $v, b: $v) -> $v {
+            unsafe { $add(a, b) }
+        }
+        #[inline(always)]
+        fn sub(self, a: $v, b: $v) -> $v {
+            unsafe { $sub(a, b) }
+        }
+        #[inline(always)]
+        fn mul(self, a: $v, b: $v) -> $v {
+            unsafe { $mul(a, b) }
+        }
+        #[inline(always)]
+        fn mul_add(self, a: $v, b: $v, c: $v) -> $v {
+            unsafe { $fmadd(a, b, c) }
+        }
+        #[inline(always)]
+        fn mul_sub(self, a: $v, b: $v, c: $v) -> $v {
+            unsafe { $fmsub(a, b, c) }
+        }
+        #[inline(always)]
+        fn div(self, a: $v, b: $v) -> $v {
+            unsafe { $div(a, b) }
+        }
+    };
+}
+
+// SAFETY (all intrinsics below): an `Avx512`, `Avx2`, `Avx512F64` or `Avx2F64`
+// value exists only inside the entry points above, which run only on CPUs with
+// those features.
 impl Simd for Avx512 {
-    type E = f32;
-    type V = __m512;
-    const LANES: usize = 16;
-    #[inline(always)]
-    fn splat(self, a: f32) -> __m512 {
-        unsafe { _mm512_set1_ps(a) }
-    }
-    #[inline(always)]
-    unsafe fn load(self, p: *const f32) -> __m512 {
-        unsafe { _mm512_loadu_ps(p) }
-    }
-    #[inline(always)]
-    unsafe fn store(self, p: *mut f32, v: __m512) {
-        unsafe { _mm512_storeu_ps(p, v) }
-    }
-    #[inline(always)]
-    fn add(self, a: __m512, b: __m512) -> __m512 {
-        unsafe { _mm512_add_ps(a, b) }
-    }
-    #[inline(always)]
-    fn sub(self, a: __m512, b: __m512) -> __m512 {
-        unsafe { _mm512_sub_ps(a, b) }
-    }
-    #[inline(always)]
-    fn mul(self, a: __m512, b: __m512) -> __m512 {
-        unsafe { _mm512_mul_ps(a, b) }
-    }
-    #[inline(always)]
-    fn mul_add(self, a: __m512, b: __m512, c: __m512) -> __m512 {
-        unsafe { _mm512_fmadd_ps(a, b, c) }
-    }
-    #[inline(always)]
-    fn mul_sub(self, a: __m512, b: __m512, c: __m512) -> __m512 {
-        unsafe { _mm512_fmsub_ps(a, b, c) }
-    }
+    lanes!(f32, __m512, 16;
+        _mm512_set1_ps, _mm512_loadu_ps, _mm512_storeu_ps, _mm512_add_ps, _mm512_sub_ps, _mm512_mul_ps, _mm512_fmadd_ps, _mm512_fmsub_ps, _mm512_div_ps);
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m512, eps: f32) -> __m512 {
         unsafe {
@@ -264,10 +280,6 @@ impl Simd for Avx512 {
             let ok = _mm512_cmp_ps_mask::<_CMP_GT_OQ>(m, _mm512_setzero_ps());
             _mm512_maskz_mov_ps(ok, a)
         }
-    }
-    #[inline(always)]
-    fn div(self, a: __m512, b: __m512) -> __m512 {
-        unsafe { _mm512_div_ps(a, b) }
     }
     #[inline(always)]
     fn any_positive(self, m: __m512) -> bool {
@@ -312,41 +324,8 @@ impl Simd for Avx512 {
 }
 
 impl Simd for Avx2 {
-    type E = f32;
-    type V = __m256;
-    const LANES: usize = 8;
-    #[inline(always)]
-    fn splat(self, a: f32) -> __m256 {
-        unsafe { _mm256_set1_ps(a) }
-    }
-    #[inline(always)]
-    unsafe fn load(self, p: *const f32) -> __m256 {
-        unsafe { _mm256_loadu_ps(p) }
-    }
-    #[inline(always)]
-    unsafe fn store(self, p: *mut f32, v: __m256) {
-        unsafe { _mm256_storeu_ps(p, v) }
-    }
-    #[inline(always)]
-    fn add(self, a: __m256, b: __m256) -> __m256 {
-        unsafe { _mm256_add_ps(a, b) }
-    }
-    #[inline(always)]
-    fn sub(self, a: __m256, b: __m256) -> __m256 {
-        unsafe { _mm256_sub_ps(a, b) }
-    }
-    #[inline(always)]
-    fn mul(self, a: __m256, b: __m256) -> __m256 {
-        unsafe { _mm256_mul_ps(a, b) }
-    }
-    #[inline(always)]
-    fn mul_add(self, a: __m256, b: __m256, c: __m256) -> __m256 {
-        unsafe { _mm256_fmadd_ps(a, b, c) }
-    }
-    #[inline(always)]
-    fn mul_sub(self, a: __m256, b: __m256, c: __m256) -> __m256 {
-        unsafe { _mm256_fmsub_ps(a, b, c) }
-    }
+    lanes!(f32, __m256, 8;
+        _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_sub_ps, _mm256_mul_ps, _mm256_fmadd_ps, _mm256_fmsub_ps, _mm256_div_ps);
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m256, eps: f32) -> __m256 {
         unsafe {
@@ -365,10 +344,6 @@ impl Simd for Avx2 {
             let ok = _mm256_cmp_ps::<_CMP_GT_OQ>(m, _mm256_setzero_ps());
             _mm256_and_ps(ok, a)
         }
-    }
-    #[inline(always)]
-    fn div(self, a: __m256, b: __m256) -> __m256 {
-        unsafe { _mm256_div_ps(a, b) }
     }
     #[inline(always)]
     fn any_positive(self, m: __m256) -> bool {
@@ -419,41 +394,8 @@ impl Simd for Avx2 {
 }
 
 impl Simd for Avx512F64 {
-    type E = f64;
-    type V = __m512d;
-    const LANES: usize = 8;
-    #[inline(always)]
-    fn splat(self, a: f64) -> __m512d {
-        unsafe { _mm512_set1_pd(a) }
-    }
-    #[inline(always)]
-    unsafe fn load(self, p: *const f64) -> __m512d {
-        unsafe { _mm512_loadu_pd(p) }
-    }
-    #[inline(always)]
-    unsafe fn store(self, p: *mut f64, v: __m512d) {
-        unsafe { _mm512_storeu_pd(p, v) }
-    }
-    #[inline(always)]
-    fn add(self, a: __m512d, b: __m512d) -> __m512d {
-        unsafe { _mm512_add_pd(a, b) }
-    }
-    #[inline(always)]
-    fn sub(self, a: __m512d, b: __m512d) -> __m512d {
-        unsafe { _mm512_sub_pd(a, b) }
-    }
-    #[inline(always)]
-    fn mul(self, a: __m512d, b: __m512d) -> __m512d {
-        unsafe { _mm512_mul_pd(a, b) }
-    }
-    #[inline(always)]
-    fn mul_add(self, a: __m512d, b: __m512d, c: __m512d) -> __m512d {
-        unsafe { _mm512_fmadd_pd(a, b, c) }
-    }
-    #[inline(always)]
-    fn mul_sub(self, a: __m512d, b: __m512d, c: __m512d) -> __m512d {
-        unsafe { _mm512_fmsub_pd(a, b, c) }
-    }
+    lanes!(f64, __m512d, 8;
+        _mm512_set1_pd, _mm512_loadu_pd, _mm512_storeu_pd, _mm512_add_pd, _mm512_sub_pd, _mm512_mul_pd, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_div_pd);
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m512d, eps: f64) -> __m512d {
         unsafe {
@@ -472,10 +414,6 @@ impl Simd for Avx512F64 {
         }
     }
     #[inline(always)]
-    fn div(self, a: __m512d, b: __m512d) -> __m512d {
-        unsafe { _mm512_div_pd(a, b) }
-    }
-    #[inline(always)]
     fn any_positive(self, m: __m512d) -> bool {
         unsafe { _mm512_cmp_pd_mask::<_CMP_GT_OQ>(m, _mm512_setzero_pd()) != 0 }
     }
@@ -483,23 +421,11 @@ impl Simd for Avx512F64 {
     // are never on a hot path, so they go lane by lane.
     #[inline(always)]
     fn fixed_sub(self, a: __m512d, b: __m512d) -> __m512d {
-        let (a, b): ([f64; 8], [f64; 8]) =
-            unsafe { (std::mem::transmute(a), std::mem::transmute(b)) };
-        unsafe {
-            std::mem::transmute(std::array::from_fn::<f64, 8, _>(|i| {
-                f64::fixed_sub(a[i], b[i])
-            }))
-        }
+        by_lanes::<_, 8>(a, b, f64::fixed_sub)
     }
     #[inline(always)]
     fn fixed_add(self, x: __m512d, t: __m512d) -> __m512d {
-        let (x, t): ([f64; 8], [f64; 8]) =
-            unsafe { (std::mem::transmute(x), std::mem::transmute(t)) };
-        unsafe {
-            std::mem::transmute(std::array::from_fn::<f64, 8, _>(|i| {
-                f64::fixed_add(x[i], t[i])
-            }))
-        }
+        by_lanes::<_, 8>(x, t, f64::fixed_add)
     }
     #[inline(always)]
     fn shift1(self, prev: __m512d, cur: __m512d) -> __m512d {
@@ -522,41 +448,8 @@ impl Simd for Avx512F64 {
 }
 
 impl Simd for Avx2F64 {
-    type E = f64;
-    type V = __m256d;
-    const LANES: usize = 4;
-    #[inline(always)]
-    fn splat(self, a: f64) -> __m256d {
-        unsafe { _mm256_set1_pd(a) }
-    }
-    #[inline(always)]
-    unsafe fn load(self, p: *const f64) -> __m256d {
-        unsafe { _mm256_loadu_pd(p) }
-    }
-    #[inline(always)]
-    unsafe fn store(self, p: *mut f64, v: __m256d) {
-        unsafe { _mm256_storeu_pd(p, v) }
-    }
-    #[inline(always)]
-    fn add(self, a: __m256d, b: __m256d) -> __m256d {
-        unsafe { _mm256_add_pd(a, b) }
-    }
-    #[inline(always)]
-    fn sub(self, a: __m256d, b: __m256d) -> __m256d {
-        unsafe { _mm256_sub_pd(a, b) }
-    }
-    #[inline(always)]
-    fn mul(self, a: __m256d, b: __m256d) -> __m256d {
-        unsafe { _mm256_mul_pd(a, b) }
-    }
-    #[inline(always)]
-    fn mul_add(self, a: __m256d, b: __m256d, c: __m256d) -> __m256d {
-        unsafe { _mm256_fmadd_pd(a, b, c) }
-    }
-    #[inline(always)]
-    fn mul_sub(self, a: __m256d, b: __m256d, c: __m256d) -> __m256d {
-        unsafe { _mm256_fmsub_pd(a, b, c) }
-    }
+    lanes!(f64, __m256d, 4;
+        _mm256_set1_pd, _mm256_loadu_pd, _mm256_storeu_pd, _mm256_add_pd, _mm256_sub_pd, _mm256_mul_pd, _mm256_fmadd_pd, _mm256_fmsub_pd, _mm256_div_pd);
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m256d, eps: f64) -> __m256d {
         unsafe {
@@ -576,36 +469,21 @@ impl Simd for Avx2F64 {
         }
     }
     #[inline(always)]
-    fn div(self, a: __m256d, b: __m256d) -> __m256d {
-        unsafe { _mm256_div_pd(a, b) }
-    }
-    #[inline(always)]
     fn any_positive(self, m: __m256d) -> bool {
         unsafe {
             let ok = _mm256_cmp_pd::<_CMP_GT_OQ>(m, _mm256_setzero_pd());
             _mm256_movemask_pd(ok) != 0
         }
     }
-    // As for `Avx512F64`: lane by lane, never on a hot path.
+    // Float64 positions are floats in metres (`Precision::Double`): these two
+    // are never on a hot path, so they go lane by lane.
     #[inline(always)]
     fn fixed_sub(self, a: __m256d, b: __m256d) -> __m256d {
-        let (a, b): ([f64; 4], [f64; 4]) =
-            unsafe { (std::mem::transmute(a), std::mem::transmute(b)) };
-        unsafe {
-            std::mem::transmute(std::array::from_fn::<f64, 4, _>(|i| {
-                f64::fixed_sub(a[i], b[i])
-            }))
-        }
+        by_lanes::<_, 4>(a, b, f64::fixed_sub)
     }
     #[inline(always)]
     fn fixed_add(self, x: __m256d, t: __m256d) -> __m256d {
-        let (x, t): ([f64; 4], [f64; 4]) =
-            unsafe { (std::mem::transmute(x), std::mem::transmute(t)) };
-        unsafe {
-            std::mem::transmute(std::array::from_fn::<f64, 4, _>(|i| {
-                f64::fixed_add(x[i], t[i])
-            }))
-        }
+        by_lanes::<_, 4>(x, t, f64::fixed_add)
     }
     #[inline(always)]
     fn shift1(self, prev: __m256d, cur: __m256d) -> __m256d {
@@ -621,5 +499,17 @@ impl Simd for Avx2F64 {
     #[inline(always)]
     fn shift2(self, prev: __m256d, cur: __m256d) -> __m256d {
         unsafe { _mm256_permute2f128_pd::<0x21>(prev, cur) }
+    }
+}
+
+/// `f` of each pair of lanes of `a` and `b`, vectors of `N` float64 lanes.
+#[inline(always)]
+fn by_lanes<V: Copy, const N: usize>(a: V, b: V, f: impl Fn(f64, f64) -> f64) -> V {
+    assert_eq!(size_of::<V>(), size_of::<[f64; N]>());
+    // SAFETY: `V` is `N` float64 lanes (asserted: the same size), any bits valid.
+    unsafe {
+        let (a, b): ([f64; N], [f64; N]) =
+            (std::mem::transmute_copy(&a), std::mem::transmute_copy(&b));
+        std::mem::transmute_copy(&std::array::from_fn::<f64, N, _>(|i| f(a[i], b[i])))
     }
 }
