@@ -454,6 +454,9 @@ trait Real:
     fn fixed_sub(a: Self, b: Self) -> Self;
     /// Fixed-point `x` moved by `t` units, rounded to the nearest.
     fn fixed_add(x: Self, t: Self) -> Self;
+    /// `a` if `yes`, else `b`, bit for bit, without a branch (which the compiler
+    /// did not vectorise).
+    fn select(yes: bool, a: Self, b: Self) -> Self;
     /// Runs one band of a step, with the best code this CPU has for this type.
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
     /// Runs one band of a lattice's step, likewise.
@@ -513,6 +516,11 @@ macro_rules! real {
             #[inline(always)]
             fn fixed_sub(a: Self, b: Self) -> Self {
                 (a.to_bits() as $int).wrapping_sub(b.to_bits() as $int) as $t
+            }
+            #[inline(always)]
+            fn select(yes: bool, a: Self, b: Self) -> Self {
+                let keep = <$bits>::from(yes).wrapping_neg();
+                $t::from_bits((a.to_bits() & keep) | (b.to_bits() & !keep))
             }
             #[inline(always)]
             fn fixed_add(x: Self, t: Self) -> Self {

@@ -83,7 +83,9 @@ lanewise!(Mul, mul, *);
 lanewise!(Div, div, /);
 
 impl<const N: usize> Lanes for F64s<N> {
-    type Mask = [bool; N];
+    /// All ones where yes, all zeros where no, as a vector compare gives them: the
+    /// compiler turned masks of `bool`s into byte shuffles.
+    type Mask = [u64; N];
     #[inline(always)]
     fn splat(x: f64) -> Self {
         F64s([x; N])
@@ -94,26 +96,34 @@ impl<const N: usize> Lanes for F64s<N> {
         F64s(std::array::from_fn(|i| self.0[i].sqrt()))
     }
     #[inline(always)]
-    fn lt(self, other: Self) -> [bool; N] {
-        std::array::from_fn(|i| self.0[i] < other.0[i])
+    fn lt(self, other: Self) -> [u64; N] {
+        std::array::from_fn(|i| all_if(self.0[i] < other.0[i]))
     }
     #[inline(always)]
-    fn le(self, other: Self) -> [bool; N] {
-        std::array::from_fn(|i| self.0[i] <= other.0[i])
+    fn le(self, other: Self) -> [u64; N] {
+        std::array::from_fn(|i| all_if(self.0[i] <= other.0[i]))
     }
     #[inline(always)]
-    fn gt(self, other: Self) -> [bool; N] {
-        std::array::from_fn(|i| self.0[i] > other.0[i])
+    fn gt(self, other: Self) -> [u64; N] {
+        std::array::from_fn(|i| all_if(self.0[i] > other.0[i]))
     }
     #[inline(always)]
-    fn any(m: [bool; N]) -> bool {
-        m.iter().fold(false, |any, &m| any | m)
+    fn any(m: [u64; N]) -> bool {
+        m.iter().fold(0, |any, &m| any | m) != 0
     }
 
     #[inline(always)]
-    fn select(m: [bool; N], a: Self, b: Self) -> Self {
-        F64s(std::array::from_fn(|i| if m[i] { a.0[i] } else { b.0[i] }))
+    fn select(m: [u64; N], a: Self, b: Self) -> Self {
+        F64s(std::array::from_fn(|i| {
+            f64::from_bits((a.0[i].to_bits() & m[i]) | (b.0[i].to_bits() & !m[i]))
+        }))
     }
+}
+
+/// All ones if `yes`, else all zeros.
+#[inline(always)]
+fn all_if(yes: bool) -> u64 {
+    0u64.wrapping_sub(u64::from(yes))
 }
 
 /// A 3-vector of lanes, with the operations of [`DVec3`] that the shared physics

@@ -209,7 +209,7 @@ impl<E: Real> ContactRows<'_, E> {
                             } else {
                                 E::of(p.f64() + push)
                             };
-                            if touch[l] & (push != 0.0) { to } else { p }
+                            E::select(touch[l] & (push != 0.0), to, p)
                         });
                         p.copy_from_slice(&new);
                     }
@@ -224,16 +224,12 @@ impl<E: Real> ContactRows<'_, E> {
                     let dv: [E; N] = std::array::from_fn(|l| E::of(v_new.0[l] - v.0[l]));
                     let speed = &mut vel[a][j..j + N];
                     for l in 0..N {
-                        speed[l] = if touch[l] { speed[l] + dv[l] } else { speed[l] };
+                        speed[l] = E::select(touch[l], speed[l] + dv[l], speed[l]);
                     }
                     if self.verlet {
                         let update = &mut upd[a][j..j + N];
                         for l in 0..N {
-                            update[l] = if touch[l] {
-                                update[l] + dv[l]
-                            } else {
-                                update[l]
-                            };
+                            update[l] = E::select(touch[l], update[l] + dv[l], update[l]);
                         }
                     }
                 }
