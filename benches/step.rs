@@ -1,13 +1,15 @@
 //! Criterion benches of the grid fast path on the peers' benchmark scene
 //! (shared/peers/scene.py): N = 32 ... 512, with and without wind, 1 and 2 threads.
 //! One iteration is one 60 Hz frame of 16 steps (dt = 1/960 s); the reported
-//! throughput in elements/s is steps/s.
+//! throughput in elements/s is steps/s. And safe stepping's estimate on a large
+//! cloth.
 
 // criterion_group! and criterion_main! generate undocumented items.
 #![allow(missing_docs)]
 
 use std::time::Duration;
 
+use cloth_sandbox::scene::Scene;
 use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec};
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 
@@ -35,5 +37,17 @@ fn grid_step(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, grid_step);
+/// Safe stepping's substeps for a frame (the stability estimate: one pass over the
+/// springs and the drag triangles) on the default cloth made 256 x 256, as the app
+/// computes them when a slider moves.
+fn safe_substeps(c: &mut Criterion) {
+    let mut scene = Scene::load("cloth").unwrap();
+    scene.set_all(["width=256", "height=256"]).unwrap();
+    let system = scene.build().unwrap();
+    c.bench_function("safe_substeps_256", |b| {
+        b.iter(|| cloth_sandbox::sim::safe::safe_substeps(system.model(), 1.0 / 60.0, 0.5))
+    });
+}
+
+criterion_group!(benches, grid_step, safe_substeps);
 criterion_main!(benches);
