@@ -9,7 +9,7 @@
 //!   in particle order a single pass can diverge, see `springs::constraint_order`);
 //! - the sphere collider (seed 003): particles inside are projected onto its surface;
 //! - self-collision ([`super::self_collision`]), particles kept `thickness` apart;
-//! - Coulomb friction on the sphere and the ground ([`Contact::resolve`]).
+//! - Coulomb friction on the sphere and the ground (`Contact::resolve`).
 //!
 //! Moving a position by `dx` in a velocity-based integrator also changes the velocity
 //! by `dx / h` (as position-based dynamics does), so a corrected particle does not

@@ -3,7 +3,7 @@
 //! symplectic Euler, explicit Euler or position Verlet, then constrained by a sphere
 //! collider and Provot's stretch limit. With XPBD the fused pass predicts with every
 //! force but the springs, and the springs become distance constraints corrected
-//! after it ([`spring_passes`], in the f64 engine's colour classes).
+//! after it (`spring_passes`, in the f64 engine's colour classes).
 //!
 //! Units are SI (m, s, kg, N). The cloth is a `width x height` grid of particles,
 //! `p = r * width + c` (row `r` from the top). Every particle is joined to its
@@ -74,12 +74,12 @@
 //!
 //! # Where things are
 //! * This file: the spec and precision rule, the state's arrays, the kernel's
-//!   step (the row pass, then [`Kernel::constrain`]) and its public face, [`GridCloth`].
-//! * [`row`]: the fused row pass, the step itself: springs, drag triangles,
+//!   step (the row pass, then `Kernel::constrain`) and its public face, [`GridCloth`].
+//! * `row`: the fused row pass, the step itself: springs, drag triangles,
 //!   integration and the sphere, per SIMD block.
-//! * [`simd`]: the vector operations the loops are written over, and [`x86`] their
+//! * `simd`: the vector operations the loops are written over, and `x86` their
 //!   AVX2 and AVX-512 versions with the entry points compiled for them.
-//! * [`spring_passes`] (XPBD's springs, the stretch limit), [`contact`]: the passes
+//! * `spring_passes` (XPBD's springs, the stretch limit), `contact`: the passes
 //!   after the step; [`lattice`]: the same
 //!   physics on a 3-D lattice (the jelly cube).
 
@@ -164,7 +164,7 @@ pub struct GridSpec {
     /// Sphere collider, if any: particles inside are projected onto its surface.
     pub sphere: Option<Sphere>,
     /// Coulomb friction coefficient μ of the sphere (the ground's is its own, see
-    /// [`constraints::Contact::resolve`]); with friction on either the sphere is
+    /// `constraints::Contact::resolve`); with friction on either the sphere is
     /// resolved after the step rather than inside it.
     pub friction: f64,
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart

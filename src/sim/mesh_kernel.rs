@@ -7,9 +7,9 @@
 //! constraints, after the step:
 //! 1. each spring's force on its `a` end, `f_a = -(k (l - L) + b (v_a - v_b)·u) u`
 //!    with `u = (x_a - x_b)/l` ([`spring_force`]), into a per-spring array: the
-//!    springs are evaluated in batches of up to [`BATCH`], their ends read as
+//!    springs are evaluated in batches of up to `BATCH`, their ends read as
 //!    slices where they come in runs with consecutive ends (a lattice's do, in
-//!    [`SpringArrays`]' order), else gathered to the stack, in a loop the compiler
+//!    `SpringArrays`' order), else gathered to the stack, in a loop the compiler
 //!    vectorizes (built for AVX2 when the CPU has it);
 //! 2. per particle, the sum over its springs from a compressed adjacency (CSR) in
 //!    the model's canonical spring order, `+f` at an `a` end and `-f` at a `b` end,
@@ -105,7 +105,7 @@ pub struct MeshParams {
     /// Speed limit in m/s, if any ([`super::constraints::speed_limit`]).
     pub max_speed: Option<f64>,
     /// Whether the springs are forces; under XPBD they are constraints instead,
-    /// one Gauss-Seidel pass of [`xpbd_pass`] after the prediction.
+    /// one Gauss-Seidel pass of `xpbd_pass` after the prediction.
     pub spring_forces: bool,
     /// Per-triangle aerodynamic drag, if on.
     pub drag: Option<Drag>,

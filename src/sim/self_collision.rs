@@ -5,7 +5,7 @@
 //!
 //! # Method
 //! * Candidate pairs: every pair no spring or bar joins closer than `reach = h_c + 2
-//!   margin`, with `margin = 3 h_c / 4` ([`MARGIN`]), listed in order of `(i,
+//!   margin`, with `margin = 3 h_c / 4` (`MARGIN`), listed in order of `(i,
 //!   j)`, `i < j` (the same list whatever the hash, the engine's cell round-off or
 //!   the threads). They come from a spatial hash (cells of `reach`, filled by a
 //!   counting sort, after Müller's dense hash of Ten Minute Physics) whose three

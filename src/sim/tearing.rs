@@ -16,7 +16,7 @@
 //!   deciding in f64, and keeps masks of the springs left for its row pass; it
 //!   hands its breaks back to the model after each run of steps
 //!   ([`super::fast_path`]). The mesh engine does the same on its own copy of the
-//!   springs and triangles ([`remove_broken`], shared with the model).
+//!   springs and triangles (`remove_broken`, shared with the model).
 
 use glam::DVec3;
 

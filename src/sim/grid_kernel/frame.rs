@@ -13,17 +13,17 @@
 //!   move is rounded likewise, but the velocity gets the move as computed, so that
 //!   the part under half a unit reaches the position at the next step (rounded
 //!   away, it would be a dead zone: XPBD's small corrections were lost whole).
-//! * Particles are kept within [`RANGE`] units of the centre (a quarter of the
-//!   integers' range) and colliders' coordinates within [`COLLIDER_RANGE`] (half),
+//! * Particles are kept within `RANGE` units of the centre (a quarter of the
+//!   integers' range) and colliders' coordinates within `COLLIDER_RANGE` (half),
 //!   so that the difference of any two coordinates, or of a coordinate and a
-//!   collider's, is exact. Every [`CHECK_STEPS`] steps the kernels check that the
+//!   collider's, is exact. Every `CHECK_STEPS` steps the kernels check that the
 //!   particles, moved as far as their speed takes them in those steps, stay inside;
-//!   if not, [`Frame::fitting`] recentres the frame on them (a shift by whole
+//!   if not, `Frame::fitting` recentres the frame on them (a shift by whole
 //!   units, exact) or, when they spread wider than the range, doubles the unit
 //!   until they fit. An unrepresentable collider (a ground or sphere so far off
 //!   that no particle can reach it) is left out of the frame's constants.
 //!
-//! Float32 and float64 positions use the identity frame ([`Frame::FLOAT`]): the
+//! Float32 and float64 positions use the identity frame (`Frame::FLOAT`): the
 //! same code, in metres.
 
 use glam::DVec3;
@@ -45,7 +45,7 @@ pub(super) const RANGE: f64 = (1u64 << 29) as f64;
 pub(super) const COLLIDER_RANGE: f64 = (1u64 << 30) as f64;
 
 /// The unit (m, a power of two) of fixed-point positions for a body of radius
-/// `extent` (m): the finest with [`RANGE`] units at least twice the extent (the
+/// `extent` (m): the finest with `RANGE` units at least twice the extent (the
 /// body, and as far again to move before the frame follows it). A power of two,
 /// so that the same body moved by a multiple of it (any whole number of metres
 /// where the unit is finer than 1 m) is stored as the same integers and steps

@@ -6,10 +6,10 @@
 //! ground, stepped by symplectic Euler, explicit Euler, position Verlet or XPBD,
 //! then projected out of a sphere, and with friction on the sphere or the ground
 //! resolved with it. These are the grid kernel's forces, integrators, projection
-//! and contact, written once in [`super`] and shared: a spring is [`spring`], a
-//! particle's step [`integrate`], the sphere [`project_out_of_sphere`], contact with
-//! friction [`ContactRows`] (over [`Contact::resolve`]), XPBD's springs and
-//! Provot's stretch limit the grid's spring passes ([`super::spring_passes`], see
+//! and contact, written once in [`super`] and shared: a spring is `spring`, a
+//! particle's step `integrate`, the sphere `project_out_of_sphere`, contact with
+//! friction `ContactRows` (over `Contact::resolve`), XPBD's springs and
+//! Provot's stretch limit the grid's spring passes (`super::spring_passes`, see
 //! `Lattice::spring_pass`). What the lattice does not model (bars, drag, tearing)
 //! runs on the mesh engine instead (`super::super::fast_path` decides, spring by
 //! spring).
@@ -34,7 +34,7 @@
 //! particles it holds in registers; the forces on the other ends go to an
 //! accumulator array. The offsets come in a run `+1` (along x) and four runs of
 //! three consecutive offsets `o - 1, o, o + 1` (`dx = -1, 0, 1`); within a run the
-//! three forces are moved by zero, one and two lanes ([`Simd::shift1`], carried
+//! three forces are moved by zero, one and two lanes (`Simd::shift1`, carried
 //! from block to block) and stored with one read-modify-write, and the `+1` run's
 //! forces reach their other ends by a shift alone. Springs reach only forward, so
 //! once a block has stored its runs the forces on its own particles are complete,
@@ -45,11 +45,11 @@
 //! integrating, the blocks within one slab and a row before it (whose springs
 //! reach into it), into its own accumulator, so no thread writes what another
 //! reads and the result is bit-identical for any number of threads. Two bands hand
-//! over each step by spinning ([`Duo`]), as the grid kernel's do.
+//! over each step by spinning (`Duo`), as the grid kernel's do.
 //!
 //! With XPBD the step predicts without the springs (their coefficients are 0 in
 //! it), and XPBD's pass over the springs follows (forward and back, see
-//! [`xpbd_sweeps_back`]), then the stretch limit's (each sweep's lines split
+//! `xpbd_sweeps_back`), then the stretch limit's (each sweep's lines split
 //! between the two threads), then the contact with friction.
 
 use std::ops::Range;
