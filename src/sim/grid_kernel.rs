@@ -520,15 +520,15 @@ macro_rules! real {
                 (a.to_bits() as $int).wrapping_sub(b.to_bits() as $int) as $t
             }
             #[inline(always)]
-            fn select(yes: bool, a: Self, b: Self) -> Self {
-                let keep = <$bits>::from(yes).wrapping_neg();
-                $t::from_bits((a.to_bits() & keep) | (b.to_bits() & !keep))
-            }
-            #[inline(always)]
             fn fixed_add(x: Self, t: Self) -> Self {
                 $t::from_bits(
                     (x.to_bits() as $int).wrapping_add(t.round_ties_even() as $int) as $bits,
                 )
+            }
+            #[inline(always)]
+            fn select(yes: bool, a: Self, b: Self) -> Self {
+                let keep = <$bits>::from(yes).wrapping_neg();
+                $t::from_bits((a.to_bits() & keep) | (b.to_bits() & !keep))
             }
             fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
                 match ctx.simd {
