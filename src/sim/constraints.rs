@@ -324,7 +324,14 @@ pub fn speed_limit(v: DVec3, max_speed: f64) -> f64 {
 #[inline(always)]
 fn coulomb<T: Lanes>(v: V3<T>, normal: V3<T>, most: T) -> V3<T> {
     let along = v - normal.scale(v.dot(normal));
-    let speed = along.length();
+    let speed2 = along.dot(along);
+    // The cheap test first: where every lane is slower than `most` by much more
+    // than the root's rounding, all stop, without the root and the division
+    // (particles at rest on a surface; a NaN fails the test).
+    if T::all(speed2.le(most * most * T::splat(1.0 - 1e-9))) {
+        return v - along;
+    }
+    let speed = speed2.sqrt();
     let slower = speed.le(most);
     V3::select(slower, v - along, v - along.scale(most / speed))
 }
@@ -564,5 +571,53 @@ mod tests {
         }
         // The contact did act on most particles.
         assert!(differ > 6000, "{differ} of 16000 changed");
+    }
+
+    /// Friction at the edge of sticking, in blocks whose lanes all take
+    /// `coulomb`'s cheap test or not: a particle sliding no faster than `most`
+    /// stops along the surface (exactly), a faster one keeps its direction and
+    /// `speed - most` of its speed, to round-off. Speeds from 1e-6 below `most` to
+    /// 1e-6 above, in relative steps down to 1e-13 around it (the cheap test's
+    /// margin is 5e-10 of the speed), and the same in lanes.
+    #[test]
+    fn friction_stops_what_is_slower_than_most_and_slows_the_rest_by_most() {
+        let most = 0.7;
+        let normal = V3::splat(DVec3::Y);
+        let offsets = [
+            -1e-6, -1e-9, -5e-10, -4e-10, -1e-10, -1e-13, 0.0, 1e-13, 1e-10, 1e-9, 1e-6,
+        ];
+        let speeds = offsets.map(|e| most * (1.0 + e));
+        for (i, &speed) in speeds.iter().enumerate() {
+            // Sliding along (3, 0, 4) / 5, pressed down at 0.25 m/s.
+            let v = DVec3::new(0.6 * speed, -0.25, 0.8 * speed);
+            let got = DVec3::from(coulomb(V3::from(v), normal, most));
+            assert_eq!(got.y, v.y, "{speed}: the normal part is left");
+            let kept = DVec3::new(got.x, 0.0, got.z);
+            if speed <= most {
+                assert_eq!(kept, DVec3::ZERO, "{speed} <= {most} stops");
+            } else {
+                let expected = speed - most;
+                assert!(
+                    (kept.length() - expected).abs() <= 1e-15 * most
+                        && kept.normalize().dot(DVec3::new(0.6, 0.0, 0.8)) > 1.0 - 1e-9,
+                    "{speed} > {most}: keeps {kept}, expected {expected} along (0.6, 0, 0.8)"
+                );
+            }
+            // The same in a block of lanes, all alike and mixed with resting ones.
+            for mixed in [false, true] {
+                let lane = |l: usize| if mixed && l % 2 == 1 { v * 1e-3 } else { v };
+                let block = V3 {
+                    x: F64s::<8>(std::array::from_fn(|l| lane(l).x)),
+                    y: F64s::<8>(std::array::from_fn(|l| lane(l).y)),
+                    z: F64s::<8>(std::array::from_fn(|l| lane(l).z)),
+                };
+                let out = coulomb(block, V3::splat(DVec3::Y), F64s::splat(most));
+                for l in 0..8 {
+                    let alone = DVec3::from(coulomb(V3::from(lane(l)), normal, most));
+                    let got = DVec3::new(out.x.0[l], out.y.0[l], out.z.0[l]);
+                    assert_eq!(got, alone, "speed {i}, lane {l}, mixed {mixed}");
+                }
+            }
+        }
     }
 }

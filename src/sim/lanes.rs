@@ -23,6 +23,8 @@ pub(crate) trait Lanes:
     fn gt(self, other: Self) -> Self::Mask;
     /// Whether any lane says yes.
     fn any(m: Self::Mask) -> bool;
+    /// Whether every lane says yes.
+    fn all(m: Self::Mask) -> bool;
 
     /// `a` in the lanes where `m` says yes, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
@@ -52,6 +54,10 @@ impl Lanes for f64 {
     }
     #[inline(always)]
     fn any(m: bool) -> bool {
+        m
+    }
+    #[inline(always)]
+    fn all(m: bool) -> bool {
         m
     }
 
@@ -110,6 +116,10 @@ impl<const N: usize> Lanes for F64s<N> {
     #[inline(always)]
     fn any(m: [u64; N]) -> bool {
         m.iter().fold(0, |any, &m| any | m) != 0
+    }
+    #[inline(always)]
+    fn all(m: [u64; N]) -> bool {
+        m.iter().fold(!0, |all, &m| all & m) == !0
     }
 
     #[inline(always)]
