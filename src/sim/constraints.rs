@@ -265,7 +265,12 @@ impl Contact {
                     let mut pushed = v + push.over(h);
                     if self.friction > 0.0 {
                         let normal = outside.over(radius);
-                        let most = T::splat(self.friction) * push.length() / h;
+                        // (Unlimited outside, as for the ground.)
+                        let most = T::select(
+                            inside,
+                            T::splat(self.friction) * push.length() / h,
+                            T::splat(f64::INFINITY),
+                        );
                         pushed = coulomb(pushed, normal, most);
                     }
                     moves = V3::select(inside, push, moves);
@@ -290,7 +295,13 @@ impl Contact {
         if !T::any(on) {
             return v;
         }
-        let most = T::splat(ground.friction) * T::splat(self.dt) * support * w;
+        // (Unlimited where off the ground, so that those lanes pass `coulomb`'s
+        // cheap test: their result is not taken.)
+        let most = T::select(
+            on,
+            T::splat(ground.friction) * T::splat(self.dt) * support * w,
+            T::splat(f64::INFINITY),
+        );
         V3::select(on, coulomb(v, V3::splat(DVec3::Y), most), v)
     }
 }
