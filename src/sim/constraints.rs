@@ -480,7 +480,7 @@ fn restore_length(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::lanes::F64s;
+    use crate::sim::lanes::{F64s, Floats};
     use rand::{Rng, SeedableRng, rngs::StdRng};
 
     /// Contact on a block of lanes gives each lane bit for bit what it gives its
@@ -535,7 +535,7 @@ mod tests {
                 x[3] = contact.sphere.unwrap().center;
                 x[5] = DVec3::NAN;
             }
-            let lanes = |p: &[DVec3; 8], a: usize| F64s(std::array::from_fn(|l| p[l][a]));
+            let lanes = |p: &[DVec3; 8], a: usize| Floats(std::array::from_fn(|l| p[l][a]));
             let v3 = |p: &[DVec3; 8]| V3 {
                 x: lanes(p, 0),
                 y: lanes(p, 1),
@@ -547,13 +547,13 @@ mod tests {
             );
             let near = Near {
                 from_centre: v3(&x.map(|x| x - centre)),
-                above_ground: F64s(x.map(|x| x.y - height)),
+                above_ground: Floats(x.map(|x| x.y - height)),
             };
-            let (push, v_new) = contact.resolve_lanes(near, v3(&v), F64s(w));
+            let (push, v_new) = contact.resolve_lanes(near, v3(&v), Floats(w));
             let to = V3 {
-                x: F64s(std::array::from_fn(|l| x[l].x + push.x.0[l])),
-                y: F64s(std::array::from_fn(|l| x[l].y + push.y.0[l])),
-                z: F64s(std::array::from_fn(|l| x[l].z + push.z.0[l])),
+                x: Floats(std::array::from_fn(|l| x[l].x + push.x.0[l])),
+                y: Floats(std::array::from_fn(|l| x[l].y + push.y.0[l])),
+                z: Floats(std::array::from_fn(|l| x[l].z + push.z.0[l])),
             };
             for l in 0..8 {
                 let (x1, v1) = contact.resolve(x[l], v[l], w[l]);
@@ -618,9 +618,9 @@ mod tests {
             for mixed in [false, true] {
                 let lane = |l: usize| if mixed && l % 2 == 1 { v * 1e-3 } else { v };
                 let block = V3 {
-                    x: F64s::<8>(std::array::from_fn(|l| lane(l).x)),
-                    y: F64s::<8>(std::array::from_fn(|l| lane(l).y)),
-                    z: F64s::<8>(std::array::from_fn(|l| lane(l).z)),
+                    x: Floats::<f64, 8>(std::array::from_fn(|l| lane(l).x)),
+                    y: Floats::<f64, 8>(std::array::from_fn(|l| lane(l).y)),
+                    z: Floats::<f64, 8>(std::array::from_fn(|l| lane(l).z)),
                 };
                 let out = coulomb(block, V3::splat(DVec3::Y), F64s::splat(most));
                 for l in 0..8 {

@@ -92,6 +92,7 @@ use glam::DVec3;
 
 use super::constraints;
 use super::duo::{Duo, run_in_pool};
+use super::lanes::LaneFloat;
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 use frame::{Frame, FrameRule};
@@ -412,7 +413,8 @@ const BLOCK: usize = 16;
 /// The float type a kernel computes in: `f32`, or `f64` where float32 cannot
 /// resolve the springs (see [`Precision`]).
 trait Real:
-    Copy
+    LaneFloat
+    + Copy
     + Default
     + PartialOrd
     + Pod

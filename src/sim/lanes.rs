@@ -1,16 +1,18 @@
-//! Float64 lanes for the physics every engine shares but the fast engines apply to
-//! many particles at once (contact and friction, [`super::constraints::Contact`]).
+//! Lanes for the physics every engine shares but the fast engines apply to many
+//! particles at once (contact and friction, [`super::constraints::Contact`]).
 //! The physics is written once over [`Lanes`]: `f64` for one particle (the f64
-//! engine), [`F64s`] for a block of them (the grid and lattice kernels). Branches
+//! engine), [`Floats`] for a block of them (the grid and lattice kernels). Branches
 //! become per-lane selects, so each lane computes exactly what the `f64` version
-//! computes for its particle (IEEE operations, no fused multiply-adds): the fast
-//! engines' contact agrees with the f64 engine's bit for bit.
+//! computes for its particle (IEEE operations, no fused multiply-adds): in float64
+//! lanes the fast engines' contact agrees with the f64 engine's bit for bit; in
+//! float32 lanes (the ground's friction in a float32 kernel, whose velocities are
+//! float32) it is the same arithmetic, rounded to float32.
 
-use std::ops::{Add, Div, Mul, Sub};
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Not, Sub};
 
 use glam::DVec3;
 
-/// Numbers of one particle (`f64`) or of a block of particles ([`F64s`]).
+/// Numbers of one particle (`f64`) or of a block of particles ([`Floats`]).
 pub(crate) trait Lanes:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
 {
@@ -67,18 +69,75 @@ impl Lanes for f64 {
     }
 }
 
-/// `N` lanes of f64: plain arrays, vectorised by the compiler for the target
-/// features of the function they are inlined into.
+/// A float a lane holds: `f64` or `f32`.
+pub(crate) trait LaneFloat:
+    Copy
+    + PartialOrd
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+{
+    /// The float's bits as an unsigned integer of its width.
+    type Word: Copy
+        + Eq
+        + BitAnd<Output = Self::Word>
+        + BitOr<Output = Self::Word>
+        + Not<Output = Self::Word>;
+    /// All zeros and all ones.
+    const NO: Self::Word;
+    const YES: Self::Word;
+    /// `x` rounded to this float.
+    fn of_f64(x: f64) -> Self;
+    fn root(self) -> Self;
+    fn word(self) -> Self::Word;
+    fn of_word(w: Self::Word) -> Self;
+}
+
+macro_rules! lane_float {
+    ($t:ty, $word:ty) => {
+        impl LaneFloat for $t {
+            type Word = $word;
+            const NO: $word = 0;
+            const YES: $word = !0;
+            #[inline(always)]
+            fn of_f64(x: f64) -> Self {
+                x as $t
+            }
+            #[inline(always)]
+            fn root(self) -> Self {
+                self.sqrt()
+            }
+            #[inline(always)]
+            fn word(self) -> $word {
+                self.to_bits()
+            }
+            #[inline(always)]
+            fn of_word(w: $word) -> Self {
+                <$t>::from_bits(w)
+            }
+        }
+    };
+}
+lane_float!(f64, u64);
+lane_float!(f32, u32);
+
+/// `N` lanes of a float `F`: plain arrays, vectorised by the compiler for the
+/// target features of the function they are inlined into.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct F64s<const N: usize>(pub [f64; N]);
+pub(crate) struct Floats<F, const N: usize>(pub [F; N]);
+
+/// `N` lanes of f64.
+#[cfg(test)]
+pub(crate) type F64s<const N: usize> = Floats<f64, N>;
 
 macro_rules! lanewise {
     ($trait:ident, $method:ident, $op:tt) => {
-        impl<const N: usize> $trait for F64s<N> {
+        impl<F: LaneFloat, const N: usize> $trait for Floats<F, N> {
             type Output = Self;
             #[inline(always)]
             fn $method(self, other: Self) -> Self {
-                F64s(std::array::from_fn(|i| self.0[i] $op other.0[i]))
+                Floats(std::array::from_fn(|i| self.0[i] $op other.0[i]))
             }
         }
     };
@@ -88,52 +147,52 @@ lanewise!(Sub, sub, -);
 lanewise!(Mul, mul, *);
 lanewise!(Div, div, /);
 
-impl<const N: usize> Lanes for F64s<N> {
+impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
     /// All ones where yes, all zeros where no, as a vector compare gives them: the
     /// compiler turned masks of `bool`s into byte shuffles.
-    type Mask = [u64; N];
+    type Mask = [F::Word; N];
     #[inline(always)]
     fn splat(x: f64) -> Self {
-        F64s([x; N])
+        Floats([F::of_f64(x); N])
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
         // (`from_fn`, not `map`: `map` was left a call in the hot loop.)
-        F64s(std::array::from_fn(|i| self.0[i].sqrt()))
+        Floats(std::array::from_fn(|i| self.0[i].root()))
     }
     #[inline(always)]
-    fn lt(self, other: Self) -> [u64; N] {
-        std::array::from_fn(|i| all_if(self.0[i] < other.0[i]))
+    fn lt(self, other: Self) -> Self::Mask {
+        std::array::from_fn(|i| all_if::<F>(self.0[i] < other.0[i]))
     }
     #[inline(always)]
-    fn le(self, other: Self) -> [u64; N] {
-        std::array::from_fn(|i| all_if(self.0[i] <= other.0[i]))
+    fn le(self, other: Self) -> Self::Mask {
+        std::array::from_fn(|i| all_if::<F>(self.0[i] <= other.0[i]))
     }
     #[inline(always)]
-    fn gt(self, other: Self) -> [u64; N] {
-        std::array::from_fn(|i| all_if(self.0[i] > other.0[i]))
+    fn gt(self, other: Self) -> Self::Mask {
+        std::array::from_fn(|i| all_if::<F>(self.0[i] > other.0[i]))
     }
     #[inline(always)]
-    fn any(m: [u64; N]) -> bool {
-        m.iter().fold(0, |any, &m| any | m) != 0
+    fn any(m: Self::Mask) -> bool {
+        m.iter().fold(F::NO, |any, &m| any | m) != F::NO
     }
     #[inline(always)]
-    fn all(m: [u64; N]) -> bool {
-        m.iter().fold(!0, |all, &m| all & m) == !0
+    fn all(m: Self::Mask) -> bool {
+        m.iter().fold(F::YES, |all, &m| all & m) == F::YES
     }
 
     #[inline(always)]
-    fn select(m: [u64; N], a: Self, b: Self) -> Self {
-        F64s(std::array::from_fn(|i| {
-            f64::from_bits((a.0[i].to_bits() & m[i]) | (b.0[i].to_bits() & !m[i]))
+    fn select(m: Self::Mask, a: Self, b: Self) -> Self {
+        Floats(std::array::from_fn(|i| {
+            F::of_word((a.0[i].word() & m[i]) | (b.0[i].word() & !m[i]))
         }))
     }
 }
 
 /// All ones if `yes`, else all zeros.
 #[inline(always)]
-fn all_if(yes: bool) -> u64 {
-    0u64.wrapping_sub(u64::from(yes))
+fn all_if<F: LaneFloat>(yes: bool) -> F::Word {
+    if yes { F::YES } else { F::NO }
 }
 
 /// A 3-vector of lanes, with the operations of [`DVec3`] that the shared physics

@@ -1,11 +1,12 @@
 //! Contact with the colliders after the step, where friction (or a stretch limit,
 //! XPBD or self-collision before it) keeps it out of the fused step: the shared
-//! [`constraints::Contact::resolve_lanes`] on blocks of particles, in float64, on
-//! the rows that may touch.
+//! [`constraints::Contact::resolve_lanes`] on blocks of particles, on the rows
+//! that may touch; in float64 near the sphere, the ground's friction alone in the
+//! kernel's float.
 
 use super::super::constraints::Near;
 use super::super::duo::Duo;
-use super::super::lanes::{F64s, V3};
+use super::super::lanes::{Floats, V3};
 use super::frame::whole_units;
 #[cfg(target_arch = "x86_64")]
 use super::x86;
@@ -66,7 +67,7 @@ pub(super) struct ContactRows<'a, E> {
     pub(super) verlet: bool,
 }
 
-/// Particles [`ContactRows`] resolves together, one per float64 lane.
+/// Particles [`ContactRows`] resolves together, one per lane.
 const CONTACT_LANES: usize = 8;
 
 impl<E: Real> ContactRows<'_, E> {
@@ -77,7 +78,11 @@ impl<E: Real> ContactRows<'_, E> {
     /// changes nothing); in the others, in blocks of [`CONTACT_LANES`] columns,
     /// those that may touch are resolved together
     /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
-    /// `resolve` gives it alone). A row's last block reads past its last column:
+    /// `resolve` gives it alone): in float64 where a lane is near the sphere (bit
+    /// for bit the f64 engine's contact); where none is, the ground's friction in
+    /// the kernel's float (its velocities' own; in a float32 kernel the friction
+    /// is rounded to float32, which cost the float64 lanes' conversions: 21% of
+    /// a one-core drape at 128 went to the contact, 23% before). A row's last block reads past its last column:
     /// the grid's ghost columns (its rows are [`super::BLOCK`] floats longer than their
     /// blocks), or the next row of a lattice (whose arrays end in ghosts); lanes
     /// that do not touch are written back what they held.
@@ -119,9 +124,8 @@ impl<E: Real> ContactRows<'_, E> {
     ) {
         const N: usize = CONTACT_LANES;
         let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
-        let (pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
+        let (mut pos, vel, upd) = ([x, y, z], [vx, vy, vz], [ux, uy, uz]);
         let frame = &self.frame;
-        let per_unit = 1.0 / frame.unit;
         // The colliders' coordinates as stored and in metres (0 for an absent
         // one, which `resolve_lanes` then leaves out).
         let exact = self
@@ -157,71 +161,46 @@ impl<E: Real> ContactRows<'_, E> {
                 if !touch.contains(&true) {
                     continue;
                 }
-                let lanes = |p: &[E]| {
-                    let p = &p[j..j + N];
-                    F64s::<N>(std::array::from_fn(|l| p[l].f64()))
-                };
-                let v = V3 {
-                    x: lanes(vel[0]),
-                    y: lanes(vel[1]),
-                    z: lanes(vel[2]),
-                };
-                let mass = F64s::<N>(std::array::from_fn(|l| w[l].f64()));
-                // Offsets (m) of coordinate `a` of the lanes from a collider's,
-                // given as stored and in metres: in fixed point from the stored
-                // one, exact (both are whole units); in floats from the exact one
-                // (float32 rounds the stored one).
-                let offset = |a: usize, (stored, exact): (E, f64)| {
-                    let p = &pos[a][j..j + N];
-                    F64s::<N>(std::array::from_fn(|l| {
-                        if FIXED {
-                            (p[l].fixed_value() - stored.fixed_value()) * frame.unit
-                        } else {
-                            p[l].f64() - exact
-                        }
-                    }))
-                };
-                let above_ground = offset(1, ground);
-                let v_new = if !sphere.contains(&true) {
+                // The touching lanes' changes of velocity.
+                let dv: [[E; N]; 3] = if !sphere.contains(&true) {
                     // None near the sphere: only the ground's friction, which
                     // leaves the positions as they are (`resolve_lanes` gives the
-                    // same, its sphere part then changing nothing).
-                    self.contact.ground_friction_lanes(above_ground, v, mass)
-                } else {
-                    let near = Near {
-                        from_centre: V3 {
-                            x: offset(0, centre[0]),
-                            y: offset(1, centre[1]),
-                            z: offset(2, centre[2]),
-                        },
-                        above_ground,
+                    // same, its sphere part then changing nothing); in the
+                    // kernel's float, whose velocities these are.
+                    let lanes = |p: &[E]| {
+                        let p = &p[j..j + N];
+                        Floats::<E, N>(std::array::from_fn(|l| p[l]))
                     };
-                    let (push, v_new) = self.contact.resolve_lanes(near, v, mass);
-                    // The touching lanes move by their push (rounded to a whole
-                    // unit in fixed point; their velocities take it as computed),
-                    // all lanes at once: the others are written what they held.
-                    for (a, push) in [push.x, push.y, push.z].into_iter().enumerate() {
-                        let p = &mut pos[a][j..j + N];
-                        let new: [E; N] = std::array::from_fn(|l| {
-                            let (p, push) = (p[l], push.0[l]);
-                            let to = if FIXED {
-                                whole_units(p.fixed_value() + (push * per_unit).round())
-                            } else {
-                                E::of(p.f64() + push)
-                            };
-                            E::select(touch[l] & (push != 0.0), to, p)
-                        });
-                        p.copy_from_slice(&new);
-                    }
-                    v_new
+                    let v = V3 {
+                        x: lanes(vel[0]),
+                        y: lanes(vel[1]),
+                        z: lanes(vel[2]),
+                    };
+                    // Height (m) above the ground: from the stored one in fixed
+                    // point, exact (both are whole units), from the exact one in
+                    // floats.
+                    let (stored, exact) = (ground.0, E::of(ground.1));
+                    let above = Floats::<E, N>(std::array::from_fn(|l| {
+                        if FIXED {
+                            E::fixed_sub(py[l], stored) * E::of(frame.unit)
+                        } else {
+                            py[l] - exact
+                        }
+                    }));
+                    let mass = Floats::<E, N>(std::array::from_fn(|l| w[l]));
+                    let v_new = self.contact.ground_friction_lanes(above, v, mass);
+                    change(v_new, v, |dv| dv)
+                } else {
+                    let [x, y, z] = &mut pos;
+                    let (pos, vel) = (
+                        [&mut ***x, &mut ***y, &mut ***z],
+                        [&**vel[0], &**vel[1], &**vel[2]],
+                    );
+                    self.resolve_near_sphere::<FIXED>(pos, vel, (i, j), (centre, ground), &touch)
                 };
                 // The touching lanes' velocities get the change (and Verlet's
                 // update velocities with them).
-                for (a, (v_new, v)) in [(v_new.x, v.x), (v_new.y, v.y), (v_new.z, v.z)]
-                    .into_iter()
-                    .enumerate()
-                {
-                    let dv: [E; N] = std::array::from_fn(|l| E::of(v_new.0[l] - v.0[l]));
+                for (a, dv) in dv.iter().enumerate() {
                     let speed = &mut vel[a][j..j + N];
                     for l in 0..N {
                         speed[l] = E::select(touch[l], speed[l] + dv[l], speed[l]);
@@ -236,6 +215,90 @@ impl<E: Real> ContactRows<'_, E> {
             }
         }
     }
+
+    /// The contact of the block of lanes at array index `j` (particle index `i`)
+    /// with a lane near the sphere, in float64 as the f64 engine resolves it
+    /// ([`constraints::Contact::resolve_lanes`]): moves the `touch` lanes by
+    /// their push (rounded to a whole unit in fixed point) and returns the
+    /// changes of their velocities (which take the push as computed). `colliders`:
+    /// the sphere's centre and the ground's height, as stored and in metres.
+    #[inline(always)]
+    fn resolve_near_sphere<const FIXED: bool>(
+        &self,
+        pos: [&mut [E]; 3],
+        vel: [&[E]; 3],
+        (i, j): (usize, usize),
+        (centre, ground): ([(E, f64); 3], (E, f64)),
+        touch: &[bool; CONTACT_LANES],
+    ) -> [[E; CONTACT_LANES]; 3] {
+        const N: usize = CONTACT_LANES;
+        let frame = &self.frame;
+        let per_unit = 1.0 / frame.unit;
+        let lanes = |p: &[E]| {
+            let p = &p[j..j + N];
+            Floats::<f64, N>(std::array::from_fn(|l| p[l].f64()))
+        };
+        let v = V3 {
+            x: lanes(vel[0]),
+            y: lanes(vel[1]),
+            z: lanes(vel[2]),
+        };
+        let w = &self.inv_mass[i..i + N];
+        let mass = Floats::<f64, N>(std::array::from_fn(|l| w[l].f64()));
+        // Offsets (m) of coordinate `a` of the lanes from a collider's, given as
+        // stored and in metres: in fixed point from the stored one, exact (both are
+        // whole units); in floats from the exact one (float32 rounds the stored
+        // one).
+        let offset = |a: usize, (stored, exact): (E, f64)| {
+            let p = &pos[a][j..j + N];
+            Floats::<f64, N>(std::array::from_fn(|l| {
+                if FIXED {
+                    (p[l].fixed_value() - stored.fixed_value()) * frame.unit
+                } else {
+                    p[l].f64() - exact
+                }
+            }))
+        };
+        let near = Near {
+            from_centre: V3 {
+                x: offset(0, centre[0]),
+                y: offset(1, centre[1]),
+                z: offset(2, centre[2]),
+            },
+            above_ground: offset(1, ground),
+        };
+        let (push, v_new) = self.contact.resolve_lanes(near, v, mass);
+        // The touching lanes move by their push, all lanes at once: the others are
+        // written what they held.
+        for (a, push) in [push.x, push.y, push.z].into_iter().enumerate() {
+            let p = &mut pos[a][j..j + N];
+            let new: [E; N] = std::array::from_fn(|l| {
+                let (p, push) = (p[l], push.0[l]);
+                let to = if FIXED {
+                    whole_units(p.fixed_value() + (push * per_unit).round())
+                } else {
+                    E::of(p.f64() + push)
+                };
+                E::select(touch[l] & (push != 0.0), to, p)
+            });
+            p.copy_from_slice(&new);
+        }
+        change(v_new, v, E::of)
+    }
+}
+
+/// `to - from` of each lane, as `E` by `as_e`. (Written out: arrays' `map` was
+/// left a call in this loop.)
+#[inline(always)]
+fn change<F: Copy + std::ops::Sub<Output = F>, E>(
+    to: V3<Floats<F, CONTACT_LANES>>,
+    from: V3<Floats<F, CONTACT_LANES>>,
+    as_e: impl Fn(F) -> E,
+) -> [[E; CONTACT_LANES]; 3] {
+    let axis = |to: Floats<F, CONTACT_LANES>, from: Floats<F, CONTACT_LANES>| {
+        std::array::from_fn(|l| as_e(to.0[l] - from.0[l]))
+    };
+    [axis(to.x, from.x), axis(to.y, from.y), axis(to.z, from.z)]
 }
 
 /// Where a particle may touch a collider, in the kernel's precision and the
