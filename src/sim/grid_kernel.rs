@@ -507,6 +507,7 @@ macro_rules! real {
             fn fixed_from(n: i64) -> Self {
                 $t::from_bits(n as $int as $bits)
             }
+            #[inline(always)]
             fn fixed_range(xs: &[Self]) -> (i64, i64) {
                 let (lo, hi) = xs.iter().fold((<$int>::MAX, <$int>::MIN), |(lo, hi), x| {
                     let n = x.to_bits() as $int;
