@@ -304,6 +304,11 @@ pub(super) struct StepLanes<S: Simd> {
     /// onto it).
     pub(super) sphere: Option<SphereLanes<S::V>>,
     pub(super) verlet: bool,
+    /// Whether the step has air damping, a ground, explicit Euler: uniform
+    /// branches, each leaving out what would add or mix in a 0.
+    pub(super) air: bool,
+    pub(super) ground_on: bool,
+    pub(super) explicit_euler: bool,
     /// Verlet's update velocities (the velocities for the other methods).
     pub(super) u: [*const S::E; 3],
     /// [`Out`]'s nine arrays.
@@ -337,6 +342,9 @@ impl<S: Simd> StepLanes<S> {
                 .sphere
                 .map(|(c, r, r2)| (c.map(|c| s.splat(c)), s.splat(r), s.splat(r2))),
             verlet: p.verlet,
+            air: p.neg_air != S::E::ZERO,
+            ground_on: p.ground_on,
+            explicit_euler: p.explicit != S::E::ZERO,
             // Without Verlet's own array the update velocity is the velocity.
             u: if p.verlet { u } else { v }.map(<[S::E]>::as_ptr),
             out: out.0.each_mut().map(|o| o.as_mut_ptr()),
@@ -625,8 +633,11 @@ pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const FIXED: bool>(
     } else {
         v[i]
     };
-    let mut force = s.mul_add(k.neg_air, v[i], force);
-    if i == 1 {
+    let mut force = force;
+    if k.air {
+        force = s.mul_add(k.neg_air, v[i], force);
+    }
+    if i == 1 && k.ground_on {
         // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
         let [height, kc, cg] = k.ground;
         let depth = difference::<S, FIXED>(s, height, x[1]);
@@ -636,9 +647,18 @@ pub(super) unsafe fn integrate<S: Simd, const PLAIN: bool, const FIXED: bool>(
     let a = s.mul_add(force, w, k.gravity[i]);
     let un = s.keep_if_positive(w, s.mul_add(k.dt, a, u));
     // Explicit Euler moves with the old velocity, the others with the new one.
-    let moving = s.mul_add(k.explicit, s.sub(u, un), un);
+    let moving = if k.explicit_euler {
+        s.mul_add(k.explicit, s.sub(u, un), un)
+    } else {
+        un
+    };
     let xn = moved::<S, FIXED>(s, x[i], k.dt_units, moving);
-    let vn = s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un));
+    // Verlet's velocity estimate `u + h/2 a`; the others' velocity is `u`.
+    let vn = if k.verlet {
+        s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un))
+    } else {
+        un
+    };
     // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
     unsafe {
         s.store(k.out[i].add(o), xn);
