@@ -150,15 +150,21 @@ fn the_engines_agree_with_friction() {
     // positions (1.7e-5 m on the double-float ones before), which round each move
     // to half their 7.5e-9 m unit: the f64 engine started 3.7e-9 m off parts from
     // itself by 1.4e-6 m at this time, and the fast engine rounds every step.
-    let run = |fast: bool| {
-        let mut s = build("drape", &[]);
-        s.set_fast_path(fast);
-        s
-    };
-    let (mut fast, mut exact) = (run(true), run(false));
-    fast.run(384).unwrap();
-    exact.run(384).unwrap();
-    let apart = common::max_distance(fast.positions(), exact.positions());
-    println!("apart after 0.4 s: {apart:e} m");
-    assert!(apart < 3e-4, "{apart}");
+    // Without self-collision the fast engine resolves the contact inside the
+    // step's hand-over, each band's rows right after them; it is the same contact
+    // (measured: the same 1.08e-4 m apart as with self-collision, whose pass finds
+    // nothing to separate this early).
+    for settings in [&[][..], &["self_collision=false"][..]] {
+        let run = |fast: bool| {
+            let mut s = build("drape", settings);
+            s.set_fast_path(fast);
+            s
+        };
+        let (mut fast, mut exact) = (run(true), run(false));
+        fast.run(384).unwrap();
+        exact.run(384).unwrap();
+        let apart = common::max_distance(fast.positions(), exact.positions());
+        println!("{settings:?}: apart after 0.4 s: {apart:e} m");
+        assert!(apart < 3e-4, "{settings:?}: {apart}");
+    }
 }

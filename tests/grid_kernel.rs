@@ -164,10 +164,11 @@ fn coincident_particles_stay_finite() {
 
 /// The same with every feature of the engine on, in each precision: Verlet (and
 /// XPBD, whose spring pass splits its colour classes among the threads), air
-/// damping, a ground, a sphere, the stretch limit and gusty drag (tolerance 0). At
-/// 96 x 96 the threads hand over work with `rayon::join`; from 128 x 128 on, the
-/// step's second band and the stretch limit's second half are handed over by
-/// spinning.
+/// damping, a ground, a sphere, the stretch limit, friction (without a stretch
+/// limit the contact is resolved on each band's rows inside the step's hand-over)
+/// and gusty drag (tolerance 0). At 96 x 96 the threads hand over work with
+/// `rayon::join`; from 128 x 128 on, the step's second band and the stretch
+/// limit's second half are handed over by spinning.
 #[test]
 fn threads_give_bit_identical_results_with_every_feature() {
     use cloth_sandbox::sim::grid_kernel::Precision;
@@ -178,9 +179,9 @@ fn threads_give_bit_identical_results_with_every_feature() {
         .into_iter()
         .chain([(Precision::Single, Integrator::Xpbd)]);
     for (precision, integrator) in cases {
-        for (n, stretch_limit) in [96, 128]
+        for (n, stretch_limit, friction) in [96, 128]
             .into_iter()
-            .flat_map(|n| [(n, None), (n, Some(0.2))])
+            .flat_map(|n| [(n, None, 0.0), (n, Some(0.2), 0.0), (n, None, 0.5)])
         {
             let state = |threads: usize| {
                 let mut spec = GridSpec::peer_bench(n, true);
@@ -192,8 +193,9 @@ fn threads_give_bit_identical_results_with_every_feature() {
                     height: -0.05,
                     stiffness: 50.0,
                     damping: 0.01,
-                    friction: 0.0,
+                    friction,
                 });
+                spec.friction = friction;
                 spec.sphere = Some(Sphere {
                     center: DVec3::new(0.5, 0.3, 0.22),
                     radius: 0.2,
@@ -226,11 +228,11 @@ fn threads_give_bit_identical_results_with_every_feature() {
             );
             assert!(
                 finite(&one.0) && finite(&one.1),
-                "{n}: {precision:?} {integrator} {stretch_limit:?}"
+                "{n}: {precision:?} {integrator} {stretch_limit:?} {friction}"
             );
             assert!(
                 one.0 == two.0 && one.1 == two.1,
-                "{n}: {precision:?} {integrator} {stretch_limit:?}"
+                "{n}: {precision:?} {integrator} {stretch_limit:?} {friction}"
             );
         }
     }

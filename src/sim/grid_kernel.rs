@@ -881,6 +881,11 @@ impl<E: Real> State<E> {
 struct Out<'a, E>([&'a mut [E]; 9]);
 
 impl<'a, E> Out<'a, E> {
+    /// The same arrays, borrowed for a shorter while.
+    fn reborrow(&mut self) -> Out<'_, E> {
+        Out(self.0.each_mut().map(|a| &mut **a))
+    }
+
     fn split_at(self, at: usize) -> (Out<'a, E>, Out<'a, E>) {
         let mut lo: [&'a mut [E]; 9] = Default::default();
         let mut hi: [&'a mut [E]; 9] = Default::default();
@@ -1261,7 +1266,7 @@ impl<E: Real> Kernel<E> {
                 if let Some((t0, wind)) = wind {
                     self.set_wind(wind.at(t0 + i as f64 * dt));
                 }
-                self.one_step(parallel, duo);
+                self.one_step(dt, parallel, duo);
                 self.constrain(dt, parallel, duo);
             }
         };
@@ -1275,7 +1280,14 @@ impl<E: Real> Kernel<E> {
         self.spec.self_collision.is_some()
     }
 
-    fn one_step(&mut self, parallel: bool, duo: Option<&Duo>) {
+    /// One step of `dt` (the one [`Self::params`] holds, in f64), and the
+    /// colliders' contact after it when it comes first ([`Self::contact_in_step`]).
+    fn one_step(&mut self, dt: f64, parallel: bool, duo: Option<&Duo>) {
+        let colliders = self.contact(dt);
+        let contact = self.contact_in_step().then(|| {
+            let cloth = (self.grid, self.inv_mass.as_slice());
+            ContactRows::new(&colliders, cloth, self.frame, self.simd, self.params.verlet)
+        });
         let ctx = Ctx {
             grid: self.grid,
             p: self.params,
@@ -1297,6 +1309,7 @@ impl<E: Real> Kernel<E> {
             }),
             drag: self.drag_on,
             simd: self.simd,
+            contact: contact.as_ref(),
         };
         let real = self.grid.h * self.grid.stride;
         fn rows<E: Real>(arrays: &mut [Buf<E>; 3], real: usize) -> [&mut [E]; 3] {
@@ -1339,15 +1352,11 @@ impl<E: Real> Kernel<E> {
         if let Some(thickness) = self.spec.self_collision {
             self.self_collision_pass(thickness, dt, parallel);
         }
-        let contact = constraints::Contact {
-            sphere: self.spec.sphere,
-            ground: self.spec.ground,
-            friction: self.spec.friction,
-            dt,
-        };
+        let contact = self.contact(dt);
         // Without friction, stretch limit or XPBD the step itself projected the
-        // particles out of the sphere.
-        if contact.is_active() && self.params.sphere.is_none() {
+        // particles out of the sphere; with nothing before the contact, the step
+        // resolved it.
+        if contact.is_active() && self.params.sphere.is_none() && !self.contact_in_step() {
             self.resolve_contact(&contact, parallel, duo);
         }
         if let Some(max_speed) = self.spec.max_speed {
@@ -1356,6 +1365,30 @@ impl<E: Real> Kernel<E> {
         if let Some(tau) = self.spec.tear_strain {
             self.tear_pass(tau, parallel, duo);
         }
+    }
+
+    /// The colliders' contact after a step of `dt`.
+    fn contact(&self, dt: f64) -> constraints::Contact {
+        constraints::Contact {
+            sphere: self.spec.sphere,
+            ground: self.spec.ground,
+            friction: self.spec.friction,
+            dt,
+        }
+    }
+
+    /// Whether the step resolves the colliders' contact on each band's rows as
+    /// soon as they are stepped, in the same hand-over (one fork and join a step,
+    /// not two): when the contact is the first constraint after the step (no
+    /// XPBD, stretch limit or self-collision) and the step does not project onto
+    /// the sphere itself. Each particle's contact is its own, so the result is the
+    /// same.
+    fn contact_in_step(&self) -> bool {
+        self.spec.integrator != Integrator::Xpbd
+            && self.spec.stretch_limit.is_none()
+            && self.spec.self_collision.is_none()
+            && self.params.sphere.is_none()
+            && self.contact(0.0).is_active()
     }
 
     /// The speed limit, as the f64 engine applies it ([`constraints::speed_limit`]):

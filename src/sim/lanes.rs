@@ -90,6 +90,7 @@ pub(crate) trait LaneFloat:
     /// `x` rounded to this float.
     fn of_f64(x: f64) -> Self;
     fn root(self) -> Self;
+    fn is_nan(self) -> bool;
     fn word(self) -> Self::Word;
     fn of_word(w: Self::Word) -> Self;
 }
@@ -107,6 +108,10 @@ macro_rules! lane_float {
             #[inline(always)]
             fn root(self) -> Self {
                 self.sqrt()
+            }
+            #[inline(always)]
+            fn is_nan(self) -> bool {
+                <$t>::is_nan(self)
             }
             #[inline(always)]
             fn word(self) -> $word {

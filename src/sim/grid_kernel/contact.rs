@@ -10,7 +10,7 @@ use super::super::lanes::{Floats, V3};
 use super::frame::whole_units;
 #[cfg(target_arch = "x86_64")]
 use super::x86;
-use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
+use super::{Frame, Grid, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
 
 impl<E: Real> Kernel<E> {
     /// The colliders' contact of every free particle that touches one, as the f64
@@ -27,16 +27,13 @@ impl<E: Real> Kernel<E> {
         let split = h / 2;
         // In two halves of the rows on two threads when allowed (each particle's
         // resolution is its own: the same results).
-        let ctx = ContactRows {
-            simd: self.simd,
-            width: w,
-            stride: st,
-            inv_mass: self.inv_mass.as_slice(),
-            reach: Reach::of(contact, &self.frame),
+        let ctx = ContactRows::new(
             contact,
-            frame: self.frame,
-            verlet: self.params.verlet,
-        };
+            (self.grid, self.inv_mass.as_slice()),
+            self.frame,
+            self.simd,
+            self.params.verlet,
+        );
         let out = self.cur.rows();
         if (parallel || duo.is_some()) && large {
             let (mut first, mut second) = out.split_at(split * st);
@@ -70,7 +67,28 @@ pub(super) struct ContactRows<'a, E> {
 /// Particles [`ContactRows`] resolves together, one per lane.
 const CONTACT_LANES: usize = 8;
 
-impl<E: Real> ContactRows<'_, E> {
+impl<'a, E: Real> ContactRows<'a, E> {
+    /// The contact with the colliders of `contact` of a grid's cloth: its
+    /// inverse masses, frame, SIMD level and whether it steps by Verlet.
+    pub(super) fn new(
+        contact: &'a constraints::Contact,
+        (grid, inv_mass): (Grid, &'a [E]),
+        frame: Frame,
+        simd: SimdLevel,
+        verlet: bool,
+    ) -> Self {
+        ContactRows {
+            simd,
+            width: grid.w,
+            stride: grid.stride,
+            inv_mass,
+            reach: Reach::of(contact, &frame),
+            contact,
+            frame,
+            verlet,
+        }
+    }
+
     /// Resolves the particles of the rows `rows` that may touch a collider, whose
     /// arrays `out` holds from row `first` on. A vectorised scan of a row first
     /// ([`row_may_touch`]) skips the rows with none that may ([`Reach::may_touch`]:

@@ -309,7 +309,7 @@ fn span_in<E: Real>(
         // (`max` of floats, with its rule for NaN, is not one).
         for i in 0..vx.len() {
             let s = vx[i] * vx[i] + vy[i] * vy[i] + vz[i] * vz[i];
-            nan |= s != s;
+            nan |= s.is_nan();
             speed2 = if s > speed2 { s } else { speed2 };
         }
     }

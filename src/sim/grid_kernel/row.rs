@@ -3,6 +3,7 @@
 //! integrated as soon as its force is complete (see the module doc of
 //! [`super`]).
 
+use super::contact::ContactRows;
 use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, SimdLevel};
 
 /// Read-only inputs of a step.
@@ -21,13 +22,25 @@ pub(super) struct Ctx<'a, E> {
     pub(super) torn: Option<[&'a [E]; 8]>,
     pub(super) drag: bool,
     pub(super) simd: SimdLevel,
+    /// The colliders' contact, resolved on each band's rows right after them (in
+    /// the same hand-over) when it is the first thing after the step
+    /// ([`super::Kernel::contact_in_step`]).
+    pub(super) contact: Option<&'a ContactRows<'a, E>>,
+}
+
+/// One band of the step, then the contact of its rows if the step has it.
+fn run_band<E: Real>(ctx: &Ctx<E>, band: &mut Band<E>, mut out: Out<E>) {
+    E::band_dispatch(ctx, band, out.reborrow());
+    if let Some(contact) = ctx.contact {
+        contact.resolve(&mut out, band.r0, band.r0..band.r1);
+    }
 }
 
 /// Run the bands, splitting the output rows among them; in parallel with
 /// `rayon::join` (inside the caller's pool) when `parallel`.
 pub(super) fn run_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: Out<E>, parallel: bool) {
     if bands.len() == 1 {
-        E::band_dispatch(ctx, &mut bands[0], out);
+        run_band(ctx, &mut bands[0], out);
         return;
     }
     let mid = bands.len() / 2;
@@ -51,8 +64,8 @@ pub(super) fn run_two_bands<E: Real>(ctx: &Ctx<E>, bands: &mut [Band<E>], out: O
     let (first, second) = bands.split_at_mut(1);
     let (out_first, out_second) = out.split_at(at);
     duo.fork_once(
-        || E::band_dispatch(ctx, &mut second[0], out_second),
-        || E::band_dispatch(ctx, &mut first[0], out_first),
+        || run_band(ctx, &mut second[0], out_second),
+        || run_band(ctx, &mut first[0], out_first),
     );
 }
 
