@@ -458,9 +458,6 @@ trait Real:
     fn fixed_sub(a: Self, b: Self) -> Self;
     /// Fixed-point `x` moved by `t` units, rounded to the nearest.
     fn fixed_add(x: Self, t: Self) -> Self;
-    /// `a` if `yes`, else `b`, bit for bit, without a branch (which the compiler
-    /// did not vectorise).
-    fn select(yes: bool, a: Self, b: Self) -> Self;
     /// Runs one band of a step, with the best code this CPU has for this type.
     fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
     /// Runs one band of a lattice's step, likewise.
@@ -527,11 +524,6 @@ macro_rules! real {
                 $t::from_bits(
                     (x.to_bits() as $int).wrapping_add(t.round_ties_even() as $int) as $bits,
                 )
-            }
-            #[inline(always)]
-            fn select(yes: bool, a: Self, b: Self) -> Self {
-                let keep = <$bits>::from(yes).wrapping_neg();
-                $t::from_bits((a.to_bits() & keep) | (b.to_bits() & !keep))
             }
             fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
                 match ctx.simd {

@@ -93,6 +93,22 @@ pub(crate) trait LaneFloat:
     fn is_nan(self) -> bool;
     fn word(self) -> Self::Word;
     fn of_word(w: Self::Word) -> Self;
+    /// All ones if `yes`, else all zeros.
+    fn mask(yes: bool) -> Self::Word;
+
+    /// `a` where `m` is all ones, `b` where it is all zeros, bit for bit: the
+    /// select every lane and every fast engine's write uses (as arrays of `bool`
+    /// and branches the compiler had made byte shuffles and jumps).
+    #[inline(always)]
+    fn pick(m: Self::Word, a: Self, b: Self) -> Self {
+        Self::of_word((a.word() & m) | (b.word() & !m))
+    }
+
+    /// `a` if `yes`, else `b`, bit for bit, without a branch.
+    #[inline(always)]
+    fn select(yes: bool, a: Self, b: Self) -> Self {
+        Self::pick(Self::mask(yes), a, b)
+    }
 }
 
 macro_rules! lane_float {
@@ -120,6 +136,10 @@ macro_rules! lane_float {
             #[inline(always)]
             fn of_word(w: $word) -> Self {
                 <$t>::from_bits(w)
+            }
+            #[inline(always)]
+            fn mask(yes: bool) -> $word {
+                <$word>::from(yes).wrapping_neg()
             }
         }
     };
@@ -167,15 +187,15 @@ impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
     }
     #[inline(always)]
     fn lt(self, other: Self) -> Self::Mask {
-        std::array::from_fn(|i| all_if::<F>(self.0[i] < other.0[i]))
+        std::array::from_fn(|i| F::mask(self.0[i] < other.0[i]))
     }
     #[inline(always)]
     fn le(self, other: Self) -> Self::Mask {
-        std::array::from_fn(|i| all_if::<F>(self.0[i] <= other.0[i]))
+        std::array::from_fn(|i| F::mask(self.0[i] <= other.0[i]))
     }
     #[inline(always)]
     fn gt(self, other: Self) -> Self::Mask {
-        std::array::from_fn(|i| all_if::<F>(self.0[i] > other.0[i]))
+        std::array::from_fn(|i| F::mask(self.0[i] > other.0[i]))
     }
     #[inline(always)]
     fn any(m: Self::Mask) -> bool {
@@ -188,16 +208,8 @@ impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
 
     #[inline(always)]
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
-        Floats(std::array::from_fn(|i| {
-            F::of_word((a.0[i].word() & m[i]) | (b.0[i].word() & !m[i]))
-        }))
+        Floats(std::array::from_fn(|i| F::pick(m[i], a.0[i], b.0[i])))
     }
-}
-
-/// All ones if `yes`, else all zeros.
-#[inline(always)]
-fn all_if<F: LaneFloat>(yes: bool) -> F::Word {
-    if yes { F::YES } else { F::NO }
 }
 
 /// A 3-vector of lanes, with the operations of [`DVec3`] that the shared physics
