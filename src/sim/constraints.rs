@@ -302,7 +302,7 @@ impl Contact {
             T::splat(ground.friction) * T::splat(self.dt) * support * w,
             T::splat(f64::INFINITY),
         );
-        V3::select(on, coulomb(v, V3::splat(DVec3::Y), most), v)
+        V3::select(on, coulomb_up(v, most), v)
     }
 }
 
@@ -334,7 +334,12 @@ pub fn speed_limit(v: DVec3, max_speed: f64) -> f64 {
 /// `most` (m/s), or removed when it is slower than that.
 #[inline(always)]
 fn coulomb<T: Lanes>(v: V3<T>, normal: V3<T>, most: T) -> V3<T> {
-    let along = v - normal.scale(v.dot(normal));
+    coulomb_along(v, v - normal.scale(v.dot(normal)), most)
+}
+
+/// [`coulomb`] given `along`, the part of `v` along the surface.
+#[inline(always)]
+fn coulomb_along<T: Lanes>(v: V3<T>, along: V3<T>, most: T) -> V3<T> {
     let speed2 = along.dot(along);
     // The cheap test first: where every lane is slower than `most` by much more
     // than the root's rounding, all stop, without the root and the division
@@ -345,6 +350,22 @@ fn coulomb<T: Lanes>(v: V3<T>, normal: V3<T>, most: T) -> V3<T> {
     let speed = speed2.sqrt();
     let slower = speed.le(most);
     V3::select(slower, v - along, v - along.scale(most / speed))
+}
+
+/// [`coulomb`] on a surface whose normal is up (the ground's), written for it:
+/// the part along the surface is `(v_x, 0, v_z)`. For finite velocities the same
+/// numbers as `coulomb(v, Y, most)`, whose `v·Y` and `Y (v·Y)` add and subtract
+/// only zeros (which may give a zero the other sign), with a third of its
+/// arithmetic.
+#[inline(always)]
+fn coulomb_up<T: Lanes>(v: V3<T>, most: T) -> V3<T> {
+    let zero = T::splat(0.0);
+    let along = V3 {
+        x: v.x,
+        y: zero,
+        z: v.z,
+    };
+    coulomb_along(v, along, most)
 }
 
 /// Where a particle at `x` inside `sphere` is projected to (the nearest point of the
@@ -584,6 +605,30 @@ mod tests {
         assert!(differ > 6000, "{differ} of 16000 changed");
     }
 
+    /// The ground's Coulomb (normal up) gives what the general one gives, for
+    /// finite velocities of every sign and size, zeros of both signs among them,
+    /// sliding and sticking: the same numbers (`==`: a zero may come out with the
+    /// other sign, the general one's `v - 0 (v·Y)` adding a zero of `v_y`'s).
+    #[test]
+    fn the_grounds_coulomb_is_the_general_one() {
+        let mut rng = StdRng::seed_from_u64(5);
+        let values = [0.0, -0.0, 1e-300, -2.5, 3.0, 1e10, -7e-8];
+        for _ in 0..20_000 {
+            let mut pick = || {
+                if rng.random_bool(0.2) {
+                    values[rng.random_range(0..values.len())]
+                } else {
+                    rng.random_range(-10.0..10.0)
+                }
+            };
+            let v = DVec3::new(pick(), pick(), pick());
+            let most = pick().abs();
+            let general = DVec3::from(coulomb(V3::from(v), V3::splat(DVec3::Y), most));
+            let up = DVec3::from(coulomb_up(V3::from(v), most));
+            assert_eq!(general, up, "v {v}, most {most}");
+        }
+    }
+
     /// Friction at the edge of sticking, in blocks whose lanes all take
     /// `coulomb`'s cheap test or not: a particle sliding no faster than `most`
     /// stops along the surface (exactly), a faster one keeps its direction and
@@ -602,6 +647,8 @@ mod tests {
             // Sliding along (3, 0, 4) / 5, pressed down at 0.25 m/s.
             let v = DVec3::new(0.6 * speed, -0.25, 0.8 * speed);
             let got = DVec3::from(coulomb(V3::from(v), normal, most));
+            let up = DVec3::from(coulomb_up(V3::from(v), most));
+            assert_eq!(got, up, "{speed}: the ground's Coulomb is the general one");
             assert_eq!(got.y, v.y, "{speed}: the normal part is left");
             let kept = DVec3::new(got.x, 0.0, got.z);
             if speed <= most {
