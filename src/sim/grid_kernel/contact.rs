@@ -98,10 +98,10 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
     /// `resolve` gives it alone): in float64 where a lane is near the sphere (bit
     /// for bit the f64 engine's contact); where none is, the ground's friction in
-    /// the kernel's float (its velocities' own; in a float32 kernel the friction
-    /// is rounded to float32, which cost the float64 lanes' conversions: 21% of
-    /// a one-core drape at 128 went to the contact, 23% before). A row's last block reads past its last column:
-    /// the grid's ghost columns (its rows are [`super::BLOCK`] floats longer than their
+    /// the kernel's own float, that of its velocities (in a float32 kernel, rounded
+    /// to float32: the conversions to float64 and back had the contact at 23% of a
+    /// one-core drape at 128, 21% without). A row's last block reads past its last
+    /// column: the grid's ghost columns (its rows are [`super::BLOCK`] floats longer than their
     /// blocks), or the next row of a lattice (whose arrays end in ghosts); lanes
     /// that do not touch are written back what they held.
     pub(super) fn resolve(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {
