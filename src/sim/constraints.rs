@@ -343,8 +343,10 @@ fn coulomb_along<T: Lanes>(v: V3<T>, along: V3<T>, most: T) -> V3<T> {
     let speed2 = along.dot(along);
     // The cheap test first: where every lane is slower than `most` by much more
     // than the root's rounding, all stop, without the root and the division
-    // (particles at rest on a surface; a NaN fails the test).
-    if T::all(speed2.le(most * most * T::splat(1.0 - 1e-9))) {
+    // (particles at rest on a surface; a NaN fails the test). The margin, 5e-7 of
+    // the speed, is far over the rounding of float32 lanes too (6e-8 a
+    // rounding), so that the test never stops a lane the root would not.
+    if T::all(speed2.le(most * most * T::splat(1.0 - 1e-6))) {
         return v - along;
     }
     let speed = speed2.sqrt();
@@ -629,18 +631,49 @@ mod tests {
         }
     }
 
+    /// In float32 lanes (the ground's friction in a float32 kernel) the cheap
+    /// test decides as the root would: around `most`, ulp by ulp of the speed
+    /// (the squared speed's rounding included), each lane stops exactly when its
+    /// float32 speed is at most `most`, as `coulomb` without the test gives it.
+    #[test]
+    fn in_float32_the_cheap_test_stops_what_the_root_would() {
+        type F = Floats<f32, 8>;
+        for most in [0.7f32, 1.3e-3, 42.0] {
+            for step in -2000i32..=200 {
+                // Speeds one float32 step apart around `most`, along x.
+                let speed = f32::from_bits((most.to_bits() as i32 + step) as u32);
+                let v = V3 {
+                    x: F::splat(f64::from(speed)),
+                    y: F::splat(-0.25),
+                    z: F::splat(0.0),
+                };
+                let out = coulomb_up(v, F::splat(f64::from(most)));
+                // Without the cheap test: the root and its comparison.
+                let root = (speed * speed + 0.0 * 0.0).sqrt();
+                let expected = if root <= most {
+                    0.0
+                } else {
+                    speed - speed * (most / root)
+                };
+                for l in 0..8 {
+                    assert_eq!(out.x.0[l], expected, "most {most}, speed {speed}");
+                }
+            }
+        }
+    }
+
     /// Friction at the edge of sticking, in blocks whose lanes all take
     /// `coulomb`'s cheap test or not: a particle sliding no faster than `most`
     /// stops along the surface (exactly), a faster one keeps its direction and
-    /// `speed - most` of its speed, to round-off. Speeds from 1e-6 below `most` to
+    /// `speed - most` of its speed, to round-off. Speeds from 1e-5 below `most` to
     /// 1e-6 above, in relative steps down to 1e-13 around it (the cheap test's
-    /// margin is 5e-10 of the speed), and the same in lanes.
+    /// margin is 5e-7 of the speed), and the same in lanes.
     #[test]
     fn friction_stops_what_is_slower_than_most_and_slows_the_rest_by_most() {
         let most = 0.7;
         let normal = V3::splat(DVec3::Y);
         let offsets = [
-            -1e-6, -1e-9, -5e-10, -4e-10, -1e-10, -1e-13, 0.0, 1e-13, 1e-10, 1e-9, 1e-6,
+            -1e-5, -1e-6, -5e-7, -4e-7, -1e-7, -1e-9, -1e-13, 0.0, 1e-13, 1e-10, 1e-9, 1e-6,
         ];
         let speeds = offsets.map(|e| most * (1.0 + e));
         for (i, &speed) in speeds.iter().enumerate() {
