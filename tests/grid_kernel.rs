@@ -81,11 +81,7 @@ fn every_simd_level_matches_reference() {
                 if level == SimdLevel::Baseline {
                     portable = x.clone();
                 }
-                let apart = x
-                    .iter()
-                    .zip(&portable)
-                    .map(|(a, b)| a.distance(*b))
-                    .fold(0.0, f64::max);
+                let apart = apart(&x, &portable);
                 let ran = cloth.simd_level();
                 println!(
                     "{precision:?} {ran:?} wind={wind}: mean y {:+.2e}, bottom-middle y {:+.2e} from float64; {apart:e} m from the portable lanes",
@@ -247,6 +243,23 @@ fn threads_give_bit_identical_results_with_every_feature() {
 /// measured with AVX2 on 2026-11-24). Bound: 1e-5 m. A lane given the wrong spring
 /// moves particles by millimetres (8.6e-3 m when the AVX-512 lanes ignored the
 /// colour classes along rows).
+/// The positions of the cloth of `spec` after `steps` steps at `level`, and the
+/// level that ran (the best this CPU has, at most `level`).
+fn stepped(spec: GridSpec, level: SimdLevel, steps: usize) -> (Vec<DVec3>, SimdLevel) {
+    let mut cloth = GridCloth::new(spec);
+    cloth.set_simd_level(level);
+    cloth.steps(DT, steps);
+    let mut x = vec![DVec3::ZERO; cloth.len()];
+    cloth.positions_into(&mut x);
+    (x, cloth.simd_level())
+}
+
+/// The largest distance between the particles of two cloths.
+fn apart(x: &[DVec3], y: &[DVec3]) -> f64 {
+    let d = x.iter().zip(y).map(|(a, b)| a.distance(*b));
+    d.fold(0.0, f64::max)
+}
+
 /// The passes along the springs after the step, Provot's stretch limit (with
 /// Verlet) and XPBD's springs, give the same cloth on every SIMD level within
 /// float32 round-off, in each precision; and each precision's cloth is the float64
@@ -272,16 +285,7 @@ fn every_simd_level_runs_the_spring_passes_alike() {
             set(&mut spec);
             spec.precision = precision;
             spec.origin[0] = x0;
-            let mut cloth = GridCloth::new(spec);
-            cloth.set_simd_level(level);
-            cloth.steps(DT, 240);
-            let mut x = vec![DVec3::ZERO; cloth.len()];
-            cloth.positions_into(&mut x);
-            (x, cloth.simd_level())
-        };
-        let apart = |x: &[DVec3], y: &[DVec3]| {
-            let d = x.iter().zip(y).map(|(a, b)| a.distance(*b));
-            d.fold(0.0, f64::max)
+            stepped(spec, level, 240)
         };
         // Float32 positions round each move to 2^-24 of the 1 m cloth's
         // coordinates; fixed-point ones to half their unit (4e-9 m), and leave the
@@ -316,6 +320,58 @@ fn every_simd_level_runs_the_spring_passes_alike() {
                 );
             }
         }
+    }
+}
+
+/// The colliders' contact with friction, resolved in the step (the ground's
+/// friction on each row as soon as it is stepped, on the level's own vectors; the
+/// sphere's after each band), gives the same cloth on every SIMD level within
+/// float32 round-off, and the float64 cloth's within what float32 rounds off over
+/// the run (measured: 2e-7 m from float64, 1e-7 m between levels): the bench
+/// cloth, 300 m out on fixed-point positions, falling from its corners onto a
+/// sphere and its lower rows onto the ground, with a ground soft enough for the
+/// step (`k_c dt² / m` = 0.04).
+#[test]
+fn every_simd_level_gives_the_contact_alike() {
+    use cloth_sandbox::sim::grid_kernel::Precision;
+    use cloth_sandbox::sim::{Ground, Sphere};
+    let state = |precision: Precision, level: SimdLevel| {
+        let mut spec = GridSpec::peer_bench(45, false);
+        spec.origin[0] = 300.0;
+        spec.precision = precision;
+        spec.ground = Some(Ground {
+            height: -0.8,
+            stiffness: 20.0,
+            damping: 0.005,
+            friction: 0.6,
+        });
+        spec.sphere = Some(Sphere {
+            center: DVec3::new(300.5, -0.55, 0.12),
+            radius: 0.15,
+        });
+        spec.friction = 0.3;
+        // 400 steps: the cloth has come down onto the sphere and the ground; later
+        // it slides off the sphere, where float32's round-off decides which
+        // particles catch (the runs part by centimetres).
+        stepped(spec, level, 400)
+    };
+    let (float64, _) = state(Precision::Double, SimdLevel::Baseline);
+    let on_ground = float64.iter().filter(|x| x.y < -0.79).count();
+    let on_sphere = float64
+        .iter()
+        .filter(|x| x.distance(DVec3::new(300.5, -0.55, 0.12)) < 0.16)
+        .count();
+    println!("{on_ground} particles on the ground, {on_sphere} on the sphere");
+    assert!(on_ground > 40 && on_sphere > 20);
+    let (portable, _) = state(Precision::Mixed, SimdLevel::Baseline);
+    let off = apart(&portable, &float64);
+    println!("fixed point, portable: {off:e} m from float64");
+    assert!(off < 1e-6, "{off:e} m from float64");
+    for level in [SimdLevel::Avx2, SimdLevel::Avx512] {
+        let (x, ran) = state(Precision::Mixed, level);
+        let off = apart(&x, &portable);
+        println!("fixed point, {ran:?}: {off:e} m from the portable lanes");
+        assert!(off < 1e-6, "{ran:?}: {off:e} m");
     }
 }
 
@@ -411,11 +467,7 @@ fn recentring_fixed_point_positions_changes_nothing() {
     }
     let (pa, pb) = (state(&a).0, state(&b).0);
     let fell = start[0].y - pa[0].y;
-    let apart = pa
-        .iter()
-        .zip(&pb)
-        .map(|(p, q)| p.distance(*q))
-        .fold(0.0, f64::max);
+    let apart = apart(&pa, &pb);
     let shape = pa.iter().map(|p| p.distance(pa[0])).fold(0.0, f64::max);
     println!("fell {fell:.2} m, {shape:.3} m across; the two {apart:.3e} m apart");
     assert!(fell > 10.0, "fell {fell} m");

@@ -248,15 +248,15 @@ impl Contact {
     /// is within the sphere's radius.
     #[inline(always)]
     fn sphere_lanes<T: Lanes>(&self, d: V3<T>, v: V3<T>) -> (V3<T>, V3<T>) {
-        let h = T::splat(self.dt);
-        let (mut moves, mut v) = (V3::splat(DVec3::ZERO), v);
+        let h = d.x.splat(self.dt);
+        let (mut moves, mut v) = (V3::splat(h, DVec3::ZERO), v);
         if let Some(sphere) = self.sphere {
-            let radius = T::splat(sphere.radius);
+            let radius = h.splat(sphere.radius);
             let dist2 = d.dot(d);
             // The cheap test first: particles all farther than the radius by much
             // more than a square root's rounding are outside, without the root.
             let reach2 = sphere.radius * sphere.radius * (1.0 + 1e-9);
-            if T::any(dist2.lt(T::splat(reach2))) {
+            if T::any(dist2.lt(h.splat(reach2))) {
                 let dist = dist2.sqrt();
                 let inside = dist.lt(radius);
                 if T::any(inside) {
@@ -268,8 +268,8 @@ impl Contact {
                         // (Unlimited outside, as for the ground.)
                         let most = T::select(
                             inside,
-                            T::splat(self.friction) * push.length() / h,
-                            T::splat(f64::INFINITY),
+                            h.splat(self.friction) * push.length() / h,
+                            h.splat(f64::INFINITY),
                         );
                         pushed = coulomb(pushed, normal, most);
                     }
@@ -290,8 +290,8 @@ impl Contact {
         let Some(ground) = self.ground.filter(|g| g.friction > 0.0) else {
             return v;
         };
-        let support = ground_support(&ground, T::splat(0.0) - above, v.y);
-        let on = support.gt(T::splat(0.0));
+        let support = ground_support(&ground, above.splat(0.0) - above, v.y);
+        let on = support.gt(above.splat(0.0));
         if !T::any(on) {
             return v;
         }
@@ -299,8 +299,8 @@ impl Contact {
         // cheap test: their result is not taken.)
         let most = T::select(
             on,
-            T::splat(ground.friction) * T::splat(self.dt) * support * w,
-            T::splat(f64::INFINITY),
+            above.splat(ground.friction) * above.splat(self.dt) * support * w,
+            above.splat(f64::INFINITY),
         );
         V3::select(on, coulomb_up(v, most), v)
     }
@@ -346,7 +346,7 @@ fn coulomb_along<T: Lanes>(v: V3<T>, along: V3<T>, most: T) -> V3<T> {
     // (particles at rest on a surface; a NaN fails the test). The margin, 5e-7 of
     // the speed, is far over the rounding of float32 lanes too (6e-8 a
     // rounding), so that the test never stops a lane the root would not.
-    if T::all(speed2.le(most * most * T::splat(1.0 - 1e-6))) {
+    if T::all(speed2.le(most * most * most.splat(1.0 - 1e-6))) {
         return v - along;
     }
     let speed = speed2.sqrt();
@@ -361,7 +361,7 @@ fn coulomb_along<T: Lanes>(v: V3<T>, along: V3<T>, most: T) -> V3<T> {
 /// arithmetic.
 #[inline(always)]
 fn coulomb_up<T: Lanes>(v: V3<T>, most: T) -> V3<T> {
-    let zero = T::splat(0.0);
+    let zero = most.splat(0.0);
     let along = V3 {
         x: v.x,
         y: zero,
@@ -383,9 +383,9 @@ pub(crate) fn out_of_sphere(x: DVec3, sphere: &Sphere) -> Option<DVec3> {
 /// offset from the centre, one particle per lane.
 #[inline(always)]
 fn surface_offset<T: Lanes>(d: V3<T>, dist: T, sphere: &Sphere) -> V3<T> {
-    let off_center = dist.gt(T::splat(EPSILON_LENGTH));
-    let normal = V3::select(off_center, d.over(dist), V3::splat(DVec3::Y));
-    normal.scale(T::splat(sphere.radius))
+    let off_center = dist.gt(dist.splat(EPSILON_LENGTH));
+    let normal = V3::select(off_center, d.over(dist), V3::splat(dist, DVec3::Y));
+    normal.scale(dist.splat(sphere.radius))
 }
 
 /// The correction `c` that brings particles at `xa` and `xb` (inverse masses `wa`,
@@ -625,7 +625,7 @@ mod tests {
             };
             let v = DVec3::new(pick(), pick(), pick());
             let most = pick().abs();
-            let general = DVec3::from(coulomb(V3::from(v), V3::splat(DVec3::Y), most));
+            let general = DVec3::from(coulomb(V3::from(v), V3::from(DVec3::Y), most));
             let up = DVec3::from(coulomb_up(V3::from(v), most));
             assert_eq!(general, up, "v {v}, most {most}");
         }
@@ -643,11 +643,11 @@ mod tests {
                 // Speeds one float32 step apart around `most`, along x.
                 let speed = f32::from_bits((most.to_bits() as i32 + step) as u32);
                 let v = V3 {
-                    x: F::splat(f64::from(speed)),
-                    y: F::splat(-0.25),
-                    z: F::splat(0.0),
+                    x: F::of(f64::from(speed)),
+                    y: F::of(-0.25),
+                    z: F::of(0.0),
                 };
-                let out = coulomb_up(v, F::splat(f64::from(most)));
+                let out = coulomb_up(v, F::of(f64::from(most)));
                 // Without the cheap test: the root and its comparison.
                 let root = (speed * speed + 0.0 * 0.0).sqrt();
                 let expected = if root <= most {
@@ -671,7 +671,7 @@ mod tests {
     #[test]
     fn friction_stops_what_is_slower_than_most_and_slows_the_rest_by_most() {
         let most = 0.7;
-        let normal = V3::splat(DVec3::Y);
+        let normal = V3::from(DVec3::Y);
         let offsets = [
             -1e-5, -1e-6, -5e-7, -4e-7, -1e-7, -1e-9, -1e-13, 0.0, 1e-13, 1e-10, 1e-9, 1e-6,
         ];
@@ -702,7 +702,7 @@ mod tests {
                     y: Floats::<f64, 8>(std::array::from_fn(|l| lane(l).y)),
                     z: Floats::<f64, 8>(std::array::from_fn(|l| lane(l).z)),
                 };
-                let out = coulomb(block, V3::splat(DVec3::Y), F64s::splat(most));
+                let out = coulomb(block, V3::splat(F64s::of(0.0), DVec3::Y), F64s::of(most));
                 for l in 0..8 {
                     let alone = DVec3::from(coulomb(V3::from(lane(l)), normal, most));
                     let got = DVec3::new(out.x.0[l], out.y.0[l], out.z.0[l]);

@@ -186,8 +186,8 @@ pub fn ground_force(ground: &super::Ground, x: DVec3, v: DVec3) -> f64 {
 /// one per lane.
 #[inline(always)]
 pub(crate) fn ground_support<T: super::lanes::Lanes>(ground: &super::Ground, depth: T, vy: T) -> T {
-    let pressed = T::splat(ground.stiffness) * depth - T::splat(ground.damping) * vy;
-    T::select(depth.gt(T::splat(0.0)), pressed, T::splat(0.0))
+    let pressed = depth.splat(ground.stiffness) * depth - depth.splat(ground.damping) * vy;
+    T::select(depth.gt(depth.splat(0.0)), pressed, depth.splat(0.0))
 }
 
 /// Force on end `a` of a damped spring, given `d = x_a - x_b` and `dv = v_a - v_b`.

@@ -1278,7 +1278,13 @@ impl<E: Real> Kernel<E> {
         let colliders = self.contact(dt);
         let contact = self.contact_in_step().then(|| {
             let cloth = (self.grid, self.inv_mass.as_slice());
-            ContactRows::new(&colliders, cloth, self.frame, self.simd, self.params.verlet)
+            ContactRows::new(
+                &colliders,
+                cloth,
+                self.frame,
+                self.simd,
+                (self.params.verlet, true),
+            )
         });
         let ctx = Ctx {
             grid: self.grid,
@@ -1373,8 +1379,9 @@ impl<E: Real> Kernel<E> {
     /// soon as they are stepped, in the same hand-over (one fork and join a step,
     /// not two): when the contact is the first constraint after the step (no
     /// XPBD, stretch limit or self-collision) and the step does not project onto
-    /// the sphere itself. Each particle's contact is its own, so the result is the
-    /// same.
+    /// the sphere itself; the ground's friction then goes to each row as soon as
+    /// it is stepped ([`ContactRows::ground_friction_row`]). Each particle's
+    /// contact is its own, so the result is the same.
     fn contact_in_step(&self) -> bool {
         self.spec.integrator != Integrator::Xpbd
             && self.spec.stretch_limit.is_none()
@@ -1866,7 +1873,7 @@ mod spring_passes;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-use contact::{ContactRows, Reach};
+use contact::ContactRows;
 use row::{
     Ctx, Particle, StepLanes, band_rows, integrate, project_out_of_sphere, row_portable,
     row_variant, run_bands, run_two_bands, spring,

@@ -18,7 +18,10 @@ pub(crate) trait Lanes:
 {
     /// Per lane, a yes or no.
     type Mask: Copy;
-    fn splat(x: f64) -> Self;
+    /// `x` in every lane, of lanes like `self` (whose value is not read: it
+    /// stands for the kind of lanes, which for a fast kernel's vectors carries the
+    /// proof that the CPU has their instructions).
+    fn splat(self, x: f64) -> Self;
     fn sqrt(self) -> Self;
     fn lt(self, other: Self) -> Self::Mask;
     fn le(self, other: Self) -> Self::Mask;
@@ -35,7 +38,7 @@ pub(crate) trait Lanes:
 impl Lanes for f64 {
     type Mask = bool;
     #[inline(always)]
-    fn splat(x: f64) -> Self {
+    fn splat(self, x: f64) -> Self {
         x
     }
     #[inline(always)]
@@ -152,6 +155,14 @@ lane_float!(f32, u32);
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Floats<F, const N: usize>(pub [F; N]);
 
+impl<F: LaneFloat, const N: usize> Floats<F, N> {
+    /// `x` (rounded to `F`) in every lane.
+    #[inline(always)]
+    pub(crate) fn of(x: f64) -> Self {
+        Floats([F::of_f64(x); N])
+    }
+}
+
 /// `N` lanes of f64.
 #[cfg(test)]
 pub(crate) type F64s<const N: usize> = Floats<f64, N>;
@@ -177,8 +188,8 @@ impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
     /// compiler turned masks of `bool`s into byte shuffles.
     type Mask = [F::Word; N];
     #[inline(always)]
-    fn splat(x: f64) -> Self {
-        Floats([F::of_f64(x); N])
+    fn splat(self, x: f64) -> Self {
+        Self::of(x)
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
@@ -222,13 +233,13 @@ pub(crate) struct V3<T> {
 }
 
 impl<T: Lanes> V3<T> {
-    /// `v` in every lane.
+    /// `v` in every lane, of lanes like `like` ([`Lanes::splat`]).
     #[inline(always)]
-    pub fn splat(v: DVec3) -> Self {
+    pub fn splat(like: T, v: DVec3) -> Self {
         V3 {
-            x: T::splat(v.x),
-            y: T::splat(v.y),
-            z: T::splat(v.z),
+            x: like.splat(v.x),
+            y: like.splat(v.y),
+            z: like.splat(v.z),
         }
     }
     #[inline(always)]

@@ -2,12 +2,17 @@
 //! XPBD or self-collision before it) keeps it out of the fused step: the shared
 //! [`constraints::Contact::resolve_lanes`] on blocks of particles, on the rows
 //! that may touch; in float64 near the sphere, the ground's friction alone in the
-//! kernel's float.
+//! kernel's float. When the contact comes first after the step, each band
+//! resolves its rows as soon as it has stepped them, and the ground's friction
+//! is given to each row right after it, on the kernel's own vectors
+//! ([`ContactRows::ground_friction_row`]).
 
 use super::super::constraints::Near;
 use super::super::duo::Duo;
-use super::super::lanes::{Floats, V3};
+use super::super::lanes::{Floats, Lanes, V3};
 use super::frame::whole_units;
+use super::row::difference;
+use super::simd::{Simd, Vector};
 #[cfg(target_arch = "x86_64")]
 use super::x86;
 use super::{Frame, Grid, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
@@ -32,7 +37,7 @@ impl<E: Real> Kernel<E> {
             (self.grid, self.inv_mass.as_slice()),
             self.frame,
             self.simd,
-            self.params.verlet,
+            (self.params.verlet, false),
         );
         let out = self.cur.rows();
         if (parallel || duo.is_some()) && large {
@@ -57,7 +62,15 @@ pub(super) struct ContactRows<'a, E> {
     pub(super) width: usize,
     pub(super) stride: usize,
     pub(super) inv_mass: &'a [E],
+    /// Where a particle may touch what [`ContactRows::resolve`] resolves (the
+    /// ground left out when the step gives its friction).
     pub(super) reach: Reach<E>,
+    /// The ground's height as stored (below every particle without a ground).
+    pub(super) ground: E,
+    /// Whether the step gives the ground's friction to each row as soon as it is
+    /// stepped, to the particles not near the sphere
+    /// ([`ContactRows::ground_friction_row`]), and `resolve` the rest.
+    pub(super) friction_in_rows: bool,
     pub(super) contact: &'a constraints::Contact,
     /// How the positions are stored.
     pub(super) frame: Frame,
@@ -69,20 +82,47 @@ const CONTACT_LANES: usize = 8;
 
 impl<'a, E: Real> ContactRows<'a, E> {
     /// The contact with the colliders of `contact` of a grid's cloth: its
-    /// inverse masses, frame, SIMD level and whether it steps by Verlet.
+    /// inverse masses, frame, SIMD level, whether it steps by Verlet, and whether
+    /// it is resolved in the step (`in_step`, [`super::Kernel::contact_in_step`]),
+    /// where the ground's friction goes to each row as soon as it is stepped.
     pub(super) fn new(
         contact: &'a constraints::Contact,
         (grid, inv_mass): (Grid, &'a [E]),
         frame: Frame,
         simd: SimdLevel,
-        verlet: bool,
+        (verlet, in_step): (bool, bool),
     ) -> Self {
+        let cloth = (grid.w, grid.stride, inv_mass);
+        Self::of_rows(contact, cloth, frame, simd, (verlet, in_step))
+    }
+
+    /// [`ContactRows::new`] for rows of `width` particles every `stride` array
+    /// indices (a grid's, or a lattice's).
+    pub(super) fn of_rows(
+        contact: &'a constraints::Contact,
+        (width, stride, inv_mass): (usize, usize, &'a [E]),
+        frame: Frame,
+        simd: SimdLevel,
+        (verlet, in_step): (bool, bool),
+    ) -> Self {
+        let friction_in_rows = in_step && contact.ground.is_some_and(|g| g.friction > 0.0);
+        let resolved = if friction_in_rows {
+            constraints::Contact {
+                ground: None,
+                ..*contact
+            }
+        } else {
+            *contact
+        };
+        let ground = contact.ground.map_or(f64::NEG_INFINITY, |g| g.height);
         ContactRows {
             simd,
-            width: grid.w,
-            stride: grid.stride,
+            width,
+            stride,
             inv_mass,
-            reach: Reach::of(contact, &frame),
+            reach: Reach::of(&resolved, &frame),
+            ground: frame.ground_height(ground),
+            friction_in_rows,
             contact,
             frame,
             verlet,
@@ -151,10 +191,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
             .sphere
             .map_or([0.0; 3], |s| s.center.to_array());
         let centre: [(E, f64); 3] = std::array::from_fn(|a| (self.reach.center[a], exact[a]));
-        let ground = (
-            self.reach.ground,
-            self.contact.ground.map_or(0.0, |g| g.height),
-        );
+        let ground = (self.ground, self.contact.ground.map_or(0.0, |g| g.height));
         for r in rows {
             let start = r * self.stride;
             let row = (r - first) * self.stride..(r - first) * self.stride + self.width;
@@ -197,7 +234,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
                     // Height (m) above the ground: from the stored one in fixed
                     // point, exact (both are whole units), from the exact one in
                     // floats.
-                    let (stored, exact) = (ground.0, E::of(ground.1));
+                    let (stored, exact) = (self.ground, E::of(ground.1));
                     let above = Floats::<E, N>(std::array::from_fn(|l| {
                         if FIXED {
                             E::fixed_sub(py[l], stored) * E::of(frame.unit)
@@ -230,6 +267,103 @@ impl<'a, E: Real> ContactRows<'a, E> {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    /// The ground's friction on the row just stepped, given as soon as it is
+    /// (`friction_in_rows`), on the kernel's vectors `s`: to each of its particles
+    /// (array index `i` on, written to `out` at `o` on, `nv` of them) that is below
+    /// the ground and not near the sphere, whose contact [`ContactRows::resolve`]
+    /// gives after the row (with the ground's friction after it, as the f64 engine
+    /// does). Each particle's friction is its own, so these are the numbers the
+    /// contact's pass after the step gives in the kernel's float
+    /// ([`constraints::Contact::ground_friction_lanes`], the same rule): without
+    /// that pass's loads, per-lane tests and stores, and with the row still in the
+    /// first cache. (After the row's blocks, not in them: in them, the row's code
+    /// came out slower.)
+    #[inline(always)]
+    pub(super) fn ground_friction_row<S: Simd<E = E>, const FIXED: bool>(
+        &self,
+        s: S,
+        out: &mut Out<E>,
+        (i, o): (usize, usize),
+        nv: usize,
+    ) {
+        let Some(height) = self.contact.ground.map(|g| g.height) else {
+            return;
+        };
+        let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
+        // Everything the loop reads and writes lies inside these bounds.
+        assert!(nv.is_multiple_of(S::LANES) && i + nv <= self.inv_mass.len());
+        for a in [&**x, y, z, vx, vy, vz] {
+            assert!(o + nv <= a.len());
+        }
+        if self.verlet {
+            assert!(o + nv <= ux.len() && o + nv <= uy.len() && o + nv <= uz.len());
+        }
+        let lanes = |v: S::V| Vector(s, v);
+        let splat = |e: E| s.splat(e);
+        let (zero, ground) = (splat(E::ZERO), splat(self.ground));
+        let (exact, unit) = (
+            lanes(splat(E::of(height))),
+            lanes(splat(E::of(self.frame.unit))),
+        );
+        let (centre, reach2) = (
+            self.reach.center.map(splat),
+            lanes(splat(self.reach.reach2)),
+        );
+        for c in (0..nv).step_by(S::LANES) {
+            // SAFETY: `o + c + LANES <= o + nv` and `i + c + LANES <= i + nv`,
+            // inside the arrays (asserted).
+            let load = |a: &[E], at: usize| unsafe { s.load(a.as_ptr().add(at + c)) };
+            let (px, py, pz) = (load(x, o), load(y, o), load(z, o));
+            let w = load(self.inv_mass, i);
+            // Free, below the ground and not near the sphere: `Reach`'s tests, in
+            // the same operations.
+            let from = |p: S::V, q: S::V| lanes(difference::<S, FIXED>(s, p, q));
+            let d = [
+                from(px, centre[0]),
+                from(py, centre[1]),
+                from(pz, centre[2]),
+            ];
+            let near = distance2(d).lt(reach2);
+            // Height above the ground: as stored (exact in fixed point), and in m
+            // as `resolve` takes it.
+            let (under, above) = if FIXED {
+                let rise = from(py, ground);
+                (s.le(rise.1, zero), rise * unit)
+            } else {
+                (s.le(py, ground), lanes(py) - exact)
+            };
+            let touch = s.both(s.gt(w, zero), s.but_not(under, near.1));
+            if !s.any(touch) {
+                continue;
+            }
+            let v = V3 {
+                x: lanes(load(vx, o)),
+                y: lanes(load(vy, o)),
+                z: lanes(load(vz, o)),
+            };
+            let v_new = self.contact.ground_friction_lanes(above, v, lanes(w));
+            // The touching lanes' velocities (and Verlet's update velocities)
+            // get the change, as in `resolve`.
+            let add = |a: &mut [E], dv: S::V| {
+                // SAFETY: as above.
+                unsafe {
+                    let p = a.as_mut_ptr().add(o + c);
+                    let old = s.load(p);
+                    s.store(p, s.select(touch, s.add(old, dv), old));
+                }
+            };
+            let dv = [v_new.x - v.x, v_new.y - v.y, v_new.z - v.z];
+            add(vx, dv[0].1);
+            add(vy, dv[1].1);
+            add(vz, dv[2].1);
+            if self.verlet {
+                add(ux, dv[0].1);
+                add(uy, dv[1].1);
+                add(uz, dv[2].1);
             }
         }
     }
@@ -366,8 +500,7 @@ impl<E: Real> Reach<E> {
     fn near_sphere<const FIXED: bool>(&self, [x, y, z]: [E; 3]) -> bool {
         let [cx, cy, cz] = self.center;
         let d = |p: E, c: E| if FIXED { E::fixed_sub(p, c) } else { p - c };
-        let (dx, dy, dz) = (d(x, cx), d(y, cy), d(z, cz));
-        dx * dx + dy * dy + dz * dz < self.reach2
+        distance2([d(x, cx), d(y, cy), d(z, cz)]) < self.reach2
     }
 
     /// Whether a particle at `[_, y, _]` may be below the ground (`<=`: one at the
@@ -380,6 +513,16 @@ impl<E: Real> Reach<E> {
             y <= self.ground
         }
     }
+}
+
+/// The squared distance of particles `d` from the sphere's centre (per axis, in
+/// the positions' units), as [`Reach::near_sphere`] compares it with the reach:
+/// for one particle or a block of them, in the same operations.
+#[inline(always)]
+fn distance2<T: Copy + std::ops::Add<Output = T> + std::ops::Mul<Output = T>>(
+    [dx, dy, dz]: [T; 3],
+) -> T {
+    dx * dx + dy * dy + dz * dz
 }
 
 /// Whether any of the particles at `[x, y, z]` with inverse masses `w` may touch a
@@ -401,9 +544,127 @@ fn row_may_touch<E: Real, const FIXED: bool>(
 
 #[cfg(test)]
 mod tests {
+    use super::super::simd::Portable;
     use super::*;
     use crate::sim::{Ground, Sphere};
     use glam::DVec3;
+    use rand::rngs::StdRng;
+    use rand::{Rng, SeedableRng};
+
+    /// The ground's friction given row by row in the step (`ground_friction_row`,
+    /// then `resolve` for the sphere) gives each particle what the contact's pass
+    /// after the step gives it, once: bit for bit, except beside a particle near
+    /// the sphere, whose block of eight the pass resolves in float64 (there to
+    /// float32's rounding). Particles above, on and below the ground, inside, near
+    /// and far from a sphere that dips below the ground, sliding and resting,
+    /// pinned among them, on float32 and fixed-point positions, by symplectic
+    /// Euler and Verlet.
+    #[test]
+    fn the_rows_friction_is_the_contacts() {
+        let height = -0.5;
+        let ground = Ground {
+            height,
+            stiffness: 200.0,
+            damping: 0.05,
+            friction: 0.6,
+        };
+        let sphere = Sphere {
+            center: DVec3::new(0.0, -0.6, 0.0),
+            radius: 0.4,
+        };
+        let contact = constraints::Contact {
+            sphere: Some(sphere),
+            ground: Some(ground),
+            friction: 0.3,
+            dt: 1e-3,
+        };
+        let unit = super::super::frame::fixed_unit(4.0);
+        let bounds = ([-2.0, -1.5, -2.0], [2.0, 1.0, 2.0]);
+        let fixed = Frame::fitting(unit, bounds, 0.0, Some(&ground), Some(&sphere)).unwrap();
+        let grid = Grid::new(37, 24);
+        let mut rng = StdRng::seed_from_u64(11);
+        for frame in [Frame::FLOAT, fixed] {
+            for verlet in [false, true] {
+                let n = grid.len();
+                let mut inv_mass = vec![0.0f32; n];
+                let mut arrays: [Vec<f32>; 9] = std::array::from_fn(|_| vec![0.0; n]);
+                for r in 0..grid.h {
+                    for c in 0..grid.w {
+                        let i = r * grid.stride + c;
+                        inv_mass[i] = if rng.random_bool(0.1) { 0.0 } else { 2.0 };
+                        let y = if rng.random_bool(0.5) {
+                            height - rng.random_range(0.0..0.02)
+                        } else {
+                            rng.random_range(-1.1..0.0)
+                        };
+                        let at = [rng.random_range(-0.8..0.8), y, rng.random_range(-0.8..0.8)];
+                        let scale = if rng.random_bool(0.5) { 1e-3 } else { 1.0 };
+                        for a in 0..3 {
+                            arrays[a][i] = frame.encode(at[a], a);
+                            arrays[3 + a][i] = rng.random_range(-1.0..1.0) * scale;
+                            arrays[6 + a][i] = arrays[3 + a][i];
+                        }
+                    }
+                }
+                let cloth = (grid, inv_mass.as_slice());
+                let level = SimdLevel::Baseline;
+                // After the step, as one pass.
+                let mut after = arrays.clone();
+                let pass = ContactRows::new(&contact, cloth, frame, level, (verlet, false));
+                let mut out = Out(after.each_mut().map(|a| a.as_mut_slice()));
+                pass.resolve(&mut out, 0, 0..grid.h);
+                // In the step, row by row.
+                let mut rows = arrays.clone();
+                let in_step = ContactRows::new(&contact, cloth, frame, level, (verlet, true));
+                assert!(in_step.friction_in_rows);
+                let mut out = Out(rows.each_mut().map(|a| a.as_mut_slice()));
+                for r in 0..grid.h {
+                    let at = r * grid.stride;
+                    let lanes = Portable::<f32>::default();
+                    if frame.fixed {
+                        in_step.ground_friction_row::<_, true>(lanes, &mut out, (at, at), grid.nv);
+                    } else {
+                        in_step.ground_friction_row::<_, false>(lanes, &mut out, (at, at), grid.nv);
+                    }
+                    in_step.resolve(&mut out, 0, r..r + 1);
+                }
+                let (mut exact, mut changed) = (0, 0);
+                for r in 0..grid.h {
+                    for c in 0..grid.w {
+                        let i = r * grid.stride + c;
+                        let block = r * grid.stride + c / CONTACT_LANES * CONTACT_LANES;
+                        let near_sphere = (block..block + CONTACT_LANES).any(|j| {
+                            let at = [0, 1, 2].map(|a| after[a][j]);
+                            inv_mass[j] > 0.0
+                                && if frame.fixed {
+                                    pass.reach.near_sphere::<true>(at)
+                                } else {
+                                    pass.reach.near_sphere::<false>(at)
+                                }
+                        });
+                        for a in 0..if verlet { 9 } else { 6 } {
+                            let (got, want) = (rows[a][i], after[a][i]);
+                            changed += usize::from(want.to_bits() != arrays[a][i].to_bits());
+                            let what = format!("{frame:?} verlet {verlet}: ({r}, {c}) array {a}");
+                            // The pass's float64 friction beside the sphere: a
+                            // velocity's rounding.
+                            if a >= 3 && near_sphere {
+                                let error = (got - want).abs();
+                                assert!(
+                                    error <= 4.0 * f32::EPSILON * (1.0 + want.abs()),
+                                    "{what}: {got}, {want}"
+                                );
+                            } else {
+                                assert_eq!(got.to_bits(), want.to_bits(), "{what}");
+                                exact += 1;
+                            }
+                        }
+                    }
+                }
+                assert!(exact > 0 && changed > 0);
+            }
+        }
+    }
 
     /// A particle below the ground or inside the sphere by less than its
     /// coordinates' rounding may touch, with float32 or fixed-point positions: its

@@ -61,7 +61,7 @@ use super::spring_passes::{
     SweepRules, SweepSprings, step_start,
 };
 use super::{
-    BLOCK, Buf, ContactRows, Frame, FrameRule, Out, Params, Particle, Precision, Reach, Real, Simd,
+    BLOCK, Buf, ContactRows, Frame, FrameRule, Out, Params, Particle, Precision, Real, Simd,
     SimdLevel, SpringCoefficients, State, StepLanes, frame, ground_constants, integrate,
     project_out_of_sphere, runaway_scan, spring,
 };
@@ -957,21 +957,16 @@ impl<E: Real> Lattice<E> {
         if !contact.is_active() || self.params.sphere.is_some() {
             return;
         }
-        let reach = Reach::of(&contact, &self.frame);
         let g = self.geometry;
         let rows = (g.shape.height + 1) * g.shape.depth;
-        let width = g.shape.width;
         let (cur, inv_mass) = (&mut self.cur, self.inv_mass.as_slice());
-        let rows_of = ContactRows {
-            simd: self.simd,
-            width,
-            stride: g.row,
-            inv_mass,
-            reach,
-            contact: &contact,
-            frame: self.frame,
-            verlet: self.params.verlet,
-        };
+        let rows_of = ContactRows::of_rows(
+            &contact,
+            (g.shape.width, g.row, inv_mass),
+            self.frame,
+            self.simd,
+            (self.params.verlet, false),
+        );
         rows_of.resolve(&mut cur.rows(), 0, 0..rows);
     }
 

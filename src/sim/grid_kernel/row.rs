@@ -24,7 +24,8 @@ pub(super) struct Ctx<'a, E> {
     pub(super) simd: SimdLevel,
     /// The colliders' contact, resolved on each band's rows right after them (in
     /// the same hand-over) when it is the first thing after the step
-    /// ([`super::Kernel::contact_in_step`]).
+    /// ([`super::Kernel::contact_in_step`]); the ground's friction on each row
+    /// right after the row ([`ContactRows::ground_friction_row`]).
     pub(super) contact: Option<&'a ContactRows<'a, E>>,
 }
 
@@ -463,6 +464,9 @@ pub(super) fn row_step<
         // SAFETY: as above.
         unsafe { block::<S, DRAG, OWN, true, PLAIN, FIXED>(&k, c, &mut carry) };
         c += S::LANES;
+    }
+    if let Some(contact) = ctx.contact.filter(|c| OWN && c.friction_in_rows) {
+        contact.ground_friction_row::<S, FIXED>(s, out, (b[0], lo), nv);
     }
 }
 

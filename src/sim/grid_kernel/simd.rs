@@ -2,6 +2,7 @@
 //! version ([`Portable`]); the AVX2 and AVX-512 ones are in [`super::x86`].
 
 use super::Real;
+use crate::sim::lanes::{Floats, Lanes};
 
 /// The few vector operations the kernel needs. Implemented by zero-sized tokens that
 /// exist only where the CPU supports the instructions.
@@ -33,6 +34,22 @@ pub(super) trait Simd: Copy {
     fn div(self, a: Self::V, b: Self::V) -> Self::V;
     /// Whether any lane of `m` is positive.
     fn any_positive(self, m: Self::V) -> bool;
+    /// Per lane, a yes or no: a comparison's result.
+    type Mask: Copy;
+    /// `a < b`, `a <= b` and `a > b` in each lane (no where either is NaN).
+    fn lt(self, a: Self::V, b: Self::V) -> Self::Mask;
+    fn le(self, a: Self::V, b: Self::V) -> Self::Mask;
+    fn gt(self, a: Self::V, b: Self::V) -> Self::Mask;
+    /// `a` in the lanes where `m` says yes, else `b`.
+    fn select(self, m: Self::Mask, a: Self::V, b: Self::V) -> Self::V;
+    /// Yes where both `a` and `b` say yes; where `a` does and `b` does not.
+    fn both(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    fn but_not(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    /// Whether any lane of `m` says yes, and whether every lane does.
+    fn any(self, m: Self::Mask) -> bool;
+    fn all(self, m: Self::Mask) -> bool;
+    /// The square root of each lane, correctly rounded.
+    fn sqrt(self, a: Self::V) -> Self::V;
     /// Fixed-point positions (integers held in the floats' bits): `a - b` as a float.
     fn fixed_sub(self, a: Self::V, b: Self::V) -> Self::V;
     /// Fixed-point position `x` moved by `t` units (rounded to the nearest).
@@ -111,6 +128,44 @@ impl<E: Real> Simd for Portable<E> {
     fn any_positive(self, m: Self::V) -> bool {
         m.iter().fold(false, |any, &m| any | (m > E::ZERO))
     }
+    // The comparisons, select and root of `Floats`, the shared physics' lanes.
+    type Mask = <Floats<E, PL> as Lanes>::Mask;
+    #[inline(always)]
+    fn lt(self, a: Self::V, b: Self::V) -> Self::Mask {
+        Floats(a).lt(Floats(b))
+    }
+    #[inline(always)]
+    fn le(self, a: Self::V, b: Self::V) -> Self::Mask {
+        Floats(a).le(Floats(b))
+    }
+    #[inline(always)]
+    fn gt(self, a: Self::V, b: Self::V) -> Self::Mask {
+        Floats(a).gt(Floats(b))
+    }
+    #[inline(always)]
+    fn select(self, m: Self::Mask, a: Self::V, b: Self::V) -> Self::V {
+        Floats::select(m, Floats(a), Floats(b)).0
+    }
+    #[inline(always)]
+    fn both(self, a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        std::array::from_fn(|i| a[i] & b[i])
+    }
+    #[inline(always)]
+    fn but_not(self, a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        std::array::from_fn(|i| a[i] & !b[i])
+    }
+    #[inline(always)]
+    fn any(self, m: Self::Mask) -> bool {
+        Floats::<E, PL>::any(m)
+    }
+    #[inline(always)]
+    fn all(self, m: Self::Mask) -> bool {
+        Floats::<E, PL>::all(m)
+    }
+    #[inline(always)]
+    fn sqrt(self, a: Self::V) -> Self::V {
+        Floats(a).sqrt().0
+    }
     #[inline(always)]
     fn fixed_sub(self, a: Self::V, b: Self::V) -> Self::V {
         std::array::from_fn(|i| E::fixed_sub(a[i], b[i]))
@@ -126,5 +181,68 @@ impl<E: Real> Simd for Portable<E> {
     #[inline(always)]
     fn shift2(self, prev: Self::V, cur: Self::V) -> Self::V {
         std::array::from_fn(|i| if i >= 2 { cur[i - 2] } else { prev[PL - 2 + i] })
+    }
+}
+
+/// A kernel's vector as [`Lanes`] (with its SIMD level's token), for the physics
+/// that every engine shares ([`super::super::constraints::Contact`]) to run on the
+/// kernel's own registers: the same IEEE operations as on [`Lanes`]' other
+/// kinds, none fused.
+#[derive(Clone, Copy)]
+pub(super) struct Vector<S: Simd>(pub(super) S, pub(super) S::V);
+
+macro_rules! vector_op {
+    ($trait:ident, $method:ident) => {
+        impl<S: Simd> std::ops::$trait for Vector<S> {
+            type Output = Self;
+            #[inline(always)]
+            fn $method(self, other: Self) -> Self {
+                Vector(self.0, self.0.$method(self.1, other.1))
+            }
+        }
+    };
+}
+vector_op!(Add, add);
+vector_op!(Sub, sub);
+vector_op!(Mul, mul);
+vector_op!(Div, div);
+
+/// A comparison of [`Vector`]s, with the token.
+#[derive(Clone, Copy)]
+pub(super) struct VectorMask<S: Simd>(pub(super) S, pub(super) S::Mask);
+
+impl<S: Simd> Lanes for Vector<S> {
+    type Mask = VectorMask<S>;
+    #[inline(always)]
+    fn splat(self, x: f64) -> Self {
+        Vector(self.0, self.0.splat(S::E::of(x)))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Vector(self.0, self.0.sqrt(self.1))
+    }
+    #[inline(always)]
+    fn lt(self, other: Self) -> VectorMask<S> {
+        VectorMask(self.0, self.0.lt(self.1, other.1))
+    }
+    #[inline(always)]
+    fn le(self, other: Self) -> VectorMask<S> {
+        VectorMask(self.0, self.0.le(self.1, other.1))
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> VectorMask<S> {
+        VectorMask(self.0, self.0.gt(self.1, other.1))
+    }
+    #[inline(always)]
+    fn any(m: VectorMask<S>) -> bool {
+        m.0.any(m.1)
+    }
+    #[inline(always)]
+    fn all(m: VectorMask<S>) -> bool {
+        m.0.all(m.1)
+    }
+    #[inline(always)]
+    fn select(m: VectorMask<S>, a: Self, b: Self) -> Self {
+        Vector(m.0, m.0.select(m.1, a.1, b.1))
     }
 }

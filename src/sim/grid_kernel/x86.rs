@@ -256,6 +256,97 @@ macro_rules! lanes {
     };
 }
 
+/// [`Simd`]'s comparisons, select and root with AVX-512's mask registers:
+/// `mask type, all lanes, compare, blend, sqrt`.
+macro_rules! masked_compares {
+    ($mask:ty, $all:expr, $cmp:ident, $blend:ident, $sqrt:ident) => {
+        type Mask = $mask;
+        #[inline(always)]
+        fn lt(self, a: Self::V, b: Self::V) -> $mask {
+            unsafe { $cmp::<_CMP_LT_OQ>(a, b) }
+        }
+        #[inline(always)]
+        fn le(self, a: Self::V, b: Self::V) -> $mask {
+            unsafe { $cmp::<_CMP_LE_OQ>(a, b) }
+        }
+        #[inline(always)]
+        fn gt(self, a: Self::V, b: Self::V) -> $mask {
+            unsafe { $cmp::<_CMP_GT_OQ>(a, b) }
+        }
+        #[inline(always)]
+        fn select(self, m: $mask, a: Self::V, b: Self::V) -> Self::V {
+            // (The blend takes its second operand where the mask is set.)
+            unsafe { $blend(m, b, a) }
+        }
+        #[inline(always)]
+        fn both(self, a: $mask, b: $mask) -> $mask {
+            a & b
+        }
+        #[inline(always)]
+        fn but_not(self, a: $mask, b: $mask) -> $mask {
+            a & !b
+        }
+        #[inline(always)]
+        fn any(self, m: $mask) -> bool {
+            m != 0
+        }
+        #[inline(always)]
+        fn all(self, m: $mask) -> bool {
+            m == $all
+        }
+        #[inline(always)]
+        fn sqrt(self, a: Self::V) -> Self::V {
+            unsafe { $sqrt(a) }
+        }
+    };
+}
+
+/// [`Simd`]'s comparisons, select and root with AVX2's vector masks: `all
+/// lanes' sign bits, compare, blend, sign bits, sqrt, and, and-not`.
+macro_rules! vector_compares {
+    ($all:expr, $cmp:ident, $blend:ident, $signs:ident, $sqrt:ident, $and:ident, $andnot:ident) => {
+        type Mask = Self::V;
+        #[inline(always)]
+        fn lt(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { $cmp::<_CMP_LT_OQ>(a, b) }
+        }
+        #[inline(always)]
+        fn le(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { $cmp::<_CMP_LE_OQ>(a, b) }
+        }
+        #[inline(always)]
+        fn gt(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { $cmp::<_CMP_GT_OQ>(a, b) }
+        }
+        #[inline(always)]
+        fn select(self, m: Self::V, a: Self::V, b: Self::V) -> Self::V {
+            // (The blend takes its second operand where the mask is set.)
+            unsafe { $blend(b, a, m) }
+        }
+        #[inline(always)]
+        fn both(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { $and(a, b) }
+        }
+        #[inline(always)]
+        fn but_not(self, a: Self::V, b: Self::V) -> Self::V {
+            // (`andnot` negates its first operand.)
+            unsafe { $andnot(b, a) }
+        }
+        #[inline(always)]
+        fn any(self, m: Self::V) -> bool {
+            unsafe { $signs(m) != 0 }
+        }
+        #[inline(always)]
+        fn all(self, m: Self::V) -> bool {
+            unsafe { $signs(m) == $all }
+        }
+        #[inline(always)]
+        fn sqrt(self, a: Self::V) -> Self::V {
+            unsafe { $sqrt(a) }
+        }
+    };
+}
+
 // SAFETY (all intrinsics below): an `Avx512`, `Avx2`, `Avx512F64` or `Avx2F64`
 // value exists only inside the entry points above, which run only on CPUs with
 // those features.
@@ -263,6 +354,13 @@ impl Simd for Avx512 {
     lanes!(f32, __m512, 16;
         _mm512_set1_ps, _mm512_loadu_ps, _mm512_storeu_ps, _mm512_add_ps, _mm512_sub_ps,
         _mm512_mul_ps, _mm512_fmadd_ps, _mm512_fmsub_ps, _mm512_div_ps);
+    masked_compares!(
+        __mmask16,
+        0xffff,
+        _mm512_cmp_ps_mask,
+        _mm512_mask_blend_ps,
+        _mm512_sqrt_ps
+    );
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m512, eps: f32) -> __m512 {
         unsafe {
@@ -328,6 +426,15 @@ impl Simd for Avx2 {
     lanes!(f32, __m256, 8;
         _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_sub_ps,
         _mm256_mul_ps, _mm256_fmadd_ps, _mm256_fmsub_ps, _mm256_div_ps);
+    vector_compares!(
+        0xff,
+        _mm256_cmp_ps,
+        _mm256_blendv_ps,
+        _mm256_movemask_ps,
+        _mm256_sqrt_ps,
+        _mm256_and_ps,
+        _mm256_andnot_ps
+    );
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m256, eps: f32) -> __m256 {
         unsafe {
@@ -399,6 +506,13 @@ impl Simd for Avx512F64 {
     lanes!(f64, __m512d, 8;
         _mm512_set1_pd, _mm512_loadu_pd, _mm512_storeu_pd, _mm512_add_pd, _mm512_sub_pd,
         _mm512_mul_pd, _mm512_fmadd_pd, _mm512_fmsub_pd, _mm512_div_pd);
+    masked_compares!(
+        __mmask8,
+        0xff,
+        _mm512_cmp_pd_mask,
+        _mm512_mask_blend_pd,
+        _mm512_sqrt_pd
+    );
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m512d, eps: f64) -> __m512d {
         unsafe {
@@ -454,6 +568,15 @@ impl Simd for Avx2F64 {
     lanes!(f64, __m256d, 4;
         _mm256_set1_pd, _mm256_loadu_pd, _mm256_storeu_pd, _mm256_add_pd, _mm256_sub_pd,
         _mm256_mul_pd, _mm256_fmadd_pd, _mm256_fmsub_pd, _mm256_div_pd);
+    vector_compares!(
+        0xf,
+        _mm256_cmp_pd,
+        _mm256_blendv_pd,
+        _mm256_movemask_pd,
+        _mm256_sqrt_pd,
+        _mm256_and_pd,
+        _mm256_andnot_pd
+    );
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m256d, eps: f64) -> __m256d {
         unsafe {
