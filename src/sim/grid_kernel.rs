@@ -798,6 +798,10 @@ struct Band<E> {
     r1: usize,
     /// `SLOTS` x 3 components x `nv` floats.
     acc: Buf<E>,
+    /// Per row, whether a free particle is near the sphere after the step, when
+    /// the step gives the ground's friction ([`ContactRows::ground_friction_row`]):
+    /// the rows the sphere's contact then resolves.
+    near_sphere: Vec<bool>,
 }
 
 impl<E: Real> Band<E> {
@@ -806,6 +810,7 @@ impl<E: Real> Band<E> {
             r0,
             r1,
             acc: Buf::zeros(SLOTS * 3 * grid.nv),
+            near_sphere: vec![true; r1 - r0],
         }
     }
 }

@@ -144,7 +144,12 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// column: the grid's ghost columns (its rows are [`super::BLOCK`] floats longer than their
     /// blocks), or the next row of a lattice (whose arrays end in ghosts); lanes
     /// that do not touch are written back what they held.
-    pub(super) fn resolve(&self, out: &mut Out<E>, first: usize, rows: std::ops::Range<usize>) {
+    pub(super) fn resolve(
+        &self,
+        out: &mut Out<E>,
+        first: usize,
+        rows: impl Iterator<Item = usize>,
+    ) {
         match self.simd {
             #[cfg(target_arch = "x86_64")]
             // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
@@ -162,7 +167,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
         &self,
         out: &mut Out<E>,
         first: usize,
-        rows: std::ops::Range<usize>,
+        rows: impl Iterator<Item = usize>,
     ) {
         if self.frame.fixed {
             self.resolve_rows_in::<true>(out, first, rows)
@@ -178,7 +183,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
         &self,
         out: &mut Out<E>,
         first: usize,
-        rows: std::ops::Range<usize>,
+        rows: impl Iterator<Item = usize>,
     ) {
         const N: usize = CONTACT_LANES;
         let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
@@ -282,6 +287,8 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// that pass's loads, per-lane tests and stores, and with the row still in the
     /// first cache. (After the row's blocks, not in them: in them, the row's code
     /// came out slower.)
+    /// Returns whether any free particle of the row is near the sphere: only
+    /// then has `resolve` anything to do in it.
     #[inline(always)]
     pub(super) fn ground_friction_row<S: Simd<E = E>, const FIXED: bool>(
         &self,
@@ -289,9 +296,9 @@ impl<'a, E: Real> ContactRows<'a, E> {
         out: &mut Out<E>,
         (i, o): (usize, usize),
         nv: usize,
-    ) {
+    ) -> bool {
         let Some(height) = self.contact.ground.map(|g| g.height) else {
-            return;
+            return true;
         };
         let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
         // Everything the loop reads and writes lies inside these bounds.
@@ -313,6 +320,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
             self.reach.center.map(splat),
             lanes(splat(self.reach.reach2)),
         );
+        let mut any_near = false;
         for c in (0..nv).step_by(S::LANES) {
             // SAFETY: `o + c + LANES <= o + nv` and `i + c + LANES <= i + nv`,
             // inside the arrays (asserted).
@@ -336,7 +344,9 @@ impl<'a, E: Real> ContactRows<'a, E> {
             } else {
                 (s.le(py, ground), lanes(py) - exact)
             };
-            let touch = s.both(s.gt(w, zero), s.but_not(under, near.1));
+            let free = s.gt(w, zero);
+            any_near |= s.any(s.both(free, near.1));
+            let touch = s.both(free, s.but_not(under, near.1));
             if !s.any(touch) {
                 continue;
             }
@@ -366,6 +376,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
                 add(uz, dv[2].1);
             }
         }
+        any_near
     }
 
     /// The contact of the block of lanes at array index `j` (particle index `i`)
@@ -621,12 +632,15 @@ mod tests {
                 for r in 0..grid.h {
                     let at = r * grid.stride;
                     let lanes = Portable::<f32>::default();
-                    if frame.fixed {
-                        in_step.ground_friction_row::<_, true>(lanes, &mut out, (at, at), grid.nv);
+                    let near = if frame.fixed {
+                        in_step.ground_friction_row::<_, true>(lanes, &mut out, (at, at), grid.nv)
                     } else {
-                        in_step.ground_friction_row::<_, false>(lanes, &mut out, (at, at), grid.nv);
+                        in_step.ground_friction_row::<_, false>(lanes, &mut out, (at, at), grid.nv)
+                    };
+                    // The sphere's contact only where the row says it may touch.
+                    if near {
+                        in_step.resolve(&mut out, 0, r..r + 1);
                     }
-                    in_step.resolve(&mut out, 0, r..r + 1);
                 }
                 let (mut exact, mut changed) = (0, 0);
                 for r in 0..grid.h {

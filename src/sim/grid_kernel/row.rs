@@ -29,11 +29,20 @@ pub(super) struct Ctx<'a, E> {
     pub(super) contact: Option<&'a ContactRows<'a, E>>,
 }
 
-/// One band of the step, then the contact of its rows if the step has it.
+/// One band of the step, then the contact of its rows if the step has it (with
+/// the ground's friction given in the step, that of the rows with a particle near
+/// the sphere).
 fn run_band<E: Real>(ctx: &Ctx<E>, band: &mut Band<E>, mut out: Out<E>) {
     E::band_dispatch(ctx, band, out.reborrow());
     if let Some(contact) = ctx.contact {
-        contact.resolve(&mut out, band.r0, band.r0..band.r1);
+        let rows = band.r0..band.r1;
+        if contact.friction_in_rows {
+            let near = &band.near_sphere;
+            let rows = rows.filter(|r| near[r - band.r0]);
+            contact.resolve(&mut out, band.r0, rows);
+        } else {
+            contact.resolve(&mut out, band.r0, rows);
+        }
     }
 }
 
@@ -466,7 +475,8 @@ pub(super) fn row_step<
         c += S::LANES;
     }
     if let Some(contact) = ctx.contact.filter(|c| OWN && c.friction_in_rows) {
-        contact.ground_friction_row::<S, FIXED>(s, out, (b[0], lo), nv);
+        band.near_sphere[row - band.r0] =
+            contact.ground_friction_row::<S, FIXED>(s, out, (b[0], lo), nv);
     }
 }
 

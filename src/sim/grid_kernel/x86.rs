@@ -162,7 +162,7 @@ pub(super) unsafe fn contact_rows_avx2<E: Real>(
     ctx: &ContactRows<E>,
     out: &mut Out<E>,
     first: usize,
-    rows: std::ops::Range<usize>,
+    rows: impl Iterator<Item = usize>,
 ) {
     ctx.resolve_rows(out, first, rows)
 }
@@ -177,7 +177,7 @@ pub(super) unsafe fn contact_rows_avx512<E: Real>(
     ctx: &ContactRows<E>,
     out: &mut Out<E>,
     first: usize,
-    rows: std::ops::Range<usize>,
+    rows: impl Iterator<Item = usize>,
 ) {
     ctx.resolve_rows(out, first, rows)
 }
