@@ -26,7 +26,11 @@
 //! (its velocity is 0). After the step, particles inside the sphere are projected
 //! onto it (fused into the step when there is no stretch limit) and the stretch limit
 //! runs a Gauss-Seidel pass in the f64 engine's colour order; a move `δ` adds `δ/h`
-//! to the velocity, as in `super::constraints`.
+//! to the velocity, as in `super::constraints`. With friction, the colliders'
+//! contact is the f64 engine's rule (`super::constraints::Contact`) after the
+//! step (`contact`); when nothing else comes after the step before it, it goes
+//! into the step: the ground's friction to each row as soon as the row is stepped,
+//! the sphere's to each band's rows after them.
 //!
 //! # Precision
 //! * Float32 positions lose the low bits of each move `x += h v`, and the lost bits
@@ -81,8 +85,9 @@
 //!   integration and the sphere, per SIMD block.
 //! * `simd`: the vector operations the loops are written over, and `x86` their
 //!   AVX2 and AVX-512 versions with the entry points compiled for them.
-//! * `spring_passes` (XPBD's springs, the stretch limit), `contact`: the passes
-//!   after the step; [`lattice`]: the same
+//! * `spring_passes` (XPBD's springs, the stretch limit), `contact` (the
+//!   colliders with friction, also in the step): the passes after the step;
+//!   [`lattice`]: the same
 //!   physics on a 3-D lattice (the jelly cube).
 
 use std::sync::OnceLock;
