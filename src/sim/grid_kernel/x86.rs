@@ -516,9 +516,15 @@ impl Simd for Avx512F64 {
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m512d, eps: f64) -> __m512d {
         unsafe {
-            // Correctly rounded, as the portable lanes: AVX-512's 14-bit estimate
-            // with a fourth-order step to float64's 53 bits ran no faster.
-            let y = _mm512_div_pd(_mm512_set1_pd(1.0), _mm512_sqrt_pd(x));
+            // AVX-512's 14-bit estimate `y` and one fourth-order step: with `e = 1 -
+            // x y²`, `y (1 + e/2 + 3e²/8 + 5e³/16)`, whose error `35/128 e⁴` is
+            // under 2^-57; the rounding of `e` and of the last sum leave it within
+            // about an ulp of the correctly rounded `1 / sqrt(x)`.
+            let y = _mm512_rsqrt14_pd(x);
+            let e = _mm512_fnmadd_pd(_mm512_mul_pd(x, y), y, _mm512_set1_pd(1.0));
+            let p = _mm512_fmadd_pd(e, _mm512_set1_pd(5.0 / 16.0), _mm512_set1_pd(3.0 / 8.0));
+            let p = _mm512_fmadd_pd(p, e, _mm512_set1_pd(0.5));
+            let y = _mm512_fmadd_pd(_mm512_mul_pd(y, e), p, y);
             let ok = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(x, _mm512_set1_pd(eps));
             _mm512_maskz_mov_pd(ok, y)
         }
