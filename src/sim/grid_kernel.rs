@@ -72,8 +72,10 @@
 //! * The loops are written once over a small SIMD trait with three versions:
 //!   AVX-512 (16 lanes, `vrsqrt14ps` + one Newton step for `1/l`), AVX2 + FMA
 //!   (8 lanes, `vrsqrtps` + one Newton step) and a portable one (`1/sqrt`, which
-//!   the compiler vectorises for SSE2 or NEON); in float64, AVX-512 (8 lanes) and
-//!   AVX2 (4 lanes) with a correctly rounded `1/sqrt`, and the portable one. The
+//!   the compiler vectorises for SSE2 or NEON); in float64, AVX-512 (8 lanes,
+//!   `vrsqrt14pd` + one fourth-order step, within an ulp of `1/sqrt`: on an
+//!   Intel core the divider had bound the float64 kernels), AVX2 (4 lanes, a
+//!   correctly rounded `1/sqrt`) and the portable one. The
 //!   best one this CPU has is picked at run time; the binary runs on any x86-64 or
 //!   aarch64 machine.
 //! * Nothing is allocated inside a step.
