@@ -530,7 +530,10 @@ impl Simd for Avx512F64 {
             let p = _mm512_fmadd_pd(e, _mm512_set1_pd(5.0 / 16.0), _mm512_set1_pd(3.0 / 8.0));
             let p = _mm512_fmadd_pd(p, e, _mm512_set1_pd(0.5));
             let y = _mm512_fmadd_pd(_mm512_mul_pd(y, e), p, y);
+            // 0 at or under `eps` (or NaN), and at infinity, as `1 / sqrt` gives
+            // (where the step would give `inf · 0`, NaN).
             let ok = _mm512_cmp_pd_mask::<_CMP_GT_OQ>(x, _mm512_set1_pd(eps));
+            let ok = _mm512_mask_cmp_pd_mask::<_CMP_LT_OQ>(ok, x, _mm512_set1_pd(f64::INFINITY));
             _mm512_maskz_mov_pd(ok, y)
         }
     }
@@ -722,10 +725,22 @@ mod tests {
         }
         println!("worst: {worst:.3} ulp from the exact value (1 / sqrt: {reference:.3})");
         assert!(worst <= 1.0, "{worst} ulp from 1 / sqrt(x)");
-        let at_eps = [1e-20, 0.5e-20, 0.0, -1.0, 2e-20, 1.0, 4.0, 1e-19];
+        // 0 where the portable lanes' `1 / sqrt` is 0 or the lane is left out:
+        // at or under `eps`, NaN, infinity.
+        let edges = [
+            1e-20,
+            0.5e-20,
+            -1.0,
+            f64::NAN,
+            f64::INFINITY,
+            2e-20,
+            4.0,
+            1e300,
+        ];
         // SAFETY: as above.
-        let y = unsafe { rsqrt_avx512_f64(at_eps, 1e-20) };
-        assert_eq!(&y[..4], &[0.0; 4], "at or under eps");
-        assert!(y[4..].iter().all(|&y| y > 0.0));
+        let y = unsafe { rsqrt_avx512_f64(edges, 1e-20) };
+        assert_eq!(&y[..5], &[0.0; 5], "at or under eps, NaN, infinity");
+        assert_eq!(y[6], 0.5);
+        assert!(y[5..].iter().all(|&y| y > 0.0 && y.is_finite()));
     }
 }
