@@ -2,7 +2,9 @@
 # Cost per particle-step of each kind of scene on the fast engine against the plain
 # `bench` cloth, in one run: `cloth run --json` (STEPS steps after 16 warm-up steps,
 # best of RUNS runs), at each size. Usage: bash benches/engine_scenes.sh [SIZES] [RUNS] [STEPS]
-# e.g. bash benches/engine_scenes.sh "128 256" 3 3840. Runs of 960 steps at 128 x 128
+# e.g. bash benches/engine_scenes.sh "128 256" 3 3840; RAYON_NUM_THREADS=1 before it
+# runs every case on one core. Each ratio is given best against best and median against
+# median: on a noisy machine the two part, and the median says how far. Runs of 960 steps at 128 x 128
 # last about 40 ms, and on a 2-core VM how soon the system spreads the two threads
 # decides much of such a run; longer runs give steadier ratios.
 set -euo pipefail
@@ -35,11 +37,11 @@ echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of $STEPS steps"
 for n in $SIZES; do
   echo
   echo "N = $n"
-  printf '%-34s %-10s %14s %10s\n' "case" "engine" "M p-steps/s" "cost/bench"
+  printf '%-34s %-10s %14s %10s %10s\n' "case" "engine" "M p-steps/s" "cost/bench" "(medians)"
   # The runs go round the cases (case 1, 2, ..., then again), so that a spell of
   # contention on a shared machine slows one run of every case, not every run of
   # one: each case keeps its fastest run.
-  declare -a args_of best_of engine_of
+  declare -a args_of rates_of engine_of
   for c in "${!CASES[@]}"; do
     args=${CASES[$c]#*|}
     if [[ $args == *RANDOM50* ]]; then
@@ -47,7 +49,7 @@ for n in $SIZES; do
       args=${args/RANDOM50/$pins}
     fi
     args_of[$c]=$args
-    best_of[$c]=0
+    rates_of[$c]=""
   done
   for _ in $(seq "$RUNS"); do
     for c in "${!CASES[@]}"; do
@@ -55,13 +57,16 @@ for n in $SIZES; do
       out=$(eval "$CLOTH run --set width=$n --set height=$n ${args_of[$c]} --steps $STEPS --warmup 16 --json" 2>/dev/null | tail -1) || true
       read -r rate engine < <(python3 -c "import json,sys; d=json.loads(sys.argv[1]); print(d['particle_steps_per_second'], d['engine'] + ('' if d['steps'] == $STEPS else '(diverged)'))" "$out")
       engine_of[$c]=$engine
-      best_of[$c]=$(python3 -c "print(max(${best_of[$c]}, $rate))")
+      rates_of[$c]="${rates_of[$c]} $rate"
     done
   done
-  base=${best_of[0]}
   for c in "${!CASES[@]}"; do
-    best=${best_of[$c]}
-    printf '%-34s %-10s %14.1f %10.2f\n' "${CASES[$c]%%|*}" "${engine_of[$c]}" "$(python3 -c "print($best/1e6)")" "$(python3 -c "print($base/$best)")"
+    read -r best ratio median_ratio < <(python3 -c "
+import statistics, sys
+base, rates = [list(map(float, a.split())) for a in sys.argv[1:]]
+print(max(rates) / 1e6, max(base) / max(rates), statistics.median(base) / statistics.median(rates))
+" "${rates_of[0]}" "${rates_of[$c]}")
+    printf '%-34s %-10s %14.1f %10.2f %10.2f\n' "${CASES[$c]%%|*}" "${engine_of[$c]}" "$best" "$ratio" "$median_ratio"
   done
 done
 
