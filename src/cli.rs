@@ -583,6 +583,7 @@ impl Summary {
             "bounding_box": { "min": [self.min.x, self.min.y, self.min.z], "max": [self.max.x, self.max.y, self.max.z] },
             "max_speed": self.max_speed,
             "engine": self.engine.name(),
+            "simd": self.engine.simd_level().name(),
             "threads": self.threads,
             "cg_iterations_last_step": self.solver_iterations,
         })
@@ -626,7 +627,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
     let mut system = resolved.build();
     // The engine `cloth run` uses (without `--exact`).
     system.set_fast_path(true);
-    let engine = system.engine().name();
+    let engine = system.engine();
     let p = system.params();
     let mut per_kind = serde_json::Map::new();
     for kind in SpringKind::ALL {
@@ -688,7 +689,8 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         "triangles": system.triangles().len(),
         "force_terms": system.force_terms().names(),
         "constraints": constraints,
-        "engine": engine,
+        "engine": engine.name(),
+        "simd": engine.simd_level().name(),
         "parameters": {
             "layout": format!("{:?}", resolved.layout).to_lowercase(),
             "width": resolved.width,

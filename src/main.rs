@@ -1,5 +1,7 @@
 //! The `cloth` binary: the desktop app when run without a subcommand, and the
 //! command line (`run`, `info`, `scenes`, `screenshot`, `report`) otherwise.
+// `cloth info`'s one `json!` object has more fields than the macro's default depth.
+#![recursion_limit = "256"]
 
 mod app;
 mod cli;

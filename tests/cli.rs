@@ -86,6 +86,54 @@ fn run_reports_the_threads_the_engine_stepped_on() {
     }
 }
 
+/// `simd` names the compiled loops the engine stepped with, as this CPU's
+/// features (read here, apart from the engine's own detection) decide them: the
+/// grid kernel the widest level the CPU has, the mesh engine its AVX2 build where
+/// there is AVX2, the general engine the baseline build; `cloth info` says the same.
+#[test]
+fn run_reports_the_simd_level_the_engine_stepped_with() {
+    let (grid, mesh) = simd_levels();
+    for (scene, exact, engine, simd) in [
+        ("bench", false, "grid-f32", grid),
+        ("bench", true, "general-f64", "baseline"),
+        ("rope", false, "mesh-f64", mesh),
+    ] {
+        let mut args = vec!["run", "--scene", scene, "--steps", "4", "--json"];
+        if exact {
+            args.push("--exact");
+        }
+        let o = cloth(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).expect("JSON");
+        let ran = (v["engine"].as_str(), v["simd"].as_str());
+        assert_eq!(ran, (Some(engine), Some(simd)), "{scene}, exact: {exact}");
+    }
+    let o = cloth(&["info", "--scene", "bench", "--json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).expect("JSON");
+    assert_eq!(v["simd"], grid);
+}
+
+/// The SIMD levels the grid kernel (AVX-512F/VL with AVX2 and FMA, or AVX2 and
+/// FMA) and the mesh engine (AVX2) can run on this CPU.
+#[cfg(target_arch = "x86_64")]
+fn simd_levels() -> (&'static str, &'static str) {
+    let avx2 = is_x86_feature_detected!("avx2");
+    let fma = is_x86_feature_detected!("fma");
+    let avx512 = is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
+    let grid = match (avx2 && fma, avx512) {
+        (true, true) => "avx512",
+        (true, false) => "avx2",
+        (false, _) => "baseline",
+    };
+    (grid, if avx2 { "avx2" } else { "baseline" })
+}
+
+#[cfg(not(target_arch = "x86_64"))]
+fn simd_levels() -> (&'static str, &'static str) {
+    ("baseline", "baseline")
+}
+
 #[test]
 fn dump_with_zero_steps_writes_the_initial_state() {
     let path = std::env::temp_dir().join(format!("cloth-dump-{}.csv", std::process::id()));

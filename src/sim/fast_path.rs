@@ -31,7 +31,7 @@ use glam::DVec3;
 
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::grid_kernel::lattice::{LatticeKernel, LatticeSpec};
-use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SpringCoefficients};
+use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SimdLevel, SpringCoefficients};
 use super::mesh_kernel::{MeshKernel, MeshParams};
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Divergence, Integrator, SpringKind, System};
@@ -70,11 +70,24 @@ impl Engine {
     }
 
     /// The engine on `threads` threads, as the command line and the panel show
-    /// it: `grid-f32 (2 threads)`.
+    /// it: `grid-f32 (2 threads, avx512)`.
     pub fn label(self, threads: usize) -> String {
+        let simd = self.simd_level().name();
         match threads {
-            1 => format!("{} (1 thread)", self.name()),
-            n => format!("{} ({n} threads)", self.name()),
+            1 => format!("{} (1 thread, {simd})", self.name()),
+            n => format!("{} ({n} threads, {simd})", self.name()),
+        }
+    }
+
+    /// The compiled version of the loops this engine steps with on this CPU: the
+    /// grid and lattice kernels pick the best the CPU has
+    /// ([`SimdLevel::detect`]), the mesh engine its AVX2 build where the CPU has
+    /// AVX2, and the general engine is compiled for the baseline target only.
+    pub fn simd_level(self) -> SimdLevel {
+        match self {
+            Self::Grid(_) | Self::Lattice(_) => SimdLevel::detect(),
+            Self::Mesh => super::mesh_kernel::simd_level(),
+            Self::General => SimdLevel::Baseline,
         }
     }
 

@@ -392,6 +392,16 @@ pub enum SimdLevel {
 }
 
 impl SimdLevel {
+    /// Name for reports: `avx512`, `avx2` or `baseline` (as `grid_timing --simd`
+    /// takes them).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Baseline => "baseline",
+            Self::Avx2 => "avx2",
+            Self::Avx512 => "avx512",
+        }
+    }
+
     /// The best level this CPU supports (detected once).
     pub fn detect() -> Self {
         static LEVEL: OnceLock<SimdLevel> = OnceLock::new();

@@ -47,6 +47,7 @@ use glam::DVec3;
 
 use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass, xpbd_sweeps_back};
 use super::forces::{ground_force, spring_force, triangle_drag};
+use super::grid_kernel::SimdLevel;
 use super::integrators::euler_update;
 use super::springs;
 use super::springs::{Adjacency, BarPairs};
@@ -389,6 +390,16 @@ fn spring_pass(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
     spring_pass_body(ctx, start, out);
 }
 
+/// The compiled version of the spring pass this CPU runs: its AVX2 build where
+/// the CPU has AVX2, else the baseline one.
+pub(crate) fn simd_level() -> SimdLevel {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        return SimdLevel::Avx2;
+    }
+    SimdLevel::Baseline
+}
+
 /// [`spring_pass`] compiled for AVX2: four springs per instruction (IEEE square
 /// roots and divisions and no fused multiply-add, so the same results as the
 /// baseline build). (An AVX-512 build measured no faster on the 32^3 jelly: the
@@ -718,10 +729,7 @@ impl MeshKernel {
             bars: model.bars.clone(),
             threads: 1,
             pool: None,
-            #[cfg(target_arch = "x86_64")]
-            avx2: std::arch::is_x86_feature_detected!("avx2"),
-            #[cfg(not(target_arch = "x86_64"))]
-            avx2: false,
+            avx2: simd_level() == SimdLevel::Avx2,
             adjacency: Adjacency::default(),
             bar_pairs: model.bar_pairs.clone(),
             self_collision: SelfCollision::default(),
