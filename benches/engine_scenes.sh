@@ -40,7 +40,7 @@ for n in $SIZES; do
   printf '%-34s %-10s %14s %10s %10s\n' "case" "engine" "M p-steps/s" "cost/bench" "(medians)"
   # The runs go round the cases (case 1, 2, ..., then again), so that a spell of
   # contention on a shared machine slows one run of every case, not every run of
-  # one: each case keeps its fastest run.
+  # one: each case keeps all its runs, for the best and the median.
   declare -a args_of rates_of engine_of
   for c in "${!CASES[@]}"; do
     args=${CASES[$c]#*|}

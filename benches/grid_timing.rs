@@ -92,12 +92,10 @@ fn main() {
                     .unwrap_or(quiet_wait)
             }
             "--simd" => {
-                simd = match args.next().as_deref() {
-                    Some("avx512") => Some(SimdLevel::Avx512),
-                    Some("avx2") => Some(SimdLevel::Avx2),
-                    Some("baseline") => Some(SimdLevel::Baseline),
-                    _ => None,
-                }
+                let name = args.next();
+                simd = [SimdLevel::Avx512, SimdLevel::Avx2, SimdLevel::Baseline]
+                    .into_iter()
+                    .find(|level| name.as_deref() == Some(level.name()));
             }
             "--wind" => winds = vec![true],
             "--calm" => winds = vec![false],
