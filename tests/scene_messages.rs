@@ -39,6 +39,16 @@ fn a_misspelt_key_gets_the_nearest_real_one() {
     assert!(!message.contains("expected one of"), "{message}");
     let message = set_error("stifness", "3");
     assert!(message.contains("did you mean `stiffness`?"), "{message}");
+    // A word of a key is that key (or those keys), not the nearest spelling
+    // (`bars`, 2 edits from `mass`).
+    let message = set_error("mass", "0.01");
+    assert!(
+        message.contains("did you mean `particle_mass` or `total_mass`"),
+        "{message}"
+    );
+    assert!(!message.contains("`bars`"), "{message}");
+    let message = set_error("density", "1");
+    assert!(message.contains("did you mean `air_density`?"), "{message}");
     // Nothing near: no guess.
     let message = set_error("zzzzqqq", "3");
     assert!(!message.contains("did you mean"), "{message}");

@@ -329,17 +329,28 @@ fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
         let unknown = rest.split('`').next().unwrap_or("");
         // serde lists the keys: "unknown field `x`, expected one of `a`, `b`".
         let known = rest.split_once("expected").map_or("", |(_, list)| list);
-        let nearest = known
-            .split('`')
-            .skip(1)
-            .step_by(2)
+        let keys = || known.split('`').skip(1).step_by(2);
+        // The keys that have the word as one of their parts (`mass`:
+        // `particle_mass`, `total_mass`, ...) are what was meant, however far they
+        // are by spelling (`bars` is 2 edits from `mass`); else the nearest by
+        // spelling.
+        let parts: Vec<&str> = keys()
+            .filter(|k| k.split('_').any(|part| part == unknown))
+            .collect();
+        let nearest = keys()
             .map(|k| (edit_distance(unknown, k), k))
             .min()
-            .filter(|&(d, _)| d <= 2.max(unknown.len() / 3));
-        return match nearest {
-            Some((_, k)) => format!(
-                "`{}` is not a scene key; did you mean `{k}`?",
-                echo(unknown)
+            .filter(|&(d, _)| d <= 2.max(unknown.len() / 3))
+            .map(|(_, k)| vec![k]);
+        let guess = Some(parts).filter(|p| !p.is_empty()).or(nearest);
+        return match guess {
+            Some(keys) => format!(
+                "`{}` is not a scene key; did you mean {}?",
+                echo(unknown),
+                keys.iter()
+                    .map(|k| format!("`{k}`"))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
             ),
             None => format!(
                 "`{}` is not a scene key (README, \"Scene files and --set share keys\", lists them)",
