@@ -47,6 +47,13 @@ fn a_misspelt_key_gets_the_nearest_real_one() {
         "{message}"
     );
     assert!(!message.contains("`bars`"), "{message}");
+    // The panel's symbols are their keys; another single letter is no guess.
+    let message = set_error("k", "100");
+    assert!(message.contains("did you mean `stiffness`?"), "{message}");
+    let message = set_error("b", "0.1");
+    assert!(message.contains("did you mean `damping`?"), "{message}");
+    let message = set_error("q", "1");
+    assert!(!message.contains("did you mean"), "{message}");
     let message = set_error("density", "1");
     assert!(message.contains("did you mean `air_density`?"), "{message}");
     // Nothing near: no guess.

@@ -320,6 +320,9 @@ fn file_message(error: &toml::de::Error, text: &str) -> String {
     )
 }
 
+/// The physics symbols the panel shows beside sliders, and their scene keys.
+const SYMBOLS: [(&str, &str); 2] = [("k", "stiffness"), ("b", "damping")];
+
 /// A deserialiser's message in plain words, for `key` when known: an unknown key
 /// gets the nearest known one ("did you mean"); a whole number out of its type, or
 /// a value of the wrong type, says what the key takes and, for the counts, their
@@ -334,13 +337,22 @@ fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
         // `particle_mass`, `total_mass`, ...) are what was meant, however far they
         // are by spelling (`bars` is 2 edits from `mass`); else the nearest by
         // spelling.
+        // The symbols the panel shows beside their sliders (`stiffness k`) are
+        // their keys.
+        let symbol = SYMBOLS
+            .iter()
+            .filter(|&&(s, key)| s == unknown && keys().any(|k| k == key))
+            .map(|&(_, key)| key);
         let parts: Vec<&str> = keys()
             .filter(|k| k.split('_').any(|part| part == unknown))
+            .chain(symbol)
             .collect();
+        // By spelling, fewer edits than the word has letters (a one-letter word
+        // is two edits from any two-letter key: `k` is not `dt`).
         let nearest = keys()
             .map(|k| (edit_distance(unknown, k), k))
             .min()
-            .filter(|&(d, _)| d <= 2.max(unknown.len() / 3))
+            .filter(|&(d, _)| d <= 2.max(unknown.len() / 3) && d < unknown.len())
             .map(|(_, k)| vec![k]);
         let guess = Some(parts).filter(|p| !p.is_empty()).or(nearest);
         return match guess {
