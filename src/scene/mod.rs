@@ -320,11 +320,40 @@ fn file_message(error: &toml::de::Error, text: &str) -> String {
     )
 }
 
-/// The physics symbols the panel shows beside sliders, and their scene keys.
+/// The physics symbols of the seeds and the panel's sliders ("stiffness k"), and
+/// their scene keys.
 const SYMBOLS: [(&str, &str); 2] = [("k", "stiffness"), ("b", "damping")];
 
+/// The keys of `keys` that an `unknown` one most likely meant, best first, or
+/// none: the keys that have it as one of their parts (`mass`: `particle_mass`,
+/// `total_mass`, ...), however far by spelling (`bars` is 2 edits from `mass`),
+/// and the key of a symbol (`k`: `stiffness`); else the nearest by spelling, within
+/// fewer edits than the word has letters (a one-letter word is two edits from any
+/// two-letter key: `k` is not `dt`).
+fn guesses<'k>(unknown: &str, keys: &[&'k str]) -> Vec<&'k str> {
+    let symbol = SYMBOLS
+        .iter()
+        .filter(|&&(s, key)| s == unknown && keys.contains(&key))
+        .map(|&(_, key)| key);
+    let meant: Vec<&str> = keys
+        .iter()
+        .copied()
+        .filter(|k| k.split('_').any(|part| part == unknown))
+        .chain(symbol)
+        .collect();
+    if !meant.is_empty() {
+        return meant;
+    }
+    keys.iter()
+        .map(|k| (edit_distance(unknown, k), *k))
+        .min()
+        .filter(|&(d, _)| d <= 2.max(unknown.len() / 3) && d < unknown.len())
+        .map(|(_, k)| vec![k])
+        .unwrap_or_default()
+}
+
 /// A deserialiser's message in plain words, for `key` when known: an unknown key
-/// gets the nearest known one ("did you mean"); a whole number out of its type, or
+/// gets the keys it likely meant ("did you mean", [`guesses`]); a whole number out of its type, or
 /// a value of the wrong type, says what the key takes and, for the counts, their
 /// range. Other messages are kept, clipped.
 fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
@@ -332,43 +361,20 @@ fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
         let unknown = rest.split('`').next().unwrap_or("");
         // serde lists the keys: "unknown field `x`, expected one of `a`, `b`".
         let known = rest.split_once("expected").map_or("", |(_, list)| list);
-        let keys = || known.split('`').skip(1).step_by(2);
-        // The keys that have the word as one of their parts (`mass`:
-        // `particle_mass`, `total_mass`, ...) are what was meant, however far they
-        // are by spelling (`bars` is 2 edits from `mass`); else the nearest by
-        // spelling.
-        // The symbols the panel shows beside their sliders (`stiffness k`) are
-        // their keys.
-        let symbol = SYMBOLS
-            .iter()
-            .filter(|&&(s, key)| s == unknown && keys().any(|k| k == key))
-            .map(|&(_, key)| key);
-        let parts: Vec<&str> = keys()
-            .filter(|k| k.split('_').any(|part| part == unknown))
-            .chain(symbol)
-            .collect();
-        // By spelling, fewer edits than the word has letters (a one-letter word
-        // is two edits from any two-letter key: `k` is not `dt`).
-        let nearest = keys()
-            .map(|k| (edit_distance(unknown, k), k))
-            .min()
-            .filter(|&(d, _)| d <= 2.max(unknown.len() / 3) && d < unknown.len())
-            .map(|(_, k)| vec![k]);
-        let guess = Some(parts).filter(|p| !p.is_empty()).or(nearest);
-        return match guess {
-            Some(keys) => format!(
-                "`{}` is not a scene key; did you mean {}?",
-                echo(unknown),
-                keys.iter()
-                    .map(|k| format!("`{k}`"))
-                    .collect::<Vec<_>>()
-                    .join(" or ")
-            ),
-            None => format!(
+        let keys: Vec<&str> = known.split('`').skip(1).step_by(2).collect();
+        let guesses = guesses(unknown, &keys);
+        if guesses.is_empty() {
+            return format!(
                 "`{}` is not a scene key (README, \"Scene files and --set share keys\", lists them)",
                 echo(unknown)
-            ),
-        };
+            );
+        }
+        let listed: Vec<String> = guesses.iter().map(|k| format!("`{k}`")).collect();
+        return format!(
+            "`{}` is not a scene key; did you mean {}?",
+            echo(unknown),
+            listed.join(" or ")
+        );
     }
     // serde: "invalid value: integer `-3`, expected u32",
     // "invalid type: string \"abc\", expected f64".
