@@ -554,3 +554,23 @@ fn what_the_lattice_kernel_does_not_model_runs_on_the_other_engines() {
     system.refuse_lattice_kernel(true);
     assert_eq!(system.engine(), Engine::Mesh);
 }
+
+#[test]
+fn a_big_stiff_jelly_runs_on_a_tight_fixed_point_unit() {
+    // The jelly made 12³ at its k = 2,000 N/m, its lowest corner on the ground. At
+    // the roomy fixed-point unit (twice its 9.5 m radius in a quarter of the
+    // integers' range: 2^-24 m) the precision rule's noise is 0.1033 m/s², over the
+    // limit, and it ran in float64; at the tight unit (`frame::fixed_unit`: 2^-26 m,
+    // the radius with an eighth to spare in just under half the range) it is
+    // 0.0917, and it runs on fixed-point positions, following the f64 engine within
+    // the bound as it settles on the ground.
+    let overrides = cube(12);
+    let overrides: Vec<&str> = overrides.iter().map(String::as_str).collect();
+    let ground = format!("ground_height={}", lowest(&build("jelly", &overrides)));
+    let overrides: Vec<&str> = overrides.into_iter().chain([ground.as_str()]).collect();
+    let system = build("jelly", &overrides);
+    let mut fast = system.clone();
+    fast.set_fast_path(true);
+    assert_eq!(fast.engine(), Engine::Lattice(Precision::Mixed));
+    lattice_and_exact("12³ jelly on a tight unit", system, 600, |_| {});
+}

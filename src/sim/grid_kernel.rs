@@ -249,13 +249,8 @@ impl Precision {
     /// kind's rest length plus the rounding of a move to half its unit; for XPBD
     /// see [`Precision::spring_noise`].
     pub fn float32_noise(spec: &GridSpec, reach: Option<f64>, dt: f64) -> f64 {
-        let h = spec.spacing.abs();
-        let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
-        let kinds = [spec.structural, spec.shear, spec.bend];
-        let springs = (kinds.iter().zip(rests)).map(|(kind, rest)| (kind.k, 4.0, rest));
         let xpbd = (spec.integrator == Integrator::Xpbd).then_some(dt);
-        let positions = reach.ok_or(spec.fixed_unit());
-        Self::spring_noise(springs, spec.particle_mass, positions, xpbd)
+        spec.noise(reach.ok_or_else(|| spec.fixed_unit()), xpbd)
     }
 
     /// `sum count k r / m` over a particle's springs, given as `(k, count, rest
@@ -342,16 +337,35 @@ impl GridSpec {
         0.5 * self.spacing.abs() * ((w * w + h * h) as f64).sqrt()
     }
 
-    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`]).
+    /// [`Precision::spring_noise`] of its springs (a particle has up to 4 of each
+    /// kind) with `positions` rounded as there, and XPBD's steps.
+    fn noise(&self, positions: Result<f64, f64>, xpbd: Option<f64>) -> f64 {
+        let h = self.spacing.abs();
+        let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
+        let kinds = [self.structural, self.shear, self.bend];
+        let springs = (kinds.iter().zip(rests)).map(|(kind, rest)| (kind.k, 4.0, rest));
+        Precision::spring_noise(springs, self.particle_mass, positions, xpbd)
+    }
+
+    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`], of its
+    /// springs' noise). XPBD keeps the roomy unit: its noise follows its step, which
+    /// the frame does not know, and is bounded whatever `k` (`m / 2h²` a spring).
     pub fn fixed_unit(&self) -> f64 {
-        self.frame_rule().unit()
+        let xpbd = self.integrator == Integrator::Xpbd;
+        frame::fixed_unit(self.extent(), |unit| {
+            if xpbd {
+                0.0
+            } else {
+                self.noise(Err(unit), None)
+            }
+        })
     }
 
     /// How its positions are stored: fixed point with [`Precision::Mixed`].
     fn frame_rule(&self) -> FrameRule<'_> {
         FrameRule {
             fixed: self.precision == Precision::Mixed,
-            extent: self.extent(),
+            unit: self.fixed_unit(),
             ground: self.ground.as_ref(),
             sphere: self.sphere.as_ref(),
         }

@@ -589,7 +589,7 @@ mod tests {
             friction: 0.3,
             dt: 1e-3,
         };
-        let unit = super::super::frame::fixed_unit(4.0);
+        let unit = super::super::frame::fixed_unit(4.0, |_| 0.0);
         let bounds = ([-2.0, -1.5, -2.0], [2.0, 1.0, 2.0]);
         let fixed = Frame::fitting(unit, bounds, 0.0, Some(&ground), Some(&sphere)).unwrap();
         let grid = Grid::new(37, 24);
@@ -703,7 +703,7 @@ mod tests {
             friction: 0.5,
             dt: 1e-3,
         };
-        let unit = super::super::frame::fixed_unit(4.0);
+        let unit = super::super::frame::fixed_unit(4.0, |_| 0.0);
         let bounds = ([-4.0, -1.0, -4.0], [4.0, 1.0, 4.0]);
         let fixed = Frame::fitting(unit, bounds, 0.0, Some(&ground), Some(&sphere)).unwrap();
         for frame in [Frame::FLOAT, fixed] {

@@ -8,12 +8,13 @@
 //!   folded into the constants (a spring's `k`, the drag's `ρ C_d`, the step's `h /
 //!   unit`), so the kernels' arithmetic is the same code in units as in metres.
 //! * The rounding of each move, at most half a unit, is the only noise fixed point
-//!   adds; [`fixed_unit`] picks the unit from the body's size and
+//!   adds; [`fixed_unit`] picks the unit from the body's size (roomy, or as fine
+//!   as the body allows where the roomy unit's noise is too much) and
 //!   [`super::Precision::spring_noise`] counts it. A constraint's or a collider's
 //!   move is rounded likewise, but the velocity gets the move as computed, so that
 //!   the part under half a unit reaches the position at the next step (rounded
 //!   away, it would be a dead zone: XPBD's small corrections were lost whole).
-//! * Particles are kept within `RANGE` units of the centre (a quarter of the
+//! * Particles are kept within `RANGE` units of the centre (just under half the
 //!   integers' range) and colliders' coordinates within `COLLIDER_RANGE` (half),
 //!   so that the difference of any two coordinates, or of a coordinate and a
 //!   collider's, is exact. Every `CHECK_STEPS` steps the kernels check that the
@@ -35,23 +36,56 @@ use crate::sim::{Ground, Sphere};
 /// check makes room for this many steps' moves at the particles' top speed.
 pub(super) const CHECK_STEPS: usize = 32;
 
-/// A quarter of the range of the integers: particles stay within this many units
-/// of the centre.
-pub(super) const RANGE: f64 = (1u64 << 29) as f64;
+/// Particles stay within this many units of the centre: just under half the
+/// integers' range, so that the difference of two of them (under `2 RANGE`) or of
+/// one and a collider's coordinate (under `RANGE + COLLIDER_RANGE`) is exact in 32
+/// bits (`the_ranges_keep_every_difference_exact`).
+pub(super) const RANGE: f64 = ((1u64 << 30) - (1u64 << 25)) as f64;
 
 /// Half the range of the integers: colliders' coordinates are kept within this
 /// many units of the centre (a ground below it is stored at it, still below every
 /// particle), so that a particle's coordinate less a collider's never overflows.
 pub(super) const COLLIDER_RANGE: f64 = (1u64 << 30) as f64;
 
+// A ground stored at `-COLLIDER_RANGE` is below every particle; a particle and a
+// collider differ by under `RANGE + COLLIDER_RANGE`, under 2^31, and so two
+// particles do (under `2 RANGE`).
+const _: () = {
+    assert!(COLLIDER_RANGE > RANGE);
+    assert!(RANGE + COLLIDER_RANGE < (1u64 << 31) as f64);
+};
+
+/// A quarter of the integers' range: the roomy unit holds the body within this
+/// many units of the centre and leaves it as far again to spread.
+const ROOMY_RANGE: f64 = (1u64 << 29) as f64;
+
+/// How far a body on a tight unit may spread, as a multiple of its radius, before
+/// the frame doubles its unit.
+const TIGHT_ROOM: f64 = 1.125;
+
 /// The unit (m, a power of two) of fixed-point positions for a body of radius
-/// `extent` (m): the finest with `RANGE` units at least twice the extent (the
-/// body, and as far again to move before the frame follows it). A power of two,
-/// so that the same body moved by a multiple of it (any whole number of metres
-/// where the unit is finer than 1 m) is stored as the same integers and steps
-/// the same.
-pub fn fixed_unit(extent: f64) -> f64 {
-    let wanted = 2.0 * extent.abs().max(1e-3) / RANGE;
+/// `extent` (m) whose acceleration noise at a unit is `noise(unit)` (m/s²,
+/// [`super::Precision::spring_noise`]): the roomy unit, the finest with
+/// `ROOMY_RANGE` units at least twice the extent (the body, and as far again to
+/// spread before the frame widens), where its noise is under the limit; else the
+/// tight one, the finest with `RANGE` units at least `TIGHT_ROOM` times the extent,
+/// 2 to 4 times finer. (The 32³ jelly at k = 2,000 N/m: 0.1188 m/s² at its roomy
+/// 2^-23 m, 0.0956 at its tight 2^-25 m, under the limit of 0.0981.) A power of
+/// two, so that the same body moved by a multiple of it (any whole number of metres
+/// where the unit is finer than 1 m) is stored as the same integers and steps the
+/// same.
+pub fn fixed_unit(extent: f64, noise: impl Fn(f64) -> f64) -> f64 {
+    let roomy = finest_unit(2.0 * extent, ROOMY_RANGE);
+    if noise(roomy) <= super::Precision::NOISE_LIMIT {
+        roomy
+    } else {
+        finest_unit(TIGHT_ROOM * extent, RANGE)
+    }
+}
+
+/// The finest power of two `u` with `units u >= length` (m; at least 1 mm).
+fn finest_unit(length: f64, units: f64) -> f64 {
+    let wanted = length.abs().max(1e-3) / units;
     2f64.powi(wanted.log2().ceil() as i32)
 }
 
@@ -63,28 +97,24 @@ pub(super) fn whole_units<E: Real>(n: f64) -> E {
 }
 
 /// What a kernel's spec asks of its positions' frame: fixed point or floats, the
-/// unit ([`fixed_unit`] of the body's radius), and the colliders it must hold.
+/// unit ([`fixed_unit`] of the body's radius and noise), and the colliders it must
+/// hold.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct FrameRule<'a> {
     pub(super) fixed: bool,
-    pub(super) extent: f64,
+    pub(super) unit: f64,
     pub(super) ground: Option<&'a Ground>,
     pub(super) sphere: Option<&'a Sphere>,
 }
 
 impl FrameRule<'_> {
-    /// The unit the rule asks for.
-    pub(super) fn unit(&self) -> f64 {
-        fixed_unit(self.extent)
-    }
-
     /// The frame for positions in the box `bounds` (m) grown by `margin` (m):
     /// [`Frame::FLOAT`] for floats, else [`Frame::fitting`] (`None` if none fits).
     pub(super) fn frame(&self, bounds: ([f64; 3], [f64; 3]), margin: f64) -> Option<Frame> {
         if !self.fixed {
             return Some(Frame::FLOAT);
         }
-        Frame::fitting(self.unit(), bounds, margin, self.ground, self.sphere)
+        Frame::fitting(self.unit, bounds, margin, self.ground, self.sphere)
     }
 
     /// The frame to move fixed-point positions `x` (with velocities `v`, real
@@ -103,7 +133,7 @@ impl FrameRule<'_> {
         }
         let (bounds, speed) = span(frame, x, v, rows);
         let margin = speed * time;
-        if frame.unit == self.unit() && frame.holds(bounds, margin) {
+        if frame.unit == self.unit && frame.holds(bounds, margin) {
             return None;
         }
         self.frame(bounds, margin).filter(|new| new != frame)
@@ -356,15 +386,45 @@ pub(super) fn reencode<E: Real>(
 mod tests {
     use super::*;
 
-    /// The unit leaves twice the extent in range, and no more than four times.
+    /// The roomy unit leaves twice the extent in a quarter of the range, and no
+    /// more than four times; the tight one, taken where the roomy one's noise is
+    /// over the limit, leaves `TIGHT_ROOM` times the extent in `RANGE`, and no more
+    /// than twice that.
     #[test]
     fn the_unit_leaves_room_for_the_body_and_as_much_again() {
-        for extent in [0.01, 0.7, 1.0, 3.3, 250.0] {
-            let room = RANGE * fixed_unit(extent);
+        for extent in [0.01, 0.7, 1.0, 3.3, 26.85, 250.0] {
+            let room = ROOMY_RANGE * fixed_unit(extent, |_| 0.0);
             assert!(
                 room >= 2.0 * extent && room < 4.0 * extent,
                 "{extent}: {room}"
             );
+            let tight = fixed_unit(extent, |_| 1.0);
+            let room = RANGE * tight;
+            assert!(
+                room >= TIGHT_ROOM * extent && room < 2.0 * TIGHT_ROOM * extent,
+                "{extent}: {room}"
+            );
+            assert!(tight < fixed_unit(extent, |_| 0.0));
+        }
+        // The noise is asked at the roomy unit: the tight one only where it is over.
+        let roomy = fixed_unit(1.0, |_| 0.0);
+        let over_at_roomy = |u: f64| if u < roomy { 0.0 } else { 1.0 };
+        assert_eq!(fixed_unit(1.0, over_at_roomy), fixed_unit(1.0, |_| 1.0));
+        assert_eq!(
+            fixed_unit(1.0, |u| if u > roomy { 1.0 } else { 0.0 }),
+            roomy
+        );
+    }
+
+    /// The 32-bit wrapping difference of the extreme coordinates, two particles'
+    /// (within `RANGE` of the centre) or a particle's and a collider's (within
+    /// `COLLIDER_RANGE`), is exact.
+    #[test]
+    fn the_ranges_keep_every_difference_exact() {
+        let (p, c) = (RANGE as i64, COLLIDER_RANGE as i64);
+        for (a, b) in [(p, -p), (-p, p), (p, -c), (-p, c)] {
+            let wrapped = (a as i32).wrapping_sub(b as i32);
+            assert_eq!(i64::from(wrapped), a - b, "{a} - {b}");
         }
     }
 
@@ -372,7 +432,7 @@ mod tests {
     /// coordinate exactly.
     #[test]
     fn a_recentred_frame_keeps_positions_exact() {
-        let unit = fixed_unit(2.0);
+        let unit = fixed_unit(2.0, |_| 0.0);
         let frame = Frame::fitting(unit, ([-1.0; 3], [1.0; 3]), 0.0, None, None).unwrap();
         let q = 0.123_456_789;
         let p: f32 = frame.encode(q, 0);

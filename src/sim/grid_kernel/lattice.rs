@@ -217,12 +217,17 @@ impl LatticeSpec {
     /// [`Precision::float32_noise`]): a particle has up to 6 axis springs, 12 face
     /// diagonals and 8 body diagonals.
     pub fn float32_noise(&self, reach: Option<f64>, dt: f64) -> f64 {
+        let xpbd = (self.integrator == Integrator::Xpbd).then_some(dt);
+        self.noise(reach.ok_or_else(|| self.fixed_unit()), xpbd)
+    }
+
+    /// [`Precision::spring_noise`] of its springs with `positions` rounded as
+    /// there, and XPBD's steps.
+    fn noise(&self, positions: Result<f64, f64>, xpbd: Option<f64>) -> f64 {
         let h = self.spacing.abs();
         let springs = [(6.0, h), (12.0, h * 2f64.sqrt()), (8.0, h * 3f64.sqrt())];
         let springs =
             (self.kinds.iter().zip(springs)).map(|(kind, (count, rest))| (kind.k, count, rest));
-        let xpbd = (self.integrator == Integrator::Xpbd).then_some(dt);
-        let positions = reach.ok_or(self.fixed_unit());
         Precision::spring_noise(springs, self.particle_mass, positions, xpbd)
     }
 
@@ -237,16 +242,25 @@ impl LatticeSpec {
         0.5 * self.spacing.abs() * cells.iter().map(|c| c * c).sum::<f64>().sqrt()
     }
 
-    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`]).
+    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`], of its
+    /// springs' noise). XPBD keeps the roomy unit: its noise follows its step, which
+    /// the frame does not know, and is bounded whatever `k` (`m / 2h²` a spring).
     pub fn fixed_unit(&self) -> f64 {
-        self.frame_rule().unit()
+        let xpbd = self.integrator == Integrator::Xpbd;
+        frame::fixed_unit(self.extent(), |unit| {
+            if xpbd {
+                0.0
+            } else {
+                self.noise(Err(unit), None)
+            }
+        })
     }
 
     /// How its positions are stored: fixed point with [`Precision::Mixed`].
     fn frame_rule(&self) -> FrameRule<'_> {
         FrameRule {
             fixed: self.precision == Precision::Mixed,
-            extent: self.extent(),
+            unit: self.fixed_unit(),
             ground: self.ground.as_ref(),
             sphere: self.sphere.as_ref(),
         }
