@@ -489,3 +489,32 @@ fn far_from_the_origin_colliders_and_a_jelly_act_exactly_as_at_the_origin() {
         assert!(d < 1e-11, "{scene}: {d:e} m apart");
     }
 }
+
+#[test]
+fn a_small_cloth_on_a_fine_unit_takes_a_strong_wind() {
+    // A 2 x 2 cloth at k = 1,690 N/m: its roomy fixed-point unit is just too coarse
+    // for the precision rule, so it runs on its tight unit, 2^-34 m. There a drag
+    // triangle's `|v_rel|² |m|²`, in units⁴ m²/s², passed float32's range in a 30
+    // m/s wind, and the cloth went non-finite in its first step. Safe steps for
+    // 0.2 s against the f64 engine, the wind blowing through the cloth.
+    let overrides = [
+        "width=2",
+        "height=2",
+        "stiffness=1690",
+        "wind=\"0,0,30\"",
+        "gust=0",
+    ];
+    let (mut fast, mut exact) = pair("cloth", &overrides);
+    assert_eq!(fast.engine(), Engine::Grid(Precision::Mixed));
+    let step = safe::safe_step(exact.model(), 1.0 / 60.0, safe::DEFAULT_SAFETY, 1 << 20);
+    for system in [&mut fast, &mut exact] {
+        let mut params = *system.params();
+        params.dt = step.dt;
+        system.set_params(params);
+    }
+    let steps = (0.2 / step.dt).ceil() as u64;
+    let (d, moved) = compare(&mut fast, &mut exact, steps);
+    println!("2 x 2 cloth in a 30 m/s wind: {d:.2e} m apart after moving {moved:.3e} m");
+    assert!(moved > 0.03, "the wind moved it {moved} m");
+    assert!(d < 1e-6, "{d} m from the f64 engine");
+}

@@ -698,8 +698,16 @@ struct Params<E> {
     bs: [E; 3],
     gravity: [E; 3],
     wind: [E; 3],
-    /// `ρ C_d / 12`: a third of the drag force with `A = |m| / 2`.
+    /// `ρ C_d / 12`: a third of the drag force with `A = |m| / 2`, over
+    /// `air_scale²`.
     drag: E,
+    /// What the drag multiplies the relative air velocity by: 2^-32 with
+    /// fixed-point positions, else 1. A triangle's `|v_rel|² |m|²` is in units⁴ m²/s²
+    /// there, which overflowed float32 for a small cloth on a fine unit (a 2 x 2
+    /// cloth on its tight unit, 2^-34 m, went non-finite in its first step in a 30
+    /// m/s wind); the power of two changes no other result by a bit (the drag is
+    /// `σ² v_rel (v_rel·m) m / (σ |v_rel| |m|)` times `drag / σ²`).
+    air_scale: E,
     dt: E,
     /// `-c` of the air damping `-c v`.
     neg_air: E,
@@ -772,13 +780,18 @@ impl<E: Real> Params<E> {
             (force(spec.shear), hs * std::f64::consts::SQRT_2),
         ];
         let unit = frame.unit;
+        let air_scale = if frame.fixed { 2f64.powi(-32) } else { 1.0 };
         Params {
             ks: kinds.map(|(kind, _)| E::of(kind.k * unit)),
             kls: kinds.map(|(kind, rest)| E::of(kind.k * rest)),
             bs: kinds.map(|(kind, _)| E::of(kind.b)),
             gravity: spec.gravity.map(E::of),
             wind: spec.wind.map(E::of),
-            drag: E::of(spec.air_density * spec.drag_coefficient / 12.0 * unit * unit),
+            drag: E::of(
+                spec.air_density * spec.drag_coefficient / 12.0 * unit * unit
+                    / (air_scale * air_scale),
+            ),
+            air_scale: E::of(air_scale),
             dt: E::ZERO,
             neg_air: E::of(-spec.air_damping),
             ground: ground_constants(spec.ground.as_ref(), frame),

@@ -567,6 +567,7 @@ impl<E: Real> Lattice<E> {
             gravity: spec.gravity.map(E::of),
             wind: [E::ZERO; 3],
             drag: E::ZERO,
+            air_scale: E::ONE,
             dt: E::ZERO,
             neg_air: E::of(-spec.air_damping),
             ground: ground_constants(spec.ground.as_ref(), frame),
