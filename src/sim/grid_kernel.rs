@@ -253,6 +253,16 @@ impl Precision {
         spec.noise(reach.ok_or_else(|| spec.fixed_unit()), xpbd)
     }
 
+    /// The unit (m) of fixed-point positions for a body of radius `extent` (m)
+    /// stepped by `integrator`, whose springs' noise as forces at a unit is
+    /// `noise(unit)`: [`frame::fixed_unit`]. XPBD keeps the roomy unit: its noise
+    /// follows its step, which the frame does not know, and is bounded whatever `k`
+    /// (`m / 2h²` a spring).
+    pub fn fixed_unit(extent: f64, integrator: Integrator, noise: impl Fn(f64) -> f64) -> f64 {
+        let xpbd = integrator == Integrator::Xpbd;
+        frame::fixed_unit(extent, |unit| if xpbd { 0.0 } else { noise(unit) })
+    }
+
     /// `sum count k r / m` over a particle's springs, given as `(k, count, rest
     /// length)` of each kind, with `r` the rounding of a length: `2^-23 reach` for
     /// float32 positions (`Ok(reach)`), `2^-23 rest + unit / 2` for fixed-point
@@ -347,17 +357,10 @@ impl GridSpec {
         Precision::spring_noise(springs, self.particle_mass, positions, xpbd)
     }
 
-    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`], of its
-    /// springs' noise). XPBD keeps the roomy unit: its noise follows its step, which
-    /// the frame does not know, and is bounded whatever `k` (`m / 2h²` a spring).
+    /// The unit (m) of its positions in fixed point ([`Precision::fixed_unit`]).
     pub fn fixed_unit(&self) -> f64 {
-        let xpbd = self.integrator == Integrator::Xpbd;
-        frame::fixed_unit(self.extent(), |unit| {
-            if xpbd {
-                0.0
-            } else {
-                self.noise(Err(unit), None)
-            }
+        Precision::fixed_unit(self.extent(), self.integrator, |unit| {
+            self.noise(Err(unit), None)
         })
     }
 

@@ -242,17 +242,10 @@ impl LatticeSpec {
         0.5 * self.spacing.abs() * cells.iter().map(|c| c * c).sum::<f64>().sqrt()
     }
 
-    /// The unit (m) of its positions in fixed point ([`frame::fixed_unit`], of its
-    /// springs' noise). XPBD keeps the roomy unit: its noise follows its step, which
-    /// the frame does not know, and is bounded whatever `k` (`m / 2h²` a spring).
+    /// The unit (m) of its positions in fixed point ([`Precision::fixed_unit`]).
     pub fn fixed_unit(&self) -> f64 {
-        let xpbd = self.integrator == Integrator::Xpbd;
-        frame::fixed_unit(self.extent(), |unit| {
-            if xpbd {
-                0.0
-            } else {
-                self.noise(Err(unit), None)
-            }
+        Precision::fixed_unit(self.extent(), self.integrator, |unit| {
+            self.noise(Err(unit), None)
         })
     }
 
