@@ -11,11 +11,12 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
+use cloth_sandbox::sim::grid_kernel::Precision;
 use cloth_sandbox::sim::safe::{
     DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, added_stretch_limit, safe_step,
 };
 use cloth_sandbox::sim::{
-    Divergence, Engine, Integrator, SpringKind, System, bounding_sphere, max_speed,
+    Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
 };
 use glam::DVec3;
 use serde_json::json;
@@ -621,6 +622,28 @@ impl Summary {
     }
 }
 
+/// The precision rule's reasons, as `cloth info` shows them: the positions the
+/// kernel keeps, and the float32 noise on each kind of positions against the limit.
+fn precision_json(rule: PrecisionRule) -> serde_json::Value {
+    let positions = match rule.precision {
+        Precision::Single => "float32".to_string(),
+        Precision::Mixed => format!(
+            "fixed point, unit 2^{} m ({:.3e} m)",
+            rule.unit.log2().round(),
+            rule.unit
+        ),
+        Precision::Double => "float64".to_string(),
+    };
+    json!({
+        "positions": positions,
+        "float32_noise_m_per_s2": {
+            "on_float32_positions": rule.float32_positions,
+            "on_fixed_point_positions": rule.fixed_point,
+            "limit": Precision::NOISE_LIMIT,
+        },
+    })
+}
+
 fn info(args: InfoArgs) -> Result<ExitCode, String> {
     let scene = args.scene.load().map_err(|e| e.to_string())?;
     let resolved = scene.resolve().map_err(|e| e.to_string())?;
@@ -691,6 +714,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         "constraints": constraints,
         "engine": engine.name(),
         "simd": engine.simd_level().name(),
+        "precision": system.precision_rule().map(precision_json),
         "parameters": {
             "layout": format!("{:?}", resolved.layout).to_lowercase(),
             "width": resolved.width,

@@ -476,3 +476,47 @@ fn a_missing_xdg_runtime_dir_is_not_reported() {
         runtime_dir.display()
     );
 }
+
+#[test]
+fn info_gives_the_precision_rules_reasons() {
+    // The precision rule takes the first level whose float32 noise is under the
+    // limit; `cloth info` shows the noise on each kind of positions, and the
+    // fixed-point unit. The 32³ jelly at k = 2,000 N/m is over the limit on
+    // float32 positions and under it on its tight fixed-point unit, 2^-25 m (on the
+    // roomy 2^-23 m it would be 0.1188 m/s², over); the cloth at k = 1e5 N/m is
+    // over it on both, and takes float64; the chain has no stencil kernel.
+    let info = |args: &[&str]| -> serde_json::Value {
+        let o = cloth(&[&["info", "--json"], args].concat());
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        serde_json::from_str(stdout(&o).trim()).unwrap()
+    };
+    let cube = [
+        "--set",
+        "width=32",
+        "--set",
+        "height=32",
+        "--set",
+        "depth=32",
+    ];
+    let jelly = info(&[&["--scene", "jelly"], &cube[..]].concat());
+    let p = &jelly["precision"];
+    let noise = &p["float32_noise_m_per_s2"];
+    let limit = noise["limit"].as_f64().unwrap();
+    assert_eq!(limit, 0.0981);
+    assert!(
+        noise["on_float32_positions"].as_f64().unwrap() > limit,
+        "{p}"
+    );
+    let fixed = noise["on_fixed_point_positions"].as_f64().unwrap();
+    assert!((fixed - 0.0956).abs() < 1e-4, "{p}");
+    let positions = p["positions"].as_str().unwrap();
+    assert!(positions.starts_with("fixed point, unit 2^-25 m"), "{p}");
+    assert_eq!(jelly["engine"], "lattice-mixed");
+    let stiff = info(&["--scene", "cloth", "--set", "stiffness=1e5"]);
+    let p = &stiff["precision"];
+    assert_eq!(p["positions"], "float64");
+    let fixed = &p["float32_noise_m_per_s2"]["on_fixed_point_positions"];
+    assert!(fixed.as_f64().unwrap() > limit, "{p}");
+    assert_eq!(stiff["engine"], "grid-f64");
+    assert!(info(&["--scene", "chain"])["precision"].is_null());
+}

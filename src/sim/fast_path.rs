@@ -54,6 +54,23 @@ pub enum Engine {
     Lattice(Precision),
 }
 
+/// What the precision rule ([`Precision::cheapest`]) weighed for the grid or
+/// lattice kernel: the acceleration noise (m/s²) that float32 arithmetic puts on a
+/// particle on float32 positions and on fixed-point ones (whose unit it names), and
+/// the level it took, the first under [`Precision::NOISE_LIMIT`], float64 past both.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrecisionRule {
+    /// The level taken.
+    pub precision: Precision,
+    /// The noise (m/s²) on float32 positions.
+    pub float32_positions: f64,
+    /// The noise (m/s²) on fixed-point positions at `unit`.
+    pub fixed_point: f64,
+    /// The fixed-point unit (m): roomy, or tight where the roomy one's noise is
+    /// over the limit ([`Precision::fixed_unit`]).
+    pub unit: f64,
+}
+
 impl Engine {
     /// Name for reports.
     pub fn name(self) -> &'static str {
@@ -457,6 +474,28 @@ impl System {
         } else {
             Engine::General
         }
+    }
+
+    /// What the precision rule weighed for the kernel [`Self::engine`] names, if it
+    /// is the grid or the lattice kernel (`cloth info` shows it).
+    pub fn precision_rule(&self) -> Option<PrecisionRule> {
+        if !self.engines.allowed {
+            return None;
+        }
+        let (reach, dt) = (self.float32_reach(), self.model.params.dt);
+        let rule = |precision, noise: &dyn Fn(Option<f64>) -> f64, unit| PrecisionRule {
+            precision,
+            float32_positions: noise(Some(reach)),
+            fixed_point: noise(None),
+            unit,
+        };
+        if let Some(spec) = self.grid_spec() {
+            let noise = |r| Precision::float32_noise(&spec, r, dt);
+            return Some(rule(spec.precision, &noise, spec.fixed_unit()));
+        }
+        let spec = self.lattice_spec()?;
+        let noise = |r| spec.float32_noise(r, dt);
+        Some(rule(spec.precision, &noise, spec.fixed_unit()))
     }
 
     /// How far from the origin (m) the particles may go for the precision rule

@@ -46,7 +46,7 @@ pub mod wind;
 pub use clock::Clock;
 pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere, max_speed};
 pub use energy_budget::EnergyBudget;
-pub use fast_path::{Engine, GridShape};
+pub use fast_path::{Engine, GridShape, PrecisionRule};
 pub use forces::ForceTerms;
 pub use grab::Grab;
 pub use grid_kernel::lattice::LatticeShape;
