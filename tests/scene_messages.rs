@@ -34,32 +34,32 @@ fn a_negative_width_is_told_its_range_not_its_type() {
 
 #[test]
 fn a_misspelt_key_gets_the_nearest_real_one() {
-    let message = set_error("widht", "3");
-    assert!(message.contains("did you mean `width`?"), "{message}");
-    assert!(!message.contains("expected one of"), "{message}");
-    let message = set_error("stifness", "3");
-    assert!(message.contains("did you mean `stiffness`?"), "{message}");
-    // A word of a key is that key (or those keys), not the nearest spelling
-    // (`bars`, 2 edits from `mass`).
-    let message = set_error("mass", "0.01");
-    assert!(
-        message.contains("did you mean `particle_mass` or `total_mass`"),
-        "{message}"
-    );
-    assert!(!message.contains("`bars`"), "{message}");
-    // The panel's symbols are their keys; another single letter is no guess.
-    let message = set_error("k", "100");
-    assert!(message.contains("did you mean `stiffness`?"), "{message}");
-    let message = set_error("b", "0.1");
-    assert!(message.contains("did you mean `damping`?"), "{message}");
-    let message = set_error("q", "1");
-    assert!(!message.contains("did you mean"), "{message}");
-    let message = set_error("density", "1");
-    assert!(message.contains("did you mean `air_density`?"), "{message}");
-    // Nothing near: no guess.
-    let message = set_error("zzzzqqq", "3");
-    assert!(!message.contains("did you mean"), "{message}");
-    assert!(message.contains("not a scene key"), "{message}");
+    // (typed, the guess). A word of a key is that key (or those keys), not the
+    // nearest spelling (`bars`, 2 edits from `mass`); the panel's symbols are
+    // their keys.
+    let guessed = [
+        ("widht", "`width`?"),
+        ("stifness", "`stiffness`?"),
+        ("mass", "`particle_mass` or `total_mass`"),
+        ("k", "`stiffness`?"),
+        ("b", "`damping`?"),
+        ("density", "`air_density`?"),
+    ];
+    for (typed, guess) in guessed {
+        let message = set_error(typed, "1");
+        assert!(
+            message.contains(&format!("did you mean {guess}")),
+            "{message}"
+        );
+        assert!(!message.contains("expected one of"), "{message}");
+    }
+    assert!(!set_error("mass", "1").contains("`bars`"));
+    // Another single letter, or nothing near: no guess.
+    for typed in ["q", "zzzzqqq"] {
+        let message = set_error(typed, "1");
+        assert!(!message.contains("did you mean"), "{message}");
+        assert!(message.contains("not a scene key"), "{message}");
+    }
 }
 
 #[test]
