@@ -3,8 +3,11 @@
 # `bench` cloth, in one run: `cloth run --json` (STEPS steps after 16 warm-up steps,
 # best of RUNS runs), at each size. Usage: bash benches/engine_scenes.sh [SIZES] [RUNS] [STEPS]
 # e.g. bash benches/engine_scenes.sh "128 256" 3 3840; RAYON_NUM_THREADS=1 before it
-# runs every case on one core. Each ratio is given best against best and median against
-# median: on a noisy machine the two part, and the median says how far. Runs of 960 steps at 128 x 128
+# runs every case on one core. Each ratio is given best against best, median against
+# median, and paired: the median over the rounds of the bench's rate over the case's
+# in the same round (each round runs every case once, one after another). On a noisy
+# machine the three part, and say how far (one lucky bench run moves every case's
+# best against best; the paired ratio compares runs seconds apart). Runs of 960 steps at 128 x 128
 # last about 40 ms, and on a 2-core VM how soon the system spreads the two threads
 # decides much of such a run; longer runs give steadier ratios.
 set -euo pipefail
@@ -37,7 +40,7 @@ echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of $STEPS steps"
 for n in $SIZES; do
   echo
   echo "N = $n"
-  printf '%-34s %-10s %14s %10s %10s\n' "case" "engine" "M p-steps/s" "cost/bench" "(medians)"
+  printf '%-34s %-10s %14s %10s %10s %10s\n' "case" "engine" "M p-steps/s" "cost/bench" "(medians)" "(paired)"
   # The runs go round the cases (case 1, 2, ..., then again), so that a spell of
   # contention on a shared machine slows one run of every case, not every run of
   # one: each case keeps all its runs, for the best and the median.
@@ -61,12 +64,13 @@ for n in $SIZES; do
     done
   done
   for c in "${!CASES[@]}"; do
-    read -r best ratio median_ratio < <(python3 -c "
+    read -r best ratio median_ratio paired < <(python3 -c "
 import statistics, sys
 base, rates = [list(map(float, a.split())) for a in sys.argv[1:]]
-print(max(rates) / 1e6, max(base) / max(rates), statistics.median(base) / statistics.median(rates))
+paired = statistics.median(b / r for b, r in zip(base, rates))
+print(max(rates) / 1e6, max(base) / max(rates), statistics.median(base) / statistics.median(rates), paired)
 " "${rates_of[0]}" "${rates_of[$c]}")
-    printf '%-34s %-10s %14.1f %10.2f %10.2f\n' "${CASES[$c]%%|*}" "${engine_of[$c]}" "$best" "$ratio" "$median_ratio"
+    printf '%-34s %-10s %14.1f %10.2f %10.2f %10.2f\n' "${CASES[$c]%%|*}" "${engine_of[$c]}" "$best" "$ratio" "$median_ratio" "$paired"
   done
 done
 
