@@ -15,7 +15,7 @@ use cloth_sandbox::sim::{Engine, Integrator, System, safe};
 use glam::DVec3;
 
 mod common;
-use common::{build, max_distance};
+use common::{build, max_distance, spread_and_back};
 
 /// Largest distance any particle moved from `start`.
 fn motion(start: &[DVec3], end: &[DVec3]) -> f64 {
@@ -517,4 +517,28 @@ fn a_small_cloth_on_a_fine_unit_takes_a_strong_wind() {
     println!("2 x 2 cloth in a 30 m/s wind: {d:.2e} m apart after moving {moved:.3e} m");
     assert!(moved > 0.03, "the wind moved it {moved} m");
     assert!(d < 1e-6, "{d} m from the f64 engine");
+}
+
+#[test]
+fn a_cloth_spread_past_its_fixed_point_unit_goes_on_in_float64_until_it_draws_in() {
+    // The default cloth at k = 800 N/m is on fixed-point positions just under the
+    // precision rule's limit. Spread to eight times its size (every particle moved
+    // out from the centre: past the four or so radii its unit holds) a kernel
+    // keeping fixed point must double its unit, which puts the noise over the
+    // limit: the run goes on in float64 and follows the f64 engine to its
+    // round-off (on fixed point, even on its own unit, the cloth is 9e-9 m off
+    // after 8 steps). Put back, the cloth returns to fixed point. (Only 8 steps
+    // spread: the springs, stretched to eight times their length, fling the
+    // particles, and in a few dozen steps even the two float64 engines part.)
+    let overrides = ["stiffness=800", "wind=\"0,0,0\"", "gust=0", "dt=0.0004"];
+    let (mut fast, _) = pair("cloth", &overrides);
+    let before = (fast.engine(), fast.precision_rule().unwrap());
+    assert_eq!(before.0, Engine::Grid(Precision::Mixed));
+    let run = spread_and_back(&mut fast, 8.0, 8);
+    println!("spread 8x: {run:?}");
+    let (engine, rule) = run.spread;
+    assert_eq!(engine, Engine::Grid(Precision::Double));
+    assert!(rule.fixed_point > Precision::NOISE_LIMIT && rule.unit > before.1.unit);
+    assert!(run.apart < 1e-12, "{:e} m from the f64 engine", run.apart);
+    assert_eq!(run.back, before);
 }

@@ -21,7 +21,7 @@ use cloth_sandbox::sim::{Engine, Integrator, SpringKind, System};
 use glam::DVec3;
 
 mod common;
-use common::{build, max_distance};
+use common::{build, max_distance, spread_and_back};
 
 /// Largest distance (m) allowed between the lattice kernel and the f64 engine after
 /// `time` s (see the module comment).
@@ -573,4 +573,32 @@ fn a_big_stiff_jelly_runs_on_a_tight_fixed_point_unit() {
     fast.set_fast_path(true);
     assert_eq!(fast.engine(), Engine::Lattice(Precision::Mixed));
     lattice_and_exact("12³ jelly on a tight unit", system, 600, |_| {});
+}
+
+#[test]
+fn a_jelly_spread_past_its_fixed_point_unit_goes_on_in_float64_until_it_draws_in() {
+    // The 12³ jelly at k = 2,000 N/m is on its tight unit (2^-26 m: its radius with
+    // an eighth to spare). Spread to five times its size it no longer fits, and a
+    // kernel keeping fixed-point positions must double its unit, which puts the
+    // precision rule's noise over the limit: the run goes on in float64, as the
+    // rule would have chosen for a body that size, and so follows the f64 engine
+    // to its round-off (on the doubled unit it was 1e-6 m off after 64 steps). Put
+    // back, the jelly fits its unit again and returns to fixed point. (High up,
+    // clear of the ground.)
+    let overrides = cube(12);
+    let overrides: Vec<&str> = (overrides.iter().map(String::as_str))
+        .chain(["origin=0,100,0"])
+        .collect();
+    let mut system = build("jelly", &overrides);
+    system.set_fast_path(true);
+    let before = (system.engine(), system.precision_rule().unwrap());
+    assert_eq!(before.0, Engine::Lattice(Precision::Mixed));
+    assert_eq!(before.1.unit, 2f64.powi(-26));
+    let run = spread_and_back(&mut system, 5.0, 64);
+    println!("spread 5x: {run:?}");
+    let (engine, rule) = run.spread;
+    assert_eq!(engine, Engine::Lattice(Precision::Double));
+    assert!(rule.fixed_point > Precision::NOISE_LIMIT && rule.unit > before.1.unit);
+    assert!(run.apart < 1e-9, "{:e} m from the f64 engine", run.apart);
+    assert_eq!(run.back, before);
 }

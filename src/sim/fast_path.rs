@@ -34,7 +34,7 @@ use super::grid_kernel::lattice::{LatticeKernel, LatticeSpec};
 use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SimdLevel, SpringCoefficients};
 use super::mesh_kernel::{MeshKernel, MeshParams};
 use super::springs::STENCIL_DIRECTIONS;
-use super::{Divergence, Integrator, SpringKind, System};
+use super::{Divergence, Ground, Integrator, Sphere, SpringKind, System};
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
 const CHUNK: u64 = 32;
@@ -67,7 +67,8 @@ pub struct PrecisionRule {
     /// The noise (m/s²) on fixed-point positions at `unit`.
     pub fixed_point: f64,
     /// The fixed-point unit (m): roomy, or tight where the roomy one's noise is
-    /// over the limit ([`Precision::fixed_unit`]).
+    /// over the limit ([`Precision::fixed_unit`]); or, once the body spread past
+    /// what that holds, the coarser unit a kernel had to take then.
     pub unit: f64,
 }
 
@@ -154,6 +155,11 @@ pub(super) struct Engines {
     ahead: Option<(Ahead, f64, u64)>,
     /// Steps run since the last full check, counted across runs.
     pub(super) unchecked: u64,
+    /// The fixed-point unit (m) a grid or lattice kernel had to take when the body
+    /// spread past what its spec's unit holds, where the noise was over the limit
+    /// (at which the run went on in float64): the precision rule weighs this unit
+    /// until the body fits its spec's unit again ([`grid_kernel::frame::holds_again`]).
+    outgrown_unit: Option<f64>,
 }
 
 /// Which fast engine holds the latest state.
@@ -179,6 +185,7 @@ impl Clone for Engines {
             // (see [`System::settle`]).
             ahead: None,
             unchecked: self.unchecked,
+            outgrown_unit: self.outgrown_unit,
         }
     }
 }
@@ -482,20 +489,72 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        let (reach, dt) = (self.float32_reach(), self.model.params.dt);
-        let rule = |precision, noise: &dyn Fn(Option<f64>) -> f64, unit| PrecisionRule {
+        let reach = self.float32_reach();
+        let rule = |precision, (unit, noise): (f64, &dyn Fn(Option<f64>) -> f64)| PrecisionRule {
             precision,
             float32_positions: noise(Some(reach)),
             fixed_point: noise(None),
             unit,
         };
         if let Some(spec) = self.grid_spec() {
-            let noise = |r| Precision::float32_noise(&spec, r, dt);
-            return Some(rule(spec.precision, &noise, spec.fixed_unit()));
+            let (unit, noise) = self.grid_noise(&spec);
+            return Some(rule(spec.precision, (unit, &noise)));
         }
         let spec = self.lattice_spec()?;
-        let noise = |r| spec.float32_noise(r, dt);
-        Some(rule(spec.precision, &noise, spec.fixed_unit()))
+        let (unit, noise) = self.lattice_noise(&spec);
+        Some(rule(spec.precision, (unit, &noise)))
+    }
+
+    /// The float32 noise (m/s²) the precision rule weighs for the grid kernel on
+    /// `spec` ([`Precision::cheapest`]: on float32 positions within a reach, on
+    /// fixed-point ones with `None`), and the fixed-point unit it weighs
+    /// ([`Self::weighed_unit`]).
+    fn grid_noise<'a>(&self, spec: &'a GridSpec) -> (f64, impl Fn(Option<f64>) -> f64 + 'a) {
+        let (unit, dt) = (self.weighed_unit(spec.fixed_unit()), self.model.params.dt);
+        let noise = move |reach: Option<f64>| match reach {
+            Some(_) => Precision::float32_noise(spec, reach, dt),
+            None => spec.fixed_point_noise(unit, dt),
+        };
+        (unit, noise)
+    }
+
+    /// [`Self::grid_noise`] for the lattice kernel.
+    fn lattice_noise<'a>(&self, spec: &'a LatticeSpec) -> (f64, impl Fn(Option<f64>) -> f64 + 'a) {
+        let (unit, dt) = (self.weighed_unit(spec.fixed_unit()), self.model.params.dt);
+        let noise = move |reach: Option<f64>| match reach {
+            Some(_) => spec.float32_noise(reach, dt),
+            None => spec.fixed_point_noise(unit, dt),
+        };
+        (unit, noise)
+    }
+
+    /// The fixed-point unit (m) the precision rule weighs for a kernel whose spec
+    /// asks for `spec_unit`: that, or the coarser one a kernel of this system had
+    /// to take when the body outgrew it ([`Engines::outgrown_unit`]).
+    fn weighed_unit(&self, spec_unit: f64) -> f64 {
+        (self.engines.outgrown_unit).map_or(spec_unit, |unit| unit.max(spec_unit))
+    }
+
+    /// Forgets the unit the body outgrew its spec's for
+    /// ([`Engines::outgrown_unit`]) once the spec's unit `spec_unit` holds the
+    /// particles again, beside the colliders: whether it did.
+    fn forget_outgrown_unit(
+        &mut self,
+        spec_unit: f64,
+        (ground, sphere): (Option<Ground>, Option<Sphere>),
+    ) -> bool {
+        let positions = &self.state.positions;
+        let back = self.engines.outgrown_unit.is_some()
+            && grid_kernel::frame::holds_again(
+                spec_unit,
+                positions,
+                ground.as_ref(),
+                sphere.as_ref(),
+            );
+        if back {
+            self.engines.outgrown_unit = None;
+        }
+        back
     }
 
     /// How far from the origin (m) the particles may go for the precision rule
@@ -516,7 +575,51 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        let spec = self.lattice_spec()?;
+        let room = |spec: &LatticeSpec| (spec.fixed_unit(), (spec.ground, spec.sphere));
+        self.run_choosing(n, Self::lattice_spec, room, |system, spec, n| {
+            system.run_lattice_once(spec, n, settle)
+        })
+    }
+
+    /// Runs `n` steps on a kernel for the spec that `spec_of` gives (`None` when
+    /// it gives none), by `run` (which returns the steps it ran). When the body
+    /// outgrows its fixed-point unit, `run` stops early and the rest of the steps
+    /// go to the kernel for the spec chosen again; once the spec's unit holds the
+    /// body again (its unit and colliders from `room`), the rule forgets the
+    /// coarser unit ([`Self::forget_outgrown_unit`]).
+    fn run_choosing<S>(
+        &mut self,
+        n: u64,
+        spec_of: impl Fn(&Self) -> Option<S>,
+        room: impl Fn(&S) -> (f64, (Option<Ground>, Option<Sphere>)),
+        mut run: impl FnMut(&mut Self, S, u64) -> Result<u64, Divergence>,
+    ) -> Option<Result<(), Divergence>> {
+        let mut spec = spec_of(self)?;
+        let (unit, colliders) = room(&spec);
+        if self.forget_outgrown_unit(unit, colliders) {
+            spec = spec_of(self)?;
+        }
+        let mut left = n;
+        loop {
+            match run(self, spec, left) {
+                Ok(done) if done < left => {
+                    left -= done;
+                    spec = spec_of(self)?;
+                }
+                result => return Some(result.map(|_| ())),
+            }
+        }
+    }
+
+    /// [`Self::run_on_lattice`]'s run of up to `n` steps on a lattice kernel for
+    /// `spec`, the one built before when it can take the spec: the steps run
+    /// ([`Self::run_in_chunks`]).
+    fn run_lattice_once(
+        &mut self,
+        spec: LatticeSpec,
+        n: u64,
+        settle: bool,
+    ) -> Result<u64, Divergence> {
         let reused = self.engines.lattice.take().and_then(|mut lattice| {
             if *lattice.kernel.spec() != spec {
                 // A live edit of a coefficient: updated in place (pins are set
@@ -549,7 +652,7 @@ impl System {
         }
         let result = self.run_in_chunks(n, &mut lattice, settle);
         self.engines.lattice = Some(lattice);
-        Some(result)
+        result
     }
 
     /// The lattice kernel's description of this system, if it models it: a
@@ -618,8 +721,8 @@ impl System {
             integrator,
             precision: Precision::Single,
         };
-        let (reach, dt) = (self.float32_reach(), model.params.dt);
-        spec.precision = Precision::cheapest(|r| spec.float32_noise(r, dt), reach);
+        let precision = Precision::cheapest(self.lattice_noise(&spec).1, self.float32_reach());
+        spec.precision = precision;
         Some(spec)
     }
 
@@ -660,7 +763,8 @@ impl System {
             load_state(&mut mesh.kernel, self);
             mesh.in_sync = true;
         }
-        let result = self.run_in_chunks(n, &mut mesh, settle);
+        // Float64 positions: the mesh engine runs every step.
+        let result = self.run_in_chunks(n, &mut mesh, settle).map(|_| ());
         self.engines.mesh = Some(mesh);
         Some(result)
     }
@@ -742,7 +846,8 @@ impl System {
             present: springs.present,
             precision: Precision::Single,
         };
-        spec.precision = Precision::needed(&spec, self.float32_reach(), model.params.dt);
+        let precision = Precision::cheapest(self.grid_noise(&spec).1, self.float32_reach());
+        spec.precision = precision;
         Some(spec)
     }
 
@@ -752,7 +857,16 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        let spec = self.grid_spec()?;
+        let room = |spec: &GridSpec| (spec.fixed_unit(), (spec.ground, spec.sphere));
+        self.run_choosing(n, Self::grid_spec, room, |system, spec, n| {
+            system.run_grid_once(spec, n, settle)
+        })
+    }
+
+    /// [`Self::run_on_grid`]'s run of up to `n` steps on a grid kernel for `spec`,
+    /// the one built before when it can take the spec: the steps run
+    /// ([`Self::run_in_chunks`]).
+    fn run_grid_once(&mut self, spec: GridSpec, n: u64, settle: bool) -> Result<u64, Divergence> {
         // The kernel is taken out of `self` while it runs, so that the divergence
         // check can borrow the system.
         let reused = self.engines.grid.take().and_then(|mut fast| {
@@ -793,7 +907,7 @@ impl System {
         }
         let result = self.run_in_chunks(n, &mut fast, settle);
         self.engines.grid = Some(fast);
-        Some(result)
+        result
     }
 
     /// The particles held in place (pinned or grabbed: inverse mass 0) with their
@@ -823,18 +937,30 @@ impl System {
     /// state was last brought up to date (a full check, or [`System::settle`]) are
     /// run again one at a time from it, so that the divergence is reported at the
     /// step where it happened rather than at the end of its chunk.
+    ///
+    /// Returns the steps run: fewer than `n` when the engine's body outgrew its
+    /// fixed-point unit ([`FastEngine::outgrown_unit`]), with the f64 state up to
+    /// date; the caller runs the rest on the engine chosen again.
     fn run_in_chunks<E: FastEngine>(
         &mut self,
         n: u64,
         engine: &mut E,
         settle: bool,
-    ) -> Result<(), Divergence> {
+    ) -> Result<u64, Divergence> {
         let dt = self.model.params.dt;
         let mut done = 0;
         let mut from = match self.engines.ahead.take() {
             Some((_, time, steps)) => (time, steps),
             None => (self.state.time, self.state.steps),
         };
+        if from.1 == self.state.steps
+            && let Some(unit) = engine.outgrown_unit(dt)
+        {
+            // Loaded with a body spread past its unit (the f64 state is the
+            // engine's): none of the run on it.
+            self.engines.outgrown_unit = Some(unit);
+            return Ok(0);
+        }
         while done < n {
             let chunk = CHUNK.min(n - done);
             engine.advance(self, chunk as usize);
@@ -849,17 +975,26 @@ impl System {
             if !plausible && self.state.steps - from.1 > 1 {
                 self.replay_one_by_one(engine, from);
             }
-            if (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS || !plausible {
+            let outgrown = engine.outgrown_unit(dt);
+            let check = (settle && done == n) || self.engines.unchecked >= ENERGY_CHECK_STEPS;
+            if check || !plausible || outgrown.is_some() {
                 self.engines.unchecked = 0;
                 engine.copy_back(self);
                 self.check()?;
                 from = (self.state.time, self.state.steps);
             }
+            if outgrown.is_some() {
+                // The body spread past what its fixed-point unit holds, and the
+                // coarser unit is too noisy: the rest of the run goes to the kernel
+                // the precision rule now chooses, from the state just copied back.
+                self.engines.outgrown_unit = outgrown;
+                break;
+            }
         }
         if from.1 != self.state.steps {
             self.engines.ahead = Some((E::KIND, from.0, from.1));
         }
-        Ok(())
+        Ok(done)
     }
 
     /// Brings the f64 state up to the fast engine's, if the engine ran ahead.
@@ -966,6 +1101,17 @@ trait FastEngine {
     fn copy_back(&mut self, system: &mut System);
     /// The system's f64 state into the engine (the reverse of `copy_back`).
     fn load(&mut self, system: &System);
+    /// The unit (m) of the engine's fixed-point positions when the body has spread
+    /// past what its spec's unit holds and the float32 noise at the unit it took
+    /// instead is over [`Precision::NOISE_LIMIT`] (steps of `dt` s): the precision
+    /// rule must then choose again.
+    fn outgrown_unit(&self, dt: f64) -> Option<f64>;
+}
+
+/// [`FastEngine::outgrown_unit`] of a kernel keeping positions in `unit` (if fixed
+/// point) for a spec asking `spec_unit`, whose noise at a unit is `noise(unit)`.
+fn outgrown(unit: Option<f64>, spec_unit: f64, noise: impl Fn(f64) -> f64) -> Option<f64> {
+    unit.filter(|&unit| unit > spec_unit && noise(unit) > Precision::NOISE_LIMIT)
 }
 
 impl FastEngine for FastPath {
@@ -1003,6 +1149,11 @@ impl FastEngine for FastPath {
     fn load(&mut self, system: &System) {
         load_state(&mut self.kernel, system);
     }
+    fn outgrown_unit(&self, dt: f64) -> Option<f64> {
+        let spec = self.kernel.spec();
+        let noise = |unit| spec.fixed_point_noise(unit, dt);
+        outgrown(self.kernel.position_unit(), spec.fixed_unit(), noise)
+    }
 }
 
 impl FastEngine for LatticePath {
@@ -1018,6 +1169,11 @@ impl FastEngine for LatticePath {
     }
     fn load(&mut self, system: &System) {
         load_state(&mut self.kernel, system);
+    }
+    fn outgrown_unit(&self, dt: f64) -> Option<f64> {
+        let spec = self.kernel.spec();
+        let noise = |unit| spec.fixed_point_noise(unit, dt);
+        outgrown(self.kernel.position_unit(), spec.fixed_unit(), noise)
     }
 }
 
@@ -1041,6 +1197,9 @@ impl FastEngine for MeshPath {
     }
     fn load(&mut self, system: &System) {
         load_state(&mut self.kernel, system);
+    }
+    fn outgrown_unit(&self, _dt: f64) -> Option<f64> {
+        None // float64 positions
     }
 }
 

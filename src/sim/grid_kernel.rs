@@ -249,8 +249,10 @@ impl Precision {
     /// kind's rest length plus the rounding of a move to half its unit; for XPBD
     /// see [`Precision::spring_noise`].
     pub fn float32_noise(spec: &GridSpec, reach: Option<f64>, dt: f64) -> f64 {
-        let xpbd = (spec.integrator == Integrator::Xpbd).then_some(dt);
-        spec.noise(reach.ok_or_else(|| spec.fixed_unit()), xpbd)
+        match reach {
+            Some(reach) => spec.noise(Ok(reach), spec.xpbd_step(dt)),
+            None => spec.fixed_point_noise(spec.fixed_unit(), dt),
+        }
     }
 
     /// The unit (m) of fixed-point positions for a body of radius `extent` (m)
@@ -362,6 +364,17 @@ impl GridSpec {
         Precision::fixed_unit(self.extent(), self.integrator, |unit| {
             self.noise(Err(unit), None)
         })
+    }
+
+    /// The float32 noise (m/s²) on fixed-point positions of `unit` (m), stepped at
+    /// `dt` s ([`Precision::spring_noise`]).
+    pub fn fixed_point_noise(&self, unit: f64, dt: f64) -> f64 {
+        self.noise(Err(unit), self.xpbd_step(dt))
+    }
+
+    /// The step that XPBD's noise follows (`None` for the other integrators).
+    fn xpbd_step(&self, dt: f64) -> Option<f64> {
+        (self.integrator == Integrator::Xpbd).then_some(dt)
     }
 
     /// How its positions are stored: fixed point with [`Precision::Mixed`].
@@ -1249,6 +1262,13 @@ impl<E: Real> Kernel<E> {
         self.simd
     }
 
+    /// The unit (m) of the fixed-point positions now: the spec's
+    /// ([`GridSpec::fixed_unit`]) or, once the cloth has spread past what that
+    /// holds, a coarser one; `None` on float positions.
+    pub fn position_unit(&self) -> Option<f64> {
+        self.frame.fixed.then_some(self.frame.unit)
+    }
+
     /// Force a SIMD level (for tests and benches). A level this CPU lacks is
     /// ignored.
     pub fn set_simd_level(&mut self, level: SimdLevel) {
@@ -2004,6 +2024,12 @@ impl GridCloth {
     forward!(
         /// The SIMD level the loops run with.
         fn simd_level(&self) -> SimdLevel
+    );
+    forward!(
+        /// The unit (m) of the fixed-point positions now: the spec's
+        /// ([`GridSpec::fixed_unit`]) or, once the cloth has spread past what that
+        /// holds, a coarser one; `None` on float positions.
+        fn position_unit(&self) -> Option<f64>
     );
     forward!(
         /// Force a SIMD level (for tests and benches). A level this CPU lacks is

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use cloth_sandbox::scene::Scene;
-use cloth_sandbox::sim::System;
+use cloth_sandbox::sim::{Engine, PrecisionRule, State, System};
 
 /// A built-in scene with `key=value` overrides, built.
 pub fn build(name: &str, overrides: &[&str]) -> System {
@@ -83,4 +83,49 @@ pub fn max_spring_error(integrator: &str, dt: f64, duration: f64) -> f64 {
         worst = worst.max((s - exact.distance(system.time())).abs());
     }
     worst
+}
+
+/// `state` with every particle moved `factor` times as far from their centroid,
+/// at rest.
+fn spread(state: &State, factor: f64) -> State {
+    let mut spread = state.clone();
+    let n = spread.positions.len() as f64;
+    let centre = spread.positions.iter().sum::<glam::DVec3>() / n;
+    for (p, v) in spread.positions.iter_mut().zip(&mut spread.velocities) {
+        *p = centre + factor * (*p - centre);
+        *v = glam::DVec3::ZERO;
+    }
+    spread
+}
+
+/// What [`spread_and_back`] saw: the engine and its precision rule while the body
+/// was spread, how far (m) it was then from the f64 engine, and the engine and
+/// rule once put back.
+#[derive(Debug)]
+pub struct SpreadRun {
+    pub spread: (Engine, PrecisionRule),
+    pub apart: f64,
+    pub back: (Engine, PrecisionRule),
+}
+
+/// Spreads `system` (allowed the fast engines) to `factor` times its size about
+/// its centroid, at rest, and runs it `steps` steps beside a copy on the f64
+/// engine; then puts it back as it was and runs it `steps` more.
+pub fn spread_and_back(system: &mut System, factor: f64, steps: u64) -> SpreadRun {
+    let start = system.state().clone();
+    system.set_state(spread(&start, factor));
+    let mut exact = system.clone();
+    exact.set_fast_path(false);
+    system.run(steps).unwrap();
+    exact.run(steps).unwrap();
+    let spread = (system.engine(), system.precision_rule().unwrap());
+    let apart = max_distance(system.positions(), exact.positions());
+    system.set_state(start);
+    system.run(steps).unwrap();
+    let back = (system.engine(), system.precision_rule().unwrap());
+    SpreadRun {
+        spread,
+        apart,
+        back,
+    }
 }

@@ -268,6 +268,20 @@ impl Frame {
     }
 }
 
+/// Whether fixed-point positions of `unit` (m) hold `points` again with a tenth of
+/// their range to spare, and the colliders beside them: a kernel built for them
+/// now would keep that unit rather than doubling it. (The spare keeps a body that
+/// has just drawn back in from outgrowing the unit again at once.)
+pub fn holds_again(
+    unit: f64,
+    points: &[DVec3],
+    ground: Option<&Ground>,
+    sphere: Option<&Sphere>,
+) -> bool {
+    let spare = 0.1 * RANGE * unit;
+    Frame::fitting(unit, bounds(points), spare, ground, sphere).is_some_and(|f| f.unit == unit)
+}
+
 /// The bounding box (m) of `points`.
 pub(super) fn bounds(points: &[DVec3]) -> ([f64; 3], [f64; 3]) {
     let (lo, hi) = (points.iter()).fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &q| {

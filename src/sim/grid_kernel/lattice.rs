@@ -217,8 +217,21 @@ impl LatticeSpec {
     /// [`Precision::float32_noise`]): a particle has up to 6 axis springs, 12 face
     /// diagonals and 8 body diagonals.
     pub fn float32_noise(&self, reach: Option<f64>, dt: f64) -> f64 {
-        let xpbd = (self.integrator == Integrator::Xpbd).then_some(dt);
-        self.noise(reach.ok_or_else(|| self.fixed_unit()), xpbd)
+        match reach {
+            Some(reach) => self.noise(Ok(reach), self.xpbd_step(dt)),
+            None => self.fixed_point_noise(self.fixed_unit(), dt),
+        }
+    }
+
+    /// The float32 noise (m/s²) on fixed-point positions of `unit` (m), stepped at
+    /// `dt` s ([`Precision::spring_noise`]).
+    pub fn fixed_point_noise(&self, unit: f64, dt: f64) -> f64 {
+        self.noise(Err(unit), self.xpbd_step(dt))
+    }
+
+    /// The step that XPBD's noise follows (`None` for the other integrators).
+    fn xpbd_step(&self, dt: f64) -> Option<f64> {
+        (self.integrator == Integrator::Xpbd).then_some(dt)
     }
 
     /// [`Precision::spring_noise`] of its springs with `positions` rounded as
@@ -436,6 +449,12 @@ impl LatticeKernel {
     forward!(
         /// True if steps run on several threads.
         fn is_parallel(&self) -> bool
+    );
+    forward!(
+        /// The unit (m) of the fixed-point positions now: the spec's
+        /// ([`LatticeSpec::fixed_unit`]) or, once the body has spread past what
+        /// that holds, a coarser one; `None` on float positions.
+        fn position_unit(&self) -> Option<f64>
     );
     forward!(
         /// Force a SIMD level (for tests and benches). A level this CPU lacks is
@@ -668,6 +687,12 @@ impl<E: Real> Lattice<E> {
     /// True if steps run on several threads.
     fn is_parallel(&self) -> bool {
         self.pool.is_some()
+    }
+
+    /// The unit (m) of the fixed-point positions now (see
+    /// [`super::GridCloth::position_unit`]); `None` on float positions.
+    fn position_unit(&self) -> Option<f64> {
+        self.frame.fixed.then_some(self.frame.unit)
     }
 
     /// Force a SIMD level (for tests and benches). A level this CPU lacks is
