@@ -272,7 +272,7 @@ impl Frame {
 /// their range to spare, and the colliders beside them: a kernel built for them
 /// now would keep that unit rather than doubling it. (The spare keeps a body that
 /// has just drawn back in from outgrowing the unit again at once.)
-pub fn holds_again(
+pub(crate) fn holds_again(
     unit: f64,
     points: &[DVec3],
     ground: Option<&Ground>,
