@@ -67,7 +67,7 @@ pub struct PrecisionRule {
     /// The noise (m/s²) on fixed-point positions at `unit`.
     pub fixed_point: f64,
     /// The fixed-point unit (m): roomy, or tight where the roomy one's noise is
-    /// over the limit ([`Precision::fixed_unit`]); or, once the body spread past
+    /// over the limit ([`GridSpec::fixed_unit`]); or, once the body spread past
     /// what that holds, the coarser unit a kernel had to take then.
     pub unit: f64,
 }

@@ -255,16 +255,6 @@ impl Precision {
         }
     }
 
-    /// The unit (m) of fixed-point positions for a body of radius `extent` (m)
-    /// stepped by `integrator`, whose springs' noise as forces at a unit is
-    /// `noise(unit)`: [`frame::fixed_unit`]. XPBD keeps the roomy unit: its noise
-    /// follows its step, which the frame does not know, and is bounded whatever `k`
-    /// (`m / 2h²` a spring).
-    pub fn fixed_unit(extent: f64, integrator: Integrator, noise: impl Fn(f64) -> f64) -> f64 {
-        let xpbd = integrator == Integrator::Xpbd;
-        frame::fixed_unit(extent, |unit| if xpbd { 0.0 } else { noise(unit) })
-    }
-
     /// `sum count k r / m` over a particle's springs, given as `(k, count, rest
     /// length)` of each kind, with `r` the rounding of a length: `2^-23 reach` for
     /// float32 positions (`Ok(reach)`), `2^-23 rest + unit / 2` for fixed-point
@@ -359,11 +349,13 @@ impl GridSpec {
         Precision::spring_noise(springs, self.particle_mass, positions, xpbd)
     }
 
-    /// The unit (m) of its positions in fixed point ([`Precision::fixed_unit`]).
+    /// The unit (m) of its positions in fixed point: [`frame::fixed_unit`] of its
+    /// radius and its springs' noise. The noise is weighed without XPBD's step,
+    /// which the unit does not follow: at any step XPBD's noise is at most that
+    /// (its compliance only softens a spring, [`Precision::spring_noise`]), so the
+    /// unit holds it at every step the sliders reach.
     pub fn fixed_unit(&self) -> f64 {
-        Precision::fixed_unit(self.extent(), self.integrator, |unit| {
-            self.noise(Err(unit), None)
-        })
+        frame::fixed_unit(self.extent(), |unit| self.noise(Err(unit), None))
     }
 
     /// The float32 noise (m/s²) on fixed-point positions of `unit` (m), stepped at

@@ -255,11 +255,10 @@ impl LatticeSpec {
         0.5 * self.spacing.abs() * cells.iter().map(|c| c * c).sum::<f64>().sqrt()
     }
 
-    /// The unit (m) of its positions in fixed point ([`Precision::fixed_unit`]).
+    /// The unit (m) of its positions in fixed point, chosen as the grid's is
+    /// ([`GridSpec::fixed_unit`]).
     pub fn fixed_unit(&self) -> f64 {
-        Precision::fixed_unit(self.extent(), self.integrator, |unit| {
-            self.noise(Err(unit), None)
-        })
+        frame::fixed_unit(self.extent(), |unit| self.noise(Err(unit), None))
     }
 
     /// How its positions are stored: fixed point with [`Precision::Mixed`].
