@@ -256,7 +256,7 @@ impl LatticeSpec {
     }
 
     /// The unit (m) of its positions in fixed point, chosen as the grid's is
-    /// ([`GridSpec::fixed_unit`]).
+    /// ([`super::GridSpec::fixed_unit`]).
     pub fn fixed_unit(&self) -> f64 {
         frame::fixed_unit(self.extent(), |unit| self.noise(Err(unit), None))
     }
