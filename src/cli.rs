@@ -346,7 +346,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
                 "time": d.time(),
                 "step": d.step(),
                 "message": d.to_string(),
-                "hint": hint(&system),
+                "hint": hint(&system, args.safe),
                 "dump": dumped.map(|(step, time)| json!({ "step": step, "time": time })),
             });
         }
@@ -357,7 +357,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     match outcome {
         Ok(()) => Ok(ExitCode::SUCCESS),
         Err(divergence) => {
-            report_divergence(&system, &divergence);
+            report_divergence(&system, &divergence, args.safe);
             let finite = system.positions().iter().all(|p| p.is_finite());
             if let (Some((step, time)), Some(path)) = (dumped, &args.dump) {
                 eprintln!(
@@ -431,7 +431,9 @@ fn write_obj(
     Ok(())
 }
 
-fn hint(system: &System) -> String {
+/// What to try after a divergence of `system` (`safe`: the run already had safe
+/// stepping, so it is not suggested).
+fn hint(system: &System, safe: bool) -> String {
     let stability = system.stability();
     let integrator = system.params().integrator;
     let other_integrator = if integrator == Integrator::ImplicitEuler {
@@ -471,22 +473,24 @@ fn hint(system: &System) -> String {
              force it steps explicitly ran away (wind drag on light particles, gravity, a \
              collider's push): try a smaller dt or more steps per frame, or less wind"
             .to_string(),
+        // The estimate takes the springs at their rest length and the drag on the
+        // triangles' rest areas: a cloth stretched far past them (a soft one under
+        // its own weight or in the wind) may need a smaller step than it says.
         Some(_) => format!(
-            "dt / dt_crit = {:.3}: the step is within the estimated stability limit, so it is not the step alone; \
-             look at what pushes hardest (stiffness, wind, gravity, a collider, constraints){}",
+            "dt / dt_crit = {:.3}: the step is within the estimated stability limit, which takes the \
+             springs and the drag areas at rest; stretched far past rest, or pushed hard (wind, \
+             gravity, a collider, constraints), the system may need a smaller step: try --dt {:.3e}{}{other_integrator}",
             stability.margin,
-            if other_integrator.is_empty() {
-                ""
-            } else {
-                ", or try --safe or --integrator implicit-euler"
-            }
+            0.5 * system.params().dt,
+            if safe { "" } else { ", --safe" },
         ),
     }
 }
 
-fn report_divergence(system: &System, divergence: &Divergence) {
+/// Prints the divergence and what to try (`safe`: the run already had safe stepping).
+fn report_divergence(system: &System, divergence: &Divergence, safe: bool) {
     eprintln!("error: the simulation diverged: {divergence}");
-    eprintln!("hint: {}", hint(system));
+    eprintln!("hint: {}", hint(system, safe));
 }
 
 /// Writes the positions as CSV `index,x,y,z` into the prepared file and renames it
