@@ -31,7 +31,9 @@ use glam::DVec3;
 
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::grid_kernel::lattice::{LatticeKernel, LatticeSpec};
-use super::grid_kernel::{self, GridCloth, GridSpec, Precision, SimdLevel, SpringCoefficients};
+use super::grid_kernel::{
+    self, GridCloth, GridSpec, Precision, SimdLevel, SpringCoefficients, SpringNoise,
+};
 use super::mesh_kernel::{MeshKernel, MeshParams};
 use super::springs::STENCIL_DIRECTIONS;
 use super::{Divergence, Ground, Integrator, Sphere, SpringKind, System};
@@ -497,35 +499,26 @@ impl System {
             unit,
         };
         if let Some(spec) = self.grid_spec() {
-            let (unit, noise) = self.grid_noise(&spec);
+            let (unit, noise) = self.noise_rule(&spec);
             return Some(rule(spec.precision, (unit, &noise)));
         }
         let spec = self.lattice_spec()?;
-        let (unit, noise) = self.lattice_noise(&spec);
+        let (unit, noise) = self.noise_rule(&spec);
         Some(rule(spec.precision, (unit, &noise)))
     }
 
-    /// The float32 noise (m/s²) the precision rule weighs for the grid kernel on
-    /// `spec` ([`Precision::cheapest`]: on float32 positions within a reach, on
+    /// The float32 noise (m/s²) the precision rule weighs for a kernel on `spec`
+    /// ([`Precision::cheapest`]: on float32 positions within a reach, on
     /// fixed-point ones with `None`), and the fixed-point unit it weighs
     /// ([`Self::weighed_unit`]).
-    fn grid_noise<'a>(&self, spec: &'a GridSpec) -> (f64, impl Fn(Option<f64>) -> f64 + 'a) {
+    fn noise_rule<'a>(
+        &self,
+        spec: &'a impl SpringNoise,
+    ) -> (f64, impl Fn(Option<f64>) -> f64 + 'a) {
         let (unit, dt) = (self.weighed_unit(spec.fixed_unit()), self.model.params.dt);
-        let noise = move |reach: Option<f64>| match reach {
-            Some(_) => Precision::float32_noise(spec, reach, dt),
-            None => spec.fixed_point_noise(unit, dt),
-        };
-        (unit, noise)
-    }
-
-    /// [`Self::grid_noise`] for the lattice kernel.
-    fn lattice_noise<'a>(&self, spec: &'a LatticeSpec) -> (f64, impl Fn(Option<f64>) -> f64 + 'a) {
-        let (unit, dt) = (self.weighed_unit(spec.fixed_unit()), self.model.params.dt);
-        let noise = move |reach: Option<f64>| match reach {
-            Some(_) => spec.float32_noise(reach, dt),
-            None => spec.fixed_point_noise(unit, dt),
-        };
-        (unit, noise)
+        (unit, move |reach: Option<f64>| {
+            spec.spring_noise(reach.ok_or(unit), dt)
+        })
     }
 
     /// The fixed-point unit (m) the precision rule weighs for a kernel whose spec
@@ -575,8 +568,7 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        let room = |spec: &LatticeSpec| (spec.fixed_unit(), (spec.ground, spec.sphere));
-        self.run_choosing(n, Self::lattice_spec, room, |system, spec, n| {
+        self.run_choosing(n, Self::lattice_spec, |system, spec, n| {
             system.run_lattice_once(spec, n, settle)
         })
     }
@@ -585,18 +577,16 @@ impl System {
     /// it gives none), by `run` (which returns the steps it ran). When the body
     /// outgrows its fixed-point unit, `run` stops early and the rest of the steps
     /// go to the kernel for the spec chosen again; once the spec's unit holds the
-    /// body again (its unit and colliders from `room`), the rule forgets the
-    /// coarser unit ([`Self::forget_outgrown_unit`]).
-    fn run_choosing<S>(
+    /// body again, the rule forgets the coarser unit
+    /// ([`Self::forget_outgrown_unit`]).
+    fn run_choosing<S: SpringNoise>(
         &mut self,
         n: u64,
         spec_of: impl Fn(&Self) -> Option<S>,
-        room: impl Fn(&S) -> (f64, (Option<Ground>, Option<Sphere>)),
         mut run: impl FnMut(&mut Self, S, u64) -> Result<u64, Divergence>,
     ) -> Option<Result<(), Divergence>> {
         let mut spec = spec_of(self)?;
-        let (unit, colliders) = room(&spec);
-        if self.forget_outgrown_unit(unit, colliders) {
+        if self.forget_outgrown_unit(spec.fixed_unit(), spec.colliders()) {
             spec = spec_of(self)?;
         }
         let mut left = n;
@@ -724,7 +714,7 @@ impl System {
             integrator,
             precision: Precision::Single,
         };
-        let precision = Precision::cheapest(self.lattice_noise(&spec).1, self.float32_reach());
+        let precision = Precision::cheapest(self.noise_rule(&spec).1, self.float32_reach());
         spec.precision = precision;
         Some(spec)
     }
@@ -849,7 +839,7 @@ impl System {
             present: springs.present,
             precision: Precision::Single,
         };
-        let precision = Precision::cheapest(self.grid_noise(&spec).1, self.float32_reach());
+        let precision = Precision::cheapest(self.noise_rule(&spec).1, self.float32_reach());
         spec.precision = precision;
         Some(spec)
     }
@@ -860,8 +850,7 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        let room = |spec: &GridSpec| (spec.fixed_unit(), (spec.ground, spec.sphere));
-        self.run_choosing(n, Self::grid_spec, room, |system, spec, n| {
+        self.run_choosing(n, Self::grid_spec, |system, spec, n| {
             system.run_grid_once(spec, n, settle)
         })
     }
@@ -1112,9 +1101,10 @@ trait FastEngine {
 }
 
 /// [`FastEngine::outgrown_unit`] of a kernel keeping positions in `unit` (if fixed
-/// point) for a spec asking `spec_unit`, whose noise at a unit is `noise(unit)`.
-fn outgrown(unit: Option<f64>, spec_unit: f64, noise: impl Fn(f64) -> f64) -> Option<f64> {
-    unit.filter(|&unit| unit > spec_unit && noise(unit) > Precision::NOISE_LIMIT)
+/// point) for `spec`, at steps of `dt` s.
+fn outgrown(unit: Option<f64>, spec: &impl SpringNoise, dt: f64) -> Option<f64> {
+    let noisy = |unit| spec.spring_noise(Err(unit), dt) > Precision::NOISE_LIMIT;
+    unit.filter(|&unit| unit > spec.fixed_unit() && noisy(unit))
 }
 
 impl FastEngine for FastPath {
@@ -1153,9 +1143,7 @@ impl FastEngine for FastPath {
         load_state(&mut self.kernel, system);
     }
     fn outgrown_unit(&self, dt: f64) -> Option<f64> {
-        let spec = self.kernel.spec();
-        let noise = |unit| spec.fixed_point_noise(unit, dt);
-        outgrown(self.kernel.position_unit(), spec.fixed_unit(), noise)
+        outgrown(self.kernel.position_unit(), self.kernel.spec(), dt)
     }
 }
 
@@ -1174,9 +1162,7 @@ impl FastEngine for LatticePath {
         load_state(&mut self.kernel, system);
     }
     fn outgrown_unit(&self, dt: f64) -> Option<f64> {
-        let spec = self.kernel.spec();
-        let noise = |unit| spec.fixed_point_noise(unit, dt);
-        outgrown(self.kernel.position_unit(), spec.fixed_unit(), noise)
+        outgrown(self.kernel.position_unit(), self.kernel.spec(), dt)
     }
 }
 

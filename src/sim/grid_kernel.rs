@@ -249,10 +249,7 @@ impl Precision {
     /// kind's rest length plus the rounding of a move to half its unit; for XPBD
     /// see [`Precision::spring_noise`].
     pub fn float32_noise(spec: &GridSpec, reach: Option<f64>, dt: f64) -> f64 {
-        match reach {
-            Some(reach) => spec.noise(Ok(reach), spec.xpbd_step(dt)),
-            None => spec.fixed_point_noise(spec.fixed_unit(), dt),
-        }
+        spec.spring_noise(reach.ok_or_else(|| spec.fixed_unit()), dt)
     }
 
     /// `sum count k r / m` over a particle's springs, given as `(k, count, rest
@@ -290,6 +287,39 @@ impl Precision {
             .map(|(k, count, rest)| count * stiffness(k.abs()) * rounding(rest))
             .sum();
         noise / mass
+    }
+}
+
+/// What the precision rule reads of a kernel's spec, a grid's or a lattice's: one
+/// rule for both (`System`'s choice of precision, and of when a body has outgrown
+/// its fixed-point unit, in [`crate::sim::fast_path`]).
+pub(crate) trait SpringNoise {
+    /// The float32 noise (m/s²) of its springs at steps of `dt` s, on positions
+    /// rounded as [`Precision::spring_noise`] says (`Ok(reach)`: float32 ones
+    /// within `reach` m; `Err(unit)`: fixed-point ones of `unit` m), XPBD's
+    /// weighed at its step.
+    fn spring_noise(&self, positions: Result<f64, f64>, dt: f64) -> f64;
+    /// The unit (m) of its positions in fixed point.
+    fn fixed_unit(&self) -> f64;
+    /// The colliders its positions' frame holds beside the body.
+    fn colliders(&self) -> (Option<Ground>, Option<Sphere>);
+}
+
+/// The step that XPBD's noise follows under `integrator` (`None` for the other
+/// integrators: [`Precision::spring_noise`]).
+fn xpbd_step(integrator: Integrator, dt: f64) -> Option<f64> {
+    (integrator == Integrator::Xpbd).then_some(dt)
+}
+
+impl SpringNoise for GridSpec {
+    fn spring_noise(&self, positions: Result<f64, f64>, dt: f64) -> f64 {
+        self.noise(positions, xpbd_step(self.integrator, dt))
+    }
+    fn fixed_unit(&self) -> f64 {
+        GridSpec::fixed_unit(self)
+    }
+    fn colliders(&self) -> (Option<Ground>, Option<Sphere>) {
+        (self.ground, self.sphere)
     }
 }
 
@@ -356,17 +386,6 @@ impl GridSpec {
     /// unit holds it at every step the sliders reach.
     pub fn fixed_unit(&self) -> f64 {
         frame::fixed_unit(self.extent(), |unit| self.noise(Err(unit), None))
-    }
-
-    /// The float32 noise (m/s²) on fixed-point positions of `unit` (m), stepped at
-    /// `dt` s ([`Precision::spring_noise`]).
-    pub fn fixed_point_noise(&self, unit: f64, dt: f64) -> f64 {
-        self.noise(Err(unit), self.xpbd_step(dt))
-    }
-
-    /// The step that XPBD's noise follows (`None` for the other integrators).
-    fn xpbd_step(&self, dt: f64) -> Option<f64> {
-        (self.integrator == Integrator::Xpbd).then_some(dt)
     }
 
     /// How its positions are stored: fixed point with [`Precision::Mixed`].

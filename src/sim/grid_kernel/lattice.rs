@@ -19,7 +19,7 @@
 //! on float32 or fixed-point positions ([`Precision::Single`],
 //! [`Precision::Mixed`]), or float64 throughout ([`Precision::Double`], the same
 //! code at half the lanes), as [`Precision::cheapest`] finds for the lattice's
-//! springs ([`LatticeSpec::float32_noise`]). Particle `(x, y, z)` is at
+//! springs ([`Precision::spring_noise`]). Particle `(x, y, z)` is at
 //! array index `x + y W + z W H` with `W = width + 1` and `H = height + 1`: one
 //! ghost column after each row and one ghost row after each slab, and ghost slabs
 //! after the last. Every one of the 13 forward neighbours `(x + dx, y + dy, z + dz)`
@@ -62,8 +62,8 @@ use super::spring_passes::{
 };
 use super::{
     BLOCK, Buf, ContactRows, Frame, FrameRule, Out, Params, Particle, Precision, Real, Simd,
-    SimdLevel, SpringCoefficients, State, StepLanes, frame, ground_constants, integrate,
-    project_out_of_sphere, runaway_scan, spring,
+    SimdLevel, SpringCoefficients, SpringNoise, State, StepLanes, frame, ground_constants,
+    integrate, project_out_of_sphere, runaway_scan, spring, xpbd_step,
 };
 use crate::sim::constraints::{Contact, xpbd_sweeps_back};
 use crate::sim::duo::{Duo, run_in_pool};
@@ -213,29 +213,9 @@ pub struct LatticeSpec {
 }
 
 impl LatticeSpec {
-    /// The float32 acceleration noise of this lattice (see
-    /// [`Precision::float32_noise`]): a particle has up to 6 axis springs, 12 face
-    /// diagonals and 8 body diagonals.
-    pub fn float32_noise(&self, reach: Option<f64>, dt: f64) -> f64 {
-        match reach {
-            Some(reach) => self.noise(Ok(reach), self.xpbd_step(dt)),
-            None => self.fixed_point_noise(self.fixed_unit(), dt),
-        }
-    }
-
-    /// The float32 noise (m/s²) on fixed-point positions of `unit` (m), stepped at
-    /// `dt` s ([`Precision::spring_noise`]).
-    pub fn fixed_point_noise(&self, unit: f64, dt: f64) -> f64 {
-        self.noise(Err(unit), self.xpbd_step(dt))
-    }
-
-    /// The step that XPBD's noise follows (`None` for the other integrators).
-    fn xpbd_step(&self, dt: f64) -> Option<f64> {
-        (self.integrator == Integrator::Xpbd).then_some(dt)
-    }
-
     /// [`Precision::spring_noise`] of its springs with `positions` rounded as
-    /// there, and XPBD's steps.
+    /// there, and XPBD's steps: a particle has up to 6 axis springs, 12 face
+    /// diagonals and 8 body diagonals.
     fn noise(&self, positions: Result<f64, f64>, xpbd: Option<f64>) -> f64 {
         let h = self.spacing.abs();
         let springs = [(6.0, h), (12.0, h * 2f64.sqrt()), (8.0, h * 3f64.sqrt())];
@@ -280,6 +260,18 @@ impl LatticeSpec {
                 | Integrator::Verlet
                 | Integrator::Xpbd
         )
+    }
+}
+
+impl SpringNoise for LatticeSpec {
+    fn spring_noise(&self, positions: Result<f64, f64>, dt: f64) -> f64 {
+        self.noise(positions, xpbd_step(self.integrator, dt))
+    }
+    fn fixed_unit(&self) -> f64 {
+        LatticeSpec::fixed_unit(self)
+    }
+    fn colliders(&self) -> (Option<Ground>, Option<Sphere>) {
+        (self.ground, self.sphere)
     }
 }
 
