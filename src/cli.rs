@@ -98,17 +98,25 @@ pub struct ReportArgs {
     force: bool,
 }
 
-/// `cloth run`.
+/// The integrator and step, given as flags rather than `--set` (`cloth run` and
+/// `cloth info`).
 #[derive(clap::Args, Debug)]
-pub struct RunArgs {
-    #[command(flatten)]
-    scene: SceneArgs,
+pub struct StepArgs {
     /// Integrator: explicit-euler, symplectic-euler, verlet, rk2, rk4, implicit-euler, xpbd.
     #[arg(long)]
     integrator: Option<String>,
     /// Time step in seconds.
     #[arg(long, allow_hyphen_values = true)]
     dt: Option<String>,
+}
+
+/// `cloth run`.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    step: StepArgs,
     /// Simulated seconds to run (default 1).
     #[arg(long, conflicts_with = "steps", allow_hyphen_values = true)]
     duration: Option<f64>,
@@ -146,6 +154,8 @@ pub struct RunArgs {
 pub struct InfoArgs {
     #[command(flatten)]
     scene: SceneArgs,
+    #[command(flatten)]
+    step: StepArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -214,9 +224,9 @@ fn scenes() {
     }
 }
 
-/// Loads a scene with the run's `--integrator` and `--dt` applied as overrides.
-fn load_run_scene(args: &RunArgs) -> Result<Scene, String> {
-    let mut scene = args.scene.load().map_err(|e| e.to_string())?;
+/// Loads a scene with `--integrator` and `--dt` applied as overrides.
+fn load_scene(scene: &SceneArgs, args: &StepArgs) -> Result<Scene, String> {
+    let mut scene = scene.load().map_err(|e| e.to_string())?;
     // The flags are scene keys; errors name the flag as the user typed it.
     let flag = |scene: &mut Scene, key: &str, value: &str, shown: &str| {
         scene.set(key, value).map_err(|e| match e {
@@ -242,7 +252,7 @@ fn load_run_scene(args: &RunArgs) -> Result<Scene, String> {
 }
 
 fn run(args: RunArgs) -> Result<ExitCode, String> {
-    let scene = load_run_scene(&args)?;
+    let scene = load_scene(&args.scene, &args.step)?;
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;
     let steps = match (args.steps, args.duration) {
@@ -649,7 +659,7 @@ fn precision_json(rule: PrecisionRule) -> serde_json::Value {
 }
 
 fn info(args: InfoArgs) -> Result<ExitCode, String> {
-    let scene = args.scene.load().map_err(|e| e.to_string())?;
+    let scene = load_scene(&args.scene, &args.step)?;
     let resolved = scene.resolve().map_err(|e| e.to_string())?;
     let mut system = resolved.build();
     // The engine `cloth run` uses (without `--exact`).

@@ -520,3 +520,26 @@ fn info_gives_the_precision_rules_reasons() {
     assert_eq!(stiff["engine"], "grid-f64");
     assert!(info(&["--scene", "chain"])["precision"].is_null());
 }
+
+/// `cloth info` takes the step flags `cloth run` takes, so that a newcomer can ask
+/// about the run they are about to make: `--integrator` and `--dt` reach the
+/// parameters, the constraints and the stability estimate, and a wrong value is
+/// named by its flag.
+#[test]
+fn info_takes_the_runs_integrator_and_step_flags() {
+    let info = |args: &[&str]| -> serde_json::Value {
+        let o = cloth(&[&["info", "--json", "--scene", "jelly"], args].concat());
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        serde_json::from_str(stdout(&o).trim()).unwrap()
+    };
+    let plain = info(&[]);
+    let xpbd = info(&["--integrator", "xpbd", "--dt", "5e-4"]);
+    assert_eq!(xpbd["parameters"]["integrator"], "xpbd");
+    assert_eq!(xpbd["parameters"]["dt"].as_f64(), Some(5e-4));
+    let constraints = xpbd["constraints"].to_string();
+    assert!(constraints.contains("XPBD"), "{constraints}");
+    assert_ne!(plain["parameters"]["integrator"], "xpbd");
+    let o = cloth(&["info", "--scene", "jelly", "--integrator", "rk5"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--integrator rk5"), "{}", stderr(&o));
+}
