@@ -13,7 +13,8 @@ use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::grid_kernel::Precision;
 use cloth_sandbox::sim::safe::{
-    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, added_stretch_limit, safe_step,
+    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, safe_step,
+    safe_step_below,
 };
 use cloth_sandbox::sim::{
     Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
@@ -224,6 +225,62 @@ fn scenes() {
     }
 }
 
+/// Runs `steps` steps of `system`'s step, or with `recheck` (safe stepping on a
+/// model with drag; the step of dt it splits) the simulated time they cover, in
+/// frames of 1/60 s simulated, choosing the step again after each frame where
+/// [`StepWatch`] says the drag's areas have outgrown it (the app's rule, every
+/// frame), and saying so. Stops early at step `until`, if given (the replay to the
+/// state before a divergence, which takes the same steps). The error is a run that
+/// its new steps would make longer than [`limits::total_steps`] allows.
+fn run_checked(
+    system: &mut System,
+    steps: u64,
+    recheck: Option<f64>,
+    until: Option<u64>,
+) -> Result<Result<(), Divergence>, String> {
+    let until = until.unwrap_or(u64::MAX);
+    let Some(frame_step) = recheck else {
+        return Ok(system.run(steps.min(until.saturating_sub(system.steps_taken()))));
+    };
+    let end = system.time() + steps as f64 * system.params().dt;
+    let particles = system.particle_count();
+    let mut watch = StepWatch::default();
+    loop {
+        let dt = system.params().dt;
+        let left = ((end - system.time()) / dt).round().max(0.0) as u64;
+        let left = left.min(until.saturating_sub(system.steps_taken()));
+        if left == 0 {
+            return Ok(Ok(()));
+        }
+        let frame = ((1.0 / 60.0) / dt).ceil().max(1.0) as u64;
+        if let Err(d) = system.run(left.min(frame)) {
+            return Ok(Err(d));
+        }
+        let now = system.dt_critical_now();
+        if watch.outgrown(system.time(), dt, now, DEFAULT_SAFETY, dt < frame_step) {
+            let choice = safe_step_below(now, frame_step, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
+            let mut params = *system.params();
+            params.dt = choice.dt;
+            system.set_params(params);
+            let left = ((end - system.time()) / choice.dt).round().max(0.0) as u64;
+            limits::total_steps(system.steps_taken() + left, 1, particles).map_err(|e| {
+                format!("run too long after safe stepping chose a smaller step: {e}")
+            })?;
+            eprintln!(
+                "safe stepping at t = {:.4} s: the cloth's drag areas have {}, so {} substeps of {:.4e} s per step of {frame_step:.4e} s",
+                system.time(),
+                if choice.dt < dt {
+                    "grown"
+                } else {
+                    "shrunk back"
+                },
+                choice.substeps,
+                choice.dt,
+            );
+        }
+    }
+}
+
 /// Loads a scene with `--integrator` and `--dt` applied as overrides.
 fn load_scene(scene: &SceneArgs, args: &StepArgs) -> Result<Scene, String> {
     let mut scene = scene.load().map_err(|e| e.to_string())?;
@@ -316,8 +373,11 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     }
     system.set_state(start_state.clone());
     system.run(0).map_err(|e| e.to_string())?;
+    let start_params = *system.params();
+    // Safe stepping on a cloth in the air checks its step as the app does.
+    let recheck = (args.safe && system.model().terms.aero).then_some(dt);
     let start = Instant::now();
-    let outcome = system.run(steps);
+    let outcome = run_checked(&mut system, steps, recheck, None)?;
     let wall = start.elapsed().as_secs_f64();
     let summary = Summary::of(&system, wall, engine);
     let mut dumped = None;
@@ -326,8 +386,14 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     {
         // The state at the divergence is not finite (or ran away): the CSV and
         // the OBJ hold the last state before it, which the run then replays to.
+        system.set_params(start_params);
         system.set_state(start_state);
-        let _ = system.run(d.step().saturating_sub(1));
+        let _ = run_checked(
+            &mut system,
+            steps,
+            recheck,
+            Some(d.step().saturating_sub(1)),
+        )?;
         dumped = Some((system.steps_taken(), system.time()));
     }
     if let (Some(file), Some(path)) = (dump.take(), &args.dump) {

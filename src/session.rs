@@ -116,6 +116,8 @@ pub struct Session {
     safe_stepping: bool,
     /// What safe stepping chose, when it is on.
     step_choice: Option<StepChoice>,
+    /// Whether the drag's areas have outgrown that choice ([`Session::recheck_step`]).
+    step_watch: safe::StepWatch,
     /// Wind and gust (m/s) the wind switch turned off, to turn back on.
     stored_wind: Option<(DVec3, f64)>,
     /// The scene as loaded, before any edit: what "Defaults" restores.
@@ -248,6 +250,7 @@ impl Session {
             ms_per_step: 0.0,
             safe_stepping: true,
             step_choice: None,
+            step_watch: safe::StepWatch::default(),
             stored_wind: None,
             pace: PaceMeter::default(),
             display_surface: Vec::new(),
@@ -302,8 +305,8 @@ impl Session {
         self.step_choice = None;
         if self.safe_stepping {
             let frame_time = user_dt * f64::from(user_substeps);
-            let choice = safe::safe_step(
-                self.system.model(),
+            let choice = safe::safe_step_below(
+                self.system.dt_critical_now(),
                 frame_time,
                 DEFAULT_SAFETY,
                 MAX_SAFE_SUBSTEPS,
@@ -326,6 +329,23 @@ impl Session {
             self.system.set_params(params);
         }
         self.substeps = substeps;
+    }
+
+    /// With safe stepping on, chooses the step again where the drag's areas have
+    /// grown (or shrunk back) past [`safe::StepWatch`]'s bounds since it was
+    /// chosen. Called on a settled state, once per frame's steps.
+    fn recheck_step(&mut self) {
+        let Some(choice) = self.step_choice else {
+            return;
+        };
+        if !self.system.model().terms.aero {
+            return;
+        }
+        let cut = choice.dt < self.settings.params.dt;
+        let (time, now) = (self.system.time(), self.system.dt_critical_now());
+        if (self.step_watch).outgrown(time, choice.dt, now, DEFAULT_SAFETY, cut) {
+            self.choose_step();
+        }
     }
 
     /// Whether safe stepping is on.
@@ -855,6 +875,7 @@ impl Session {
         match self.system.settle() {
             Ok(()) if self.last_good.steps != before => {
                 self.last_good.clone_from(self.system.state());
+                self.recheck_step();
             }
             Ok(()) => {}
             Err(d) => self.diverged(d),
@@ -872,7 +893,10 @@ impl Session {
         };
         let done = (self.system.steps_taken() - before) as u32;
         match outcome {
-            Ok(()) if settle => self.last_good.clone_from(self.system.state()),
+            Ok(()) if settle => {
+                self.last_good.clone_from(self.system.state());
+                self.recheck_step();
+            }
             Ok(()) => {}
             Err(d) => self.diverged(d),
         }

@@ -98,3 +98,44 @@ fn a_large_cloth_gets_the_substeps_of_a_small_one_of_its_material() {
         );
     }
 }
+
+/// A running system's step is chosen again at once when the critical step has
+/// shrunk so far that the step is over three quarters of it, and, when it had been
+/// cut, grows back only after a second of room at every check (under a quarter of
+/// it): a cloth flapping in the wind, whose areas swing from frame to frame, does
+/// not make the step swing with them.
+#[test]
+fn the_step_watch_cuts_at_once_and_grows_back_after_a_second_of_room() {
+    use cloth_sandbox::sim::safe::StepWatch;
+    let safety = DEFAULT_SAFETY;
+    let mut watch = StepWatch::default();
+    let dt = 1e-3;
+    // Chosen at half of 2e-3; still within three quarters of 1.4e-3, not of 1.3e-3.
+    assert!(!watch.outgrown(0.0, dt, Some(2e-3), safety, false));
+    assert!(!watch.outgrown(0.1, dt, Some(1.4e-3), safety, false));
+    assert!(watch.outgrown(0.2, dt, Some(1.3e-3), safety, false));
+    // A cut step with room (critical step over 4 ms) for most of a second, with one
+    // frame between that has none: no growing back until a whole second of room.
+    let frame = 1.0 / 60.0;
+    let mut t = 1.0;
+    for k in 0..59 {
+        let critical = if k == 30 { 3e-3 } else { 5e-3 };
+        assert!(!watch.outgrown(t, dt, Some(critical), safety, true), "{k}");
+        t += frame;
+    }
+    let roomy_from = t - 28.0 * frame;
+    while !watch.outgrown(t, dt, Some(5e-3), safety, true) {
+        t += frame;
+        assert!(
+            t < roomy_from + 1.0 + 1.5 * frame,
+            "not grown back by {t} s"
+        );
+    }
+    assert!(
+        t - roomy_from > 1.0 - 0.5 * frame,
+        "grown back after {} s",
+        t - roomy_from
+    );
+    // A step that was never cut is not grown, however much room it has.
+    assert!(!watch.outgrown(t + 5.0, dt, Some(1.0), safety, false));
+}

@@ -238,3 +238,44 @@ fn drag_on_light_particles_limits_implicit_euler_and_xpbd() {
         run(safe.dt, steps).unwrap_or_else(|e| panic!("{integrator} safe: {e}"));
     }
 }
+
+/// The drag's step limit on a running cloth is taken on its triangles' areas now:
+/// at rest it is the estimate's; stretched `s` times along its height, each inner
+/// particle's share of the area is `s L²` (six triangles of `L² / 2`, a third each),
+/// and with gravity off and the springs too soft to bind, the limit is symplectic
+/// Euler's on the decay `gamma = rho C_d A |wind| / m`: `h = 2 / gamma`.
+#[test]
+fn the_drag_limit_follows_the_areas_a_cloth_is_stretched_to() {
+    use cloth_sandbox::sim::stability::{dt_critical_at, estimate};
+    let mut scene = Scene::load("bench-wind").unwrap();
+    let overrides = [
+        "width=8",
+        "height=8",
+        "gravity=0,0,0",
+        "stiffness_per_mass=1",
+        "damping_per_mass=0",
+    ];
+    scene.set_all(overrides).unwrap();
+    let system = scene.build().unwrap();
+    let model = system.model();
+    let at_rest = estimate(model).dt_critical;
+    let rest = system.positions().to_vec();
+    let same = dt_critical_at(model, &rest, at_rest).unwrap();
+    assert!(
+        (same / at_rest.unwrap() - 1.0).abs() < 1e-12,
+        "{same} {at_rest:?}"
+    );
+    let (m, l, wind, rho_cd) = (1.0 / 64.0, 1.0 / 7.0, 5.0, 1.2);
+    for s in [4.0, 16.0] {
+        let top = rest.iter().map(|p| p.y).fold(f64::MIN, f64::max);
+        let stretched: Vec<_> = (rest.iter())
+            .map(|p| glam::DVec3::new(p.x, top + s * (p.y - top), p.z))
+            .collect();
+        let limit = dt_critical_at(model, &stretched, at_rest).unwrap();
+        let expected = 2.0 * m / (rho_cd * s * l * l * wind);
+        assert!(
+            expected < at_rest.unwrap() && (limit / expected - 1.0).abs() < 1e-9,
+            "stretched {s}x: {limit} s, expected {expected} s (at rest {at_rest:?})"
+        );
+    }
+}

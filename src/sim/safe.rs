@@ -41,13 +41,25 @@ pub struct SafeStep {
 /// `safety` (in (0, 1]) times the critical step of `model.params.integrator`, capped
 /// at `max_substeps`. Ignores `model.params.dt`.
 pub fn safe_step(model: &Model, frame_time: f64, safety: f64, max_substeps: u32) -> SafeStep {
+    let dt_critical = stability::estimate(model).dt_critical;
+    safe_step_below(dt_critical, frame_time, safety, max_substeps)
+}
+
+/// [`safe_step`] for a critical step `dt_critical` given (as [`SafeStep::dt_critical`]
+/// reads): a running system's, whose drag areas may have outgrown its rest ones
+/// ([`stability::dt_critical_at`]).
+pub fn safe_step_below(
+    dt_critical: Option<f64>,
+    frame_time: f64,
+    safety: f64,
+    max_substeps: u32,
+) -> SafeStep {
     let max_substeps = max_substeps.max(1);
     let safety = if safety.is_finite() && safety > 0.0 {
         safety.min(1.0)
     } else {
         DEFAULT_SAFETY
     };
-    let dt_critical = stability::estimate(model).dt_critical;
     if !(frame_time.is_finite() && frame_time > 0.0) {
         return SafeStep {
             substeps: 1,
@@ -73,6 +85,65 @@ pub fn safe_step(model: &Model, frame_time: f64, safety: f64, max_substeps: u32)
         dt: frame_time / substeps as f64,
         dt_critical,
         safe,
+    }
+}
+
+/// How far the step safe stepping chose may come towards the critical step of a
+/// running system, as a multiple of the safety fraction, before it chooses again:
+/// a step of `DEFAULT_SAFETY` (half the critical step) is chosen again once the
+/// critical step has shrunk by a third (the drag areas grew), so that it runs at
+/// most at three quarters of it.
+pub const RECHOOSE_ABOVE: f64 = 1.5;
+/// The same the other way: a step that safe stepping cut below the frame's own
+/// step is chosen again once it has stayed under half the safety fraction of the
+/// critical step for [`ROOMY_FOR`] (the areas shrank back), so that the run speeds
+/// up again, but not at every flap of a cloth in the wind.
+pub const RECHOOSE_BELOW: f64 = 0.5;
+/// Simulated seconds a cut step must have had room at every check before it
+/// is chosen again ([`RECHOOSE_BELOW`]).
+pub const ROOMY_FOR: f64 = 1.0;
+
+/// Safe stepping's watch over a running system's step: whether to choose it again
+/// as the drag's areas grow and shrink ([`stability::dt_critical_at`]). The app
+/// (every frame) and `cloth run --safe` (every 1/60 s simulated) follow it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StepWatch {
+    /// Simulated time since which a cut step has had room at every check.
+    roomy_since: Option<f64>,
+}
+
+impl StepWatch {
+    /// Whether to choose the step again at simulated time `time`: the step `dt`
+    /// chosen under `safety` is over [`RECHOOSE_ABOVE`] times `safety` of the
+    /// critical step now, `dt_critical`; or it was cut below the frame's step
+    /// (`cut`) and has been under [`RECHOOSE_BELOW`] times that for [`ROOMY_FOR`].
+    pub fn outgrown(
+        &mut self,
+        time: f64,
+        dt: f64,
+        dt_critical: Option<f64>,
+        safety: f64,
+        cut: bool,
+    ) -> bool {
+        let critical = dt_critical.filter(|c| c.is_finite() && *c > 0.0);
+        let Some(critical) = critical else {
+            self.roomy_since = None;
+            return false;
+        };
+        if dt > RECHOOSE_ABOVE * safety * critical {
+            self.roomy_since = None;
+            return true;
+        }
+        if !(cut && dt < RECHOOSE_BELOW * safety * critical) {
+            self.roomy_since = None;
+            return false;
+        }
+        let since = *self.roomy_since.get_or_insert(time);
+        let roomy = time - since >= ROOMY_FOR;
+        if roomy {
+            self.roomy_since = None;
+        }
+        roomy
     }
 }
 

@@ -372,6 +372,13 @@ impl System {
             .get_or_init(|| stability::estimate(&self.model))
     }
 
+    /// The critical step of [`System::stability`] with the drag also taken on the
+    /// triangles' areas now ([`stability::dt_critical_at`]), for safe stepping.
+    pub fn dt_critical_now(&self) -> Option<f64> {
+        let at_rest = self.stability().dt_critical;
+        stability::dt_critical_at(&self.model, self.positions(), at_rest)
+    }
+
     /// Advances one step of `dt`, then checks the state. On divergence the state is
     /// left as it is (the caller decides to reset).
     pub fn step(&mut self) -> Result<(), Divergence> {
