@@ -13,8 +13,7 @@ use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::grid_kernel::Precision;
 use cloth_sandbox::sim::safe::{
-    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, safe_step,
-    safe_step_below,
+    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas, safe_step,
 };
 use cloth_sandbox::sim::{
     Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
@@ -228,7 +227,7 @@ fn scenes() {
 /// Runs `steps` steps of `system`'s step, or with `recheck` (safe stepping on a
 /// model with drag; the step of dt it splits) the simulated time they cover, in
 /// frames of 1/60 s simulated, choosing the step again after each frame where
-/// [`StepWatch`] says the drag's areas have outgrown it (the app's rule, every
+/// the drag's areas have outgrown it ([`follow_areas`]: the app's rule, every
 /// frame), and saying so. Stops early at step `until`, if given (the replay to the
 /// state before a divergence, which takes the same steps). The error is a run that
 /// its new steps would make longer than [`limits::total_steps`] allows.
@@ -256,12 +255,7 @@ fn run_checked(
         if let Err(d) = system.run(left.min(frame)) {
             return Ok(Err(d));
         }
-        let now = system.dt_critical_now();
-        if watch.outgrown(system.time(), dt, now, DEFAULT_SAFETY, dt < frame_step) {
-            let choice = safe_step_below(now, frame_step, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
-            let mut params = *system.params();
-            params.dt = choice.dt;
-            system.set_params(params);
+        if let Some(choice) = follow_areas(system, &mut watch, frame_step) {
             let left = ((end - system.time()) / choice.dt).round().max(0.0) as u64;
             limits::total_steps(system.steps_taken() + left, 1, particles).map_err(|e| {
                 format!("run too long after safe stepping chose a smaller step: {e}")

@@ -549,7 +549,10 @@ impl App {
         };
         let system = self.session.system().clone();
         let scene = self.session.name();
-        match record::Job::start(system, view, seconds, 25, gpu, size, &dir, scene) {
+        let safe_frame = self.session.safe_frame_time();
+        match record::Job::start(
+            system, safe_frame, view, seconds, 25, gpu, size, &dir, scene,
+        ) {
             Ok(job) => {
                 log::info!("recording {seconds} s to {}", job.path.display());
                 self.panel.error = None;

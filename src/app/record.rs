@@ -37,6 +37,7 @@ use crate::render::offscreen::{Offscreen, write_png};
 use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::session::Session;
 use cloth_sandbox::sim::System;
+use cloth_sandbox::sim::safe::{StepWatch, follow_areas};
 use cloth_sandbox::view::OrbitCamera;
 
 /// Most frames one recording may have (at 25 fps, 400 s).
@@ -331,21 +332,27 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
 
 /// Steps `system` from its state and renders `frames` frames at `fps` (frame i
 /// at `i / fps` seconds after the start), handing each to `each` as RGBA8 rows.
+/// With `safe_frame` (the session it came from steps safely, splitting frames of
+/// that many seconds: [`Session::safe_frame_time`]) it keeps safe stepping's watch
+/// on the drag's areas after each frame, as the app does ([`safe::follow_areas`]).
 /// A divergence stops it with [`Diverged`], which says at which frame.
 pub fn render_frames(
     system: &mut System,
+    safe_frame: Option<f64>,
     view: &View,
     fps: u32,
     frames: u64,
     offscreen: &mut Offscreen,
     mut each: impl FnMut(u64, Vec<u8>) -> anyhow::Result<()>,
 ) -> anyhow::Result<()> {
-    // The step that runs (safe stepping may have made it smaller than the scene's).
-    let dt = system.params().dt;
-    let start = system.steps_taken();
+    // The step that runs (safe stepping may have made it smaller than the scene's),
+    // and the frame and step it took over from (where the watch last chose it).
+    let mut dt = system.params().dt;
+    let mut from = (0, system.steps_taken());
+    let mut watch = StepWatch::default();
     let mut data = FrameData::default();
     for i in 0..frames {
-        let target = start + step_at(i, fps, dt) as u64;
+        let target = from.1 + (step_at(i, fps, dt) - step_at(from.0, fps, dt)).max(0.0) as u64;
         let due = target.saturating_sub(system.steps_taken());
         if let Err(d) = system.run(due) {
             return Err(Diverged {
@@ -354,6 +361,12 @@ pub fn render_frames(
                 message: format!("{d} (at frame {i} of {frames})"),
             }
             .into());
+        }
+        if let Some(frame_time) = safe_frame
+            && follow_areas(system, &mut watch, frame_time).is_some()
+        {
+            dt = system.params().dt;
+            from = (i, system.steps_taken());
         }
         data.build(system, &view.surface, &view.options, view.by_strain);
         let frame = data.scene_frame(None);
@@ -367,8 +380,10 @@ pub fn render_frames(
 /// such as a name reserved with `create_new`, is replaced whole at the end) at
 /// `fps`, on `offscreen`; `progress` gets the frames done so far and can stop it.
 /// The app's "Record" button runs it on a thread of its own.
+#[allow(clippy::too_many_arguments)]
 pub fn record_gif(
     mut system: System,
+    safe_frame: Option<f64>,
     view: &View,
     seconds: f64,
     fps: u32,
@@ -380,14 +395,22 @@ pub fn record_gif(
     check_steps(&system, fps, frames).map_err(|e| anyhow!(e))?;
     let size = offscreen.size();
     let mut sink = Sink::gif(path, size, fps)?;
-    render_frames(&mut system, view, fps, frames, offscreen, |i, pixels| {
-        if progress.cancel.load(Ordering::Relaxed) {
-            anyhow::bail!("the recording was cancelled");
-        }
-        sink.push(i, size, pixels)?;
-        progress.frames_done.store(i + 1, Ordering::Relaxed);
-        Ok(())
-    })?;
+    render_frames(
+        &mut system,
+        safe_frame,
+        view,
+        fps,
+        frames,
+        offscreen,
+        |i, pixels| {
+            if progress.cancel.load(Ordering::Relaxed) {
+                anyhow::bail!("the recording was cancelled");
+            }
+            sink.push(i, size, pixels)?;
+            progress.frames_done.store(i + 1, Ordering::Relaxed);
+            Ok(())
+        },
+    )?;
     sink.finish()
 }
 
@@ -437,6 +460,7 @@ impl Job {
     #[allow(clippy::too_many_arguments)]
     pub fn start(
         system: System,
+        safe_frame: Option<f64>,
         view: View,
         seconds: f64,
         fps: u32,
@@ -473,6 +497,7 @@ impl Job {
                 .and_then(|mut offscreen| {
                     record_gif(
                         system,
+                        safe_frame,
                         &view,
                         seconds,
                         fps,
@@ -557,8 +582,10 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
         by_strain: false,
         surface: session.surface().to_vec(),
     };
+    let safe_frame = session.safe_frame_time();
     let outcome = render_frames(
         session.system_mut(),
+        safe_frame,
         &view,
         args.fps,
         frames,

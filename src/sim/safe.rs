@@ -14,7 +14,7 @@
 //! It costs one pass over the springs and a bisection on a 2x2 amplification
 //! matrix: cheap enough to call whenever a slider moves.
 
-use super::{Model, stability};
+use super::{Model, System, stability};
 
 /// Default fraction of the critical step that safe stepping keeps below.
 pub const DEFAULT_SAFETY: f64 = 0.5;
@@ -145,6 +145,30 @@ impl StepWatch {
         }
         roomy
     }
+}
+
+/// Safe stepping's watch kept on a running `system` whose step splits frames of
+/// `frame_time` seconds (`cloth run --safe`, recordings; the app's session chooses
+/// its own, with the stretch limit it may add): after a frame's steps, where
+/// `watch` says the drag's areas have outgrown the step, sets the step safe
+/// stepping chooses now ([`safe_step_below`] on [`System::dt_critical_now`]) and
+/// returns that choice.
+pub fn follow_areas(
+    system: &mut System,
+    watch: &mut StepWatch,
+    frame_time: f64,
+) -> Option<SafeStep> {
+    let dt = system.params().dt;
+    let now = system.dt_critical_now();
+    let cut = dt < frame_time * (1.0 - 1e-12);
+    if !watch.outgrown(system.time(), dt, now, DEFAULT_SAFETY, cut) {
+        return None;
+    }
+    let choice = safe_step_below(now, frame_time, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
+    let mut params = *system.params();
+    params.dt = choice.dt;
+    system.set_params(params);
+    Some(choice)
 }
 
 /// Stretch limit (Provot's tau) that safe stepping adds to a cloth with aero drag,
