@@ -543,3 +543,38 @@ fn info_takes_the_runs_integrator_and_step_flags() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("--integrator rk5"), "{}", stderr(&o));
 }
+
+/// An integrator's name is taken in any case and with `_` or a space for `-`, as
+/// a newcomer types it from the README's prose ("Verlet", "RK4"): `Verlet` had
+/// been refused as "not an integrator".
+#[test]
+fn integrator_names_are_taken_in_any_case() {
+    for (typed, name) in [
+        ("Verlet", "verlet"),
+        ("RK4", "rk4"),
+        ("symplectic_euler", "symplectic-euler"),
+        ("Implicit Euler", "implicit-euler"),
+    ] {
+        let o = cloth(&["info", "--scene", "chain", "--json", "--integrator", typed]);
+        assert_eq!(o.status.code(), Some(0), "{typed}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+        assert_eq!(v["parameters"]["integrator"], name, "{typed}");
+        let o = cloth(&[
+            "run",
+            "--scene",
+            "chain",
+            "--steps",
+            "2",
+            "--integrator",
+            typed,
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{typed}: {}", stderr(&o));
+    }
+    let o = cloth(&["run", "--scene", "chain", "--integrator", "euler"]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "an ambiguous name: {}",
+        stderr(&o)
+    );
+}

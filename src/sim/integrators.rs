@@ -67,8 +67,10 @@ impl Integrator {
         }
     }
 
-    /// Parses a name from [`Self::name`].
+    /// Parses a name from [`Self::name`], in any case and with `_` or a space for
+    /// `-` (`Verlet`, `RK4`, `symplectic_euler`), as a newcomer may type it.
     pub fn from_name(name: &str) -> Option<Self> {
+        let name = name.trim().to_ascii_lowercase().replace(['_', ' '], "-");
         Self::ALL.into_iter().find(|i| i.name() == name)
     }
 
