@@ -591,6 +591,9 @@ struct Summary {
     max_speed: f64,
     engine: Engine,
     threads: usize,
+    integrator: Integrator,
+    /// The step the run ended on (safe stepping may have split the scene's).
+    dt: f64,
     /// Conjugate-gradient iterations of the last step, for implicit Euler.
     solver_iterations: Option<usize>,
 }
@@ -624,6 +627,8 @@ impl Summary {
             max_speed,
             engine,
             threads: system.engine_threads(),
+            integrator: system.params().integrator,
+            dt: system.params().dt,
             solver_iterations: (system.params().integrator == Integrator::ImplicitEuler)
                 .then(|| system.solver_iterations()),
         }
@@ -660,6 +665,8 @@ impl Summary {
             "engine": self.engine.name(),
             "simd": self.engine.simd_level().name(),
             "threads": self.threads,
+            "integrator": self.integrator.name(),
+            "dt": self.dt,
             "cg_iterations_last_step": self.solver_iterations,
         })
     }
@@ -687,6 +694,7 @@ impl Summary {
         );
         println!("max speed       {:.4} m/s", self.max_speed);
         println!("engine          {}", self.engine.label(self.threads));
+        println!("integrator      {}, dt {:.4e} s", self.integrator, self.dt);
         if let Some(n) = self.solver_iterations {
             println!("cg iterations   {n} (last step)");
         }

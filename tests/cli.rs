@@ -19,6 +19,7 @@ fn run_prints_the_summary() {
         "energy",
         "bounding box",
         "max speed",
+        "integrator",
     ] {
         assert!(out.contains(field), "missing {field} in\n{out}");
     }
@@ -44,9 +45,14 @@ fn run_json_is_one_object_with_the_fields() {
         "energy",
         "bounding_box",
         "max_speed",
+        "integrator",
+        "dt",
     ] {
         assert!(!v[field].is_null(), "missing {field}");
     }
+    assert_eq!(v["integrator"], "symplectic-euler");
+    let dt = v["dt"].as_f64().unwrap();
+    assert!((dt * 960.0 - 1.0).abs() < 1e-12, "the bench's 1/960 s: {dt}");
 }
 
 /// `threads` is what the engine stepped on, and `RAYON_NUM_THREADS` sets it for
@@ -559,16 +565,11 @@ fn integrator_names_are_taken_in_any_case() {
         assert_eq!(o.status.code(), Some(0), "{typed}: {}", stderr(&o));
         let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
         assert_eq!(v["parameters"]["integrator"], name, "{typed}");
-        let o = cloth(&[
-            "run",
-            "--scene",
-            "chain",
-            "--steps",
-            "2",
-            "--integrator",
-            typed,
-        ]);
+        let run = ["run", "--scene", "chain", "--steps", "2", "--json"];
+        let o = cloth(&[&run[..], &["--integrator", typed]].concat());
         assert_eq!(o.status.code(), Some(0), "{typed}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+        assert_eq!(v["integrator"], name, "{typed}");
     }
     let o = cloth(&["run", "--scene", "chain", "--integrator", "euler"]);
     assert_eq!(
