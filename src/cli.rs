@@ -548,9 +548,14 @@ fn hint(system: &System, safe: bool) -> String {
         // its own weight or in the wind) may need a smaller step than it says.
         Some(_) => format!(
             "dt / dt_crit = {:.3}: the step is within the estimated stability limit, which takes the \
-             springs and the drag areas at rest; stretched far past rest, or pushed hard (wind, \
-             gravity, a collider, constraints), the system may need a smaller step: try --dt {:.3e}{}{other_integrator}",
+             springs {}; stretched far past rest, or pushed hard (wind, gravity, a collider, \
+             constraints), the system may need a smaller step: try --dt {:.3e}{}{other_integrator}",
             stability.margin,
+            if safe {
+                "at rest (safe stepping followed the drag's areas)"
+            } else {
+                "and the drag areas at rest"
+            },
             0.5 * system.params().dt,
             if safe { "" } else { ", --safe" },
         ),

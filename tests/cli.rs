@@ -52,7 +52,10 @@ fn run_json_is_one_object_with_the_fields() {
     }
     assert_eq!(v["integrator"], "symplectic-euler");
     let dt = v["dt"].as_f64().unwrap();
-    assert!((dt * 960.0 - 1.0).abs() < 1e-12, "the bench's 1/960 s: {dt}");
+    assert!(
+        (dt * 960.0 - 1.0).abs() < 1e-12,
+        "the bench's 1/960 s: {dt}"
+    );
 }
 
 /// `threads` is what the engine stepped on, and `RAYON_NUM_THREADS` sets it for
