@@ -238,7 +238,7 @@ fn run_checked(
     until: Option<u64>,
 ) -> Result<Result<(), Divergence>, String> {
     let until = until.unwrap_or(u64::MAX);
-    let Some(frame_step) = recheck else {
+    let Some(scene_dt) = recheck else {
         return Ok(system.run(steps.min(until.saturating_sub(system.steps_taken()))));
     };
     let end = system.time() + steps as f64 * system.params().dt;
@@ -255,13 +255,13 @@ fn run_checked(
         if let Err(d) = system.run(left.min(frame)) {
             return Ok(Err(d));
         }
-        if let Some(choice) = follow_areas(system, &mut watch, frame_step) {
+        if let Some(choice) = follow_areas(system, &mut watch, scene_dt) {
             let left = ((end - system.time()) / choice.dt).round().max(0.0) as u64;
             limits::total_steps(system.steps_taken() + left, 1, particles).map_err(|e| {
                 format!("run too long after safe stepping chose a smaller step: {e}")
             })?;
             eprintln!(
-                "safe stepping at t = {:.4} s: the cloth's drag areas have {}, so {} substeps of {:.4e} s per step of {frame_step:.4e} s",
+                "safe stepping at t = {:.4} s: the cloth's drag areas have {}, so {} substeps of {:.4e} s per step of {scene_dt:.4e} s",
                 system.time(),
                 if choice.dt < dt {
                     "grown"

@@ -359,14 +359,11 @@ impl Session {
         self.choose_step();
     }
 
-    /// With safe stepping on, the simulated time of a frame, whose steps it
-    /// splits (the scene's `substeps` steps of its `dt`): what a copy of the
-    /// running system stepped elsewhere (a recording) splits to keep its watch on
-    /// the drag's areas ([`safe::follow_areas`]). None when it is off.
-    pub fn safe_frame_time(&self) -> Option<f64> {
-        let user = &self.settings;
-        let frame = user.params.dt * f64::from(user.substeps);
-        self.step_choice.map(|_| frame)
+    /// With safe stepping on, the scene's own step, which it splits: what a copy
+    /// of the running system stepped elsewhere (a recording) splits to keep its
+    /// watch on the drag's areas ([`safe::follow_areas`]). None when it is off.
+    pub fn safe_scene_step(&self) -> Option<f64> {
+        self.step_choice.map(|_| self.settings.params.dt)
     }
 
     /// What safe stepping chose (None when it is off).

@@ -139,3 +139,39 @@ fn the_step_watch_cuts_at_once_and_grows_back_after_a_second_of_room() {
     // A step that was never cut is not grown, however much room it has.
     assert!(!watch.outgrown(t + 5.0, dt, Some(1.0), safety, false));
 }
+
+/// The watch kept on a bare system (a recording, `cloth run --safe`) splits the
+/// scene's step and never takes a longer one: the peers' cloth in its wind at 32 x
+/// 32 has room to spare at the scene's 1/960 s, which stays, while at 128 x 128 on
+/// Verlet the step is cut as the cloth stretches.
+#[test]
+fn following_the_drag_areas_never_lengthens_the_scenes_step() {
+    use cloth_sandbox::sim::safe::{StepWatch, follow_areas};
+    for (size, integrator, cuts) in [("32", "symplectic-euler", false), ("128", "verlet", true)] {
+        let mut scene = Scene::load("bench-wind").unwrap();
+        let integrator = format!("integrator=\"{integrator}\"");
+        let overrides = [
+            format!("width={size}"),
+            format!("height={size}"),
+            integrator,
+        ];
+        scene.set_all(overrides.iter().map(String::as_str)).unwrap();
+        let mut system = scene.build().unwrap();
+        system.set_fast_path(true);
+        let scene_dt = system.params().dt;
+        let mut watch = StepWatch::default();
+        let mut shortest = scene_dt;
+        while system.time() < 2.5 {
+            let dt = system.params().dt;
+            system.run(((1.0 / 60.0) / dt).ceil() as u64).unwrap();
+            follow_areas(&mut system, &mut watch, scene_dt);
+            let dt = system.params().dt;
+            assert!(
+                dt <= scene_dt,
+                "{size}: {dt} s over the scene's {scene_dt} s"
+            );
+            shortest = shortest.min(dt);
+        }
+        assert_eq!(shortest < scene_dt, cuts, "{size}: down to {shortest} s");
+    }
+}

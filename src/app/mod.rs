@@ -549,10 +549,8 @@ impl App {
         };
         let system = self.session.system().clone();
         let scene = self.session.name();
-        let safe_frame = self.session.safe_frame_time();
-        match record::Job::start(
-            system, safe_frame, view, seconds, 25, gpu, size, &dir, scene,
-        ) {
+        let scene_dt = self.session.safe_scene_step();
+        match record::Job::start(system, scene_dt, view, seconds, 25, gpu, size, &dir, scene) {
             Ok(job) => {
                 log::info!("recording {seconds} s to {}", job.path.display());
                 self.panel.error = None;

@@ -332,13 +332,13 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
 
 /// Steps `system` from its state and renders `frames` frames at `fps` (frame i
 /// at `i / fps` seconds after the start), handing each to `each` as RGBA8 rows.
-/// With `safe_frame` (the session it came from steps safely, splitting frames of
-/// that many seconds: [`Session::safe_frame_time`]) it keeps safe stepping's watch
+/// With `scene_dt` (the session it came from steps safely, splitting its scene's
+/// step of that many seconds: [`Session::safe_scene_step`]) it keeps safe stepping's watch
 /// on the drag's areas after each frame, as the app does ([`safe::follow_areas`]).
 /// A divergence stops it with [`Diverged`], which says at which frame.
 pub fn render_frames(
     system: &mut System,
-    safe_frame: Option<f64>,
+    scene_dt: Option<f64>,
     view: &View,
     fps: u32,
     frames: u64,
@@ -362,8 +362,8 @@ pub fn render_frames(
             }
             .into());
         }
-        if let Some(frame_time) = safe_frame
-            && follow_areas(system, &mut watch, frame_time).is_some()
+        if let Some(scene_dt) = scene_dt
+            && follow_areas(system, &mut watch, scene_dt).is_some()
         {
             dt = system.params().dt;
             from = (i, system.steps_taken());
@@ -383,7 +383,7 @@ pub fn render_frames(
 #[allow(clippy::too_many_arguments)]
 pub fn record_gif(
     mut system: System,
-    safe_frame: Option<f64>,
+    scene_dt: Option<f64>,
     view: &View,
     seconds: f64,
     fps: u32,
@@ -397,7 +397,7 @@ pub fn record_gif(
     let mut sink = Sink::gif(path, size, fps)?;
     render_frames(
         &mut system,
-        safe_frame,
+        scene_dt,
         view,
         fps,
         frames,
@@ -460,7 +460,7 @@ impl Job {
     #[allow(clippy::too_many_arguments)]
     pub fn start(
         system: System,
-        safe_frame: Option<f64>,
+        scene_dt: Option<f64>,
         view: View,
         seconds: f64,
         fps: u32,
@@ -497,7 +497,7 @@ impl Job {
                 .and_then(|mut offscreen| {
                     record_gif(
                         system,
-                        safe_frame,
+                        scene_dt,
                         &view,
                         seconds,
                         fps,
@@ -582,10 +582,10 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
         by_strain: false,
         surface: session.surface().to_vec(),
     };
-    let safe_frame = session.safe_frame_time();
+    let scene_dt = session.safe_scene_step();
     let outcome = render_frames(
         session.system_mut(),
-        safe_frame,
+        scene_dt,
         &view,
         args.fps,
         frames,

@@ -147,24 +147,21 @@ impl StepWatch {
     }
 }
 
-/// Safe stepping's watch kept on a running `system` whose step splits frames of
-/// `frame_time` seconds (`cloth run --safe`, recordings; the app's session chooses
+/// Safe stepping's watch kept on a running `system` whose step splits the scene's
+/// own step, `scene_dt` (`cloth run --safe`, recordings; the app's session chooses
 /// its own, with the stretch limit it may add): after a frame's steps, where
 /// `watch` says the drag's areas have outgrown the step, sets the step safe
-/// stepping chooses now ([`safe_step_below`] on [`System::dt_critical_now`]) and
-/// returns that choice.
-pub fn follow_areas(
-    system: &mut System,
-    watch: &mut StepWatch,
-    frame_time: f64,
-) -> Option<SafeStep> {
+/// stepping chooses now ([`safe_step_below`] on [`System::dt_critical_now`]:
+/// `scene_dt` split into the fewest substeps below `DEFAULT_SAFETY` of it, never
+/// a step longer than `scene_dt`) and returns that choice.
+pub fn follow_areas(system: &mut System, watch: &mut StepWatch, scene_dt: f64) -> Option<SafeStep> {
     let dt = system.params().dt;
     let now = system.dt_critical_now();
-    let cut = dt < frame_time * (1.0 - 1e-12);
+    let cut = dt < scene_dt * (1.0 - 1e-12);
     if !watch.outgrown(system.time(), dt, now, DEFAULT_SAFETY, cut) {
         return None;
     }
-    let choice = safe_step_below(now, frame_time, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
+    let choice = safe_step_below(now, scene_dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
     let mut params = *system.params();
     params.dt = choice.dt;
     system.set_params(params);
