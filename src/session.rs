@@ -282,9 +282,11 @@ impl Session {
     }
 
     /// Applies the scene's dt and substeps, or, with safe stepping on, a step no
-    /// larger than `DEFAULT_SAFETY * dt_crit` and as many substeps as keep the
-    /// simulated time per frame (`substeps * dt` of the scene) the same, up to
-    /// [`MAX_SAFE_SUBSTEPS`] (beyond that the simulation runs slower, never unsafe).
+    /// larger than `DEFAULT_SAFETY * dt_crit` (with the drag taken on the
+    /// triangles' areas now as well: [`System::dt_critical_now`]) and as many
+    /// substeps as keep the simulated time per frame (`substeps * dt` of the
+    /// scene) the same, up to [`MAX_SAFE_SUBSTEPS`] (beyond that the simulation
+    /// runs slower, never unsafe).
     fn choose_step(&mut self) {
         let user = self.settings.params;
         // The stability estimate reads the integrator, the air damping and the
@@ -303,6 +305,9 @@ impl Session {
         let mut params = user;
         let mut substeps = user_substeps;
         self.step_choice = None;
+        // A new choice starts a new watch: a cut step grows back only after a
+        // second of room since this choice.
+        self.step_watch = safe::StepWatch::default();
         if self.safe_stepping {
             let frame_time = user_dt * f64::from(user_substeps);
             let choice = safe::safe_step_below(
