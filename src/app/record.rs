@@ -334,7 +334,7 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
 /// at `i / fps` seconds after the start), handing each to `each` as RGBA8 rows.
 /// With `scene_dt` (the session it came from steps safely, splitting its scene's
 /// step of that many seconds: [`Session::safe_scene_step`]) it keeps safe stepping's watch
-/// on the drag's areas after each frame, as the app does ([`safe::follow_areas`]).
+/// on the drag's areas after each frame, as the app does ([`follow_areas`]).
 /// A divergence stops it with [`Diverged`], which says at which frame.
 pub fn render_frames(
     system: &mut System,
