@@ -346,9 +346,9 @@ impl Session {
         if !self.system.model().terms.aero {
             return;
         }
-        let cut = choice.dt < self.settings.params.dt;
+        let steps = (choice.dt, self.settings.params.dt);
         let (time, now) = (self.system.time(), self.system.dt_critical_now());
-        if (self.step_watch).outgrown(time, choice.dt, now, DEFAULT_SAFETY, cut) {
+        if (self.step_watch).outgrown(time, steps, now, DEFAULT_SAFETY) {
             self.choose_step();
         }
     }

@@ -110,21 +110,26 @@ fn the_step_watch_cuts_at_once_and_grows_back_after_a_second_of_room() {
     let safety = DEFAULT_SAFETY;
     let mut watch = StepWatch::default();
     let dt = 1e-3;
+    // A step cut from the scene's own, for the second part.
+    let scene_dt = 2e-3;
     // Chosen at half of 2e-3; still within three quarters of 1.4e-3, not of 1.3e-3.
-    assert!(!watch.outgrown(0.0, dt, Some(2e-3), safety, false));
-    assert!(!watch.outgrown(0.1, dt, Some(1.4e-3), safety, false));
-    assert!(watch.outgrown(0.2, dt, Some(1.3e-3), safety, false));
+    assert!(!watch.outgrown(0.0, (dt, dt), Some(2e-3), safety));
+    assert!(!watch.outgrown(0.1, (dt, dt), Some(1.4e-3), safety));
+    assert!(watch.outgrown(0.2, (dt, dt), Some(1.3e-3), safety));
     // A cut step with room (critical step over 4 ms) for most of a second, with one
     // frame between that has none: no growing back until a whole second of room.
     let frame = 1.0 / 60.0;
     let mut t = 1.0;
     for k in 0..59 {
         let critical = if k == 30 { 3e-3 } else { 5e-3 };
-        assert!(!watch.outgrown(t, dt, Some(critical), safety, true), "{k}");
+        assert!(
+            !watch.outgrown(t, (dt, scene_dt), Some(critical), safety),
+            "{k}"
+        );
         t += frame;
     }
     let roomy_from = t - 28.0 * frame;
-    while !watch.outgrown(t, dt, Some(5e-3), safety, true) {
+    while !watch.outgrown(t, (dt, scene_dt), Some(5e-3), safety) {
         t += frame;
         assert!(
             t < roomy_from + 1.0 + 1.5 * frame,
@@ -137,7 +142,7 @@ fn the_step_watch_cuts_at_once_and_grows_back_after_a_second_of_room() {
         t - roomy_from
     );
     // A step that was never cut is not grown, however much room it has.
-    assert!(!watch.outgrown(t + 5.0, dt, Some(1.0), safety, false));
+    assert!(!watch.outgrown(t + 5.0, (dt, dt), Some(1.0), safety));
 }
 
 /// The watch kept on a bare system (a recording, `cloth run --safe`) splits the

@@ -115,16 +115,17 @@ pub struct StepWatch {
 impl StepWatch {
     /// Whether to choose the step again at simulated time `time`: the step `dt`
     /// chosen under `safety` is over [`RECHOOSE_ABOVE`] times `safety` of the
-    /// critical step now, `dt_critical`; or it was cut below the frame's step
-    /// (`cut`) and has been under [`RECHOOSE_BELOW`] times that for [`ROOMY_FOR`].
+    /// critical step now, `dt_critical`; or it was cut below the scene's own step
+    /// `scene_dt` and has been under [`RECHOOSE_BELOW`] times that for
+    /// [`ROOMY_FOR`].
     pub fn outgrown(
         &mut self,
         time: f64,
-        dt: f64,
+        (dt, scene_dt): (f64, f64),
         dt_critical: Option<f64>,
         safety: f64,
-        cut: bool,
     ) -> bool {
+        let cut = dt < scene_dt * (1.0 - 1e-12);
         let critical = dt_critical.filter(|c| c.is_finite() && *c > 0.0);
         let Some(critical) = critical else {
             self.roomy_since = None;
@@ -157,8 +158,7 @@ impl StepWatch {
 pub fn follow_areas(system: &mut System, watch: &mut StepWatch, scene_dt: f64) -> Option<SafeStep> {
     let dt = system.params().dt;
     let now = system.dt_critical_now();
-    let cut = dt < scene_dt * (1.0 - 1e-12);
-    if !watch.outgrown(system.time(), dt, now, DEFAULT_SAFETY, cut) {
+    if !watch.outgrown(system.time(), (dt, scene_dt), now, DEFAULT_SAFETY) {
         return None;
     }
     let choice = safe_step_below(now, scene_dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
