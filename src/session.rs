@@ -770,17 +770,19 @@ impl Session {
         }
         let new = &self.settings;
         // Per-kind constants are multiples of k and b (shear and bend scales on a grid).
-        if new.stiffness != old.stiffness {
-            for &kind in &self.spring_kinds {
-                self.system
-                    .set_spring_stiffness(kind, new.stiffness * new.spring_scale(kind));
+        let kinds = &self.spring_kinds;
+        let of_kind = |value: f64| {
+            move |kind| {
+                kinds
+                    .contains(&kind)
+                    .then(|| value * new.spring_scale(kind))
             }
+        };
+        if new.stiffness != old.stiffness {
+            self.system.set_stiffness_by_kind(of_kind(new.stiffness));
         }
         if new.damping != old.damping {
-            for &kind in &self.spring_kinds {
-                self.system
-                    .set_spring_damping(kind, new.damping * new.spring_scale(kind));
-            }
+            self.system.set_damping_by_kind(of_kind(new.damping));
         }
         // The cloth grows or shrinks with its rest length (positions too, about the
         // pins), so strains are kept: changing the rest length of springs pinned in

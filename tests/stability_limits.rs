@@ -279,3 +279,50 @@ fn the_drag_limit_follows_the_areas_a_cloth_is_stretched_to() {
         );
     }
 }
+
+/// A running system keeps its drag areas at rest across edits of its coefficients
+/// (finding them is most of the estimate's work on a grid), so its estimate must
+/// find them again where they change: a rest-length edit (areas times the factor
+/// squared) and cut springs (the triangles along them go). Each time the system's
+/// own estimate must equal one made from scratch, and the drag must have moved it.
+#[test]
+fn the_systems_estimate_follows_rest_length_edits_and_cut_springs() {
+    use cloth_sandbox::sim::SpringKind;
+    use cloth_sandbox::sim::stability::estimate;
+    let mut scene = Scene::load("bench-wind").unwrap();
+    let overrides = [
+        "width=8",
+        "height=8",
+        "gravity=0,0,0",
+        "stiffness_per_mass=1",
+        "damping_per_mass=0",
+    ];
+    scene.set_all(overrides).unwrap();
+    let mut system = scene.build().unwrap();
+    let limit = |system: &cloth_sandbox::sim::System| {
+        let own = system.stability().dt_critical.unwrap();
+        let fresh = estimate(system.model()).dt_critical.unwrap();
+        assert_eq!(own, fresh, "the system's estimate against one from scratch");
+        own
+    };
+    let start = limit(&system);
+    // A stiffness edit keeps the areas, and the drag's limit with them.
+    system.set_spring_stiffness(SpringKind::Structural, 1e-3);
+    assert_eq!(limit(&system), start);
+    system.scale_rest_lengths(2.0);
+    let longer = limit(&system);
+    assert!(longer < 0.3 * start, "{longer} s against {start} s before");
+    // Every horizontal spring below the top row cut: each triangle has one, so only
+    // the top row's upper triangles are left, and the most area a particle has is a
+    // third of an inner particle's before.
+    let pairs: Vec<(usize, usize)> = (1..8)
+        .flat_map(|r| (0..7).map(move |c| (8 * r + c, 8 * r + c + 1)))
+        .collect();
+    assert!(system.cut(&pairs) > 0);
+    assert!(!system.triangles().is_empty());
+    let cut = limit(&system);
+    assert!(
+        cut > 2.0 * longer,
+        "{cut} s against {longer} s before the cut"
+    );
+}

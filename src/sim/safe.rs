@@ -185,16 +185,20 @@ pub const WIND_LOAD_NEEDING_A_LIMIT: f64 = 0.5;
 /// rest length, for the spring with the smallest `k L` (a grid's structural ones).
 /// The default cloth: 0.003. Infinite when no spring holds anything.
 pub fn wind_load_ratio(model: &Model) -> f64 {
-    let weakest = (model.springs.iter())
-        .filter(|s| s.rest > 0.0)
-        .min_by(|a, b| (a.stiffness * a.rest).total_cmp(&(b.stiffness * b.rest)));
-    let Some(spring) = weakest else {
+    // The weakest spring's `k L` and `L`.
+    let mut weakest: Option<(f64, f64)> = None;
+    for s in model.springs.iter().filter(|s| s.rest > 0.0) {
+        let capacity = s.stiffness * s.rest;
+        if weakest.is_none_or(|(least, _)| capacity.total_cmp(&least).is_lt()) {
+            weakest = Some((capacity, s.rest));
+        }
+    }
+    let Some((capacity, l)) = weakest else {
         return f64::INFINITY;
     };
     let p = &model.params;
-    let (l, wind) = (spring.rest, p.wind.length() + p.gust);
+    let wind = p.wind.length() + p.gust;
     let drag = 0.5 * p.air_density * p.drag_coefficient * wind * wind * l * l;
-    let capacity = spring.stiffness * l;
     if capacity > 0.0 {
         drag / capacity
     } else {

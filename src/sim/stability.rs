@@ -36,23 +36,47 @@ pub struct Stability {
     pub margin: f64,
 }
 
-/// Gershgorin bound on the highest angular frequency (rad/s) of the model's springs
-/// and ground contact, over free particles.
-pub fn omega_max_bound(model: &Model) -> f64 {
-    let mut stiffness_sum = vec![0.0; model.mass.len()];
-    // XPBD's springs are constraints, not a force term that the step integrates.
+/// What the estimate reads of the springs, in one pass over them: each particle's
+/// sum of spring stiffness (N/m), and the smallest `b/k` (s) over the springs; no
+/// springs where they are not a force (XPBD's are constraints the step does not
+/// integrate).
+struct SpringSums {
+    stiffness: Vec<f64>,
+    damping_per_stiffness: f64,
+}
+
+fn spring_sums(model: &Model) -> SpringSums {
+    let mut stiffness = vec![0.0; model.mass.len()];
+    let mut damping_per_stiffness = f64::INFINITY;
     let springs = if model.terms.springs {
         &model.springs[..]
     } else {
         &[]
     };
     for s in springs {
-        stiffness_sum[s.a as usize] += s.stiffness;
-        stiffness_sum[s.b as usize] += s.stiffness;
+        stiffness[s.a as usize] += s.stiffness;
+        stiffness[s.b as usize] += s.stiffness;
+        // `b / k < r` as `b < r k` (k > 0): a division only for a new smallest.
+        if s.stiffness > 0.0 && s.damping < damping_per_stiffness * s.stiffness {
+            damping_per_stiffness = damping_per_stiffness.min(s.damping / s.stiffness);
+        }
     }
+    SpringSums {
+        stiffness,
+        damping_per_stiffness,
+    }
+}
+
+/// Gershgorin bound on the highest angular frequency (rad/s) of the model's springs
+/// and ground contact, over free particles.
+pub fn omega_max_bound(model: &Model) -> f64 {
+    omega_max_of(model, &spring_sums(model))
+}
+
+fn omega_max_of(model: &Model, sums: &SpringSums) -> f64 {
     let ground = model.params.ground.map_or(0.0, |g| g.stiffness);
     let mut worst: f64 = 0.0;
-    for (i, &k) in stiffness_sum.iter().enumerate() {
+    for (i, &k) in sums.stiffness.iter().enumerate() {
         if model.inv_mass[i] > 0.0 {
             worst = worst.max((2.0 * k + ground) * model.inv_mass[i]);
         }
@@ -63,13 +87,14 @@ pub fn omega_max_bound(model: &Model) -> f64 {
 /// Damping ratio of a mode of angular frequency `omega` (rad/s), from the springs'
 /// smallest `b/k` and the air damping over the heaviest free particle.
 pub fn damping_ratio(model: &Model, omega: f64) -> f64 {
+    damping_ratio_of(model, &spring_sums(model), omega)
+}
+
+fn damping_ratio_of(model: &Model, sums: &SpringSums, omega: f64) -> f64 {
     if omega <= 0.0 {
         return 0.0;
     }
-    let spring_ratio = (model.springs.iter())
-        .filter(|s| model.terms.springs && s.stiffness > 0.0)
-        .map(|s| s.damping / s.stiffness)
-        .fold(f64::INFINITY, f64::min);
+    let spring_ratio = sums.damping_per_stiffness;
     let spring_ratio = if spring_ratio.is_finite() {
         spring_ratio
     } else {
@@ -89,15 +114,20 @@ pub fn damping_ratio(model: &Model, omega: f64) -> f64 {
 
 /// Estimate for `model` at its step `dt` with its integrator.
 pub fn estimate(model: &Model) -> Stability {
-    let omega_max = omega_max_bound(model);
-    let zeta = damping_ratio(model, omega_max);
+    let areas = model.terms.aero.then(|| drag_areas(model));
+    estimate_with(model, areas.as_deref())
+}
+
+/// [`estimate`] given each particle's drag area at rest ([`drag_areas`]; `None`
+/// where the model has no drag). Only the springs' rest lengths and the triangles
+/// decide those areas, so a running system keeps them across edits of its other
+/// coefficients: finding them is most of the estimate's work on a grid.
+pub(crate) fn estimate_with(model: &Model, drag_areas: Option<&[f64]>) -> Stability {
+    let sums = spring_sums(model);
+    let omega_max = omega_max_of(model, &sums);
+    let zeta = damping_ratio_of(model, &sums, omega_max);
     let stepper = stepper(model.params.integrator);
-    let areas = if model.terms.aero {
-        drag_areas(model)
-    } else {
-        vec![0.0; model.mass.len()]
-    };
-    let decay = decay_limit(model, stepper, &areas);
+    let decay = decay_limit(model, stepper, drag_areas.filter(|_| model.terms.aero));
     let dt_critical = critical_step(stepper, omega_max, zeta).map(|c| c.min(decay));
     let margin = match dt_critical {
         None => f64::INFINITY,
@@ -136,7 +166,7 @@ fn stepper(integrator: Integrator) -> Integrator {
 /// `omega_max`, over the heaviest particle; with nothing oscillating (bars alone:
 /// the rope) this is the whole limit, and with springs the lower of the two.
 /// Infinite when nothing damps explicitly.
-fn decay_limit(model: &Model, stepper: Integrator, drag_areas: &[f64]) -> f64 {
+fn decay_limit(model: &Model, stepper: Integrator, drag_areas: Option<&[f64]>) -> f64 {
     let air = if model.terms.air_damping {
         model.params.air_damping
     } else {
@@ -150,7 +180,9 @@ fn decay_limit(model: &Model, stepper: Integrator, drag_areas: &[f64]) -> f64 {
     let p = &model.params;
     let (k, gravity) = (p.half_rho_cd(), p.gravity.length());
     let wind = model.wind.base.length() + model.wind.gust.abs();
-    let gamma = (model.inv_mass.iter().zip(drag_areas)).fold(0.0, |fastest: f64, (&w, &area)| {
+    let area = |i: usize| drag_areas.map_or(0.0, |a| a[i]);
+    let gamma = (model.inv_mass.iter().enumerate()).fold(0.0, |fastest: f64, (i, &w)| {
+        let area = area(i);
         // `ρ C_d A / m` times the wind, and times the speed of the fall through
         // still air, `sqrt(2 m g / (ρ C_d A))`.
         let drag = 2.0 * k * area * wind * w + (4.0 * k * area * gravity * w).sqrt();
@@ -193,7 +225,7 @@ pub fn dt_critical_at(model: &Model, positions: &[DVec3], at_rest: Option<f64>) 
             areas[i as usize] += third;
         }
     }
-    let now = decay_limit(model, stepper(model.params.integrator), &areas);
+    let now = decay_limit(model, stepper(model.params.integrator), Some(&areas));
     at_rest.map(|c| c.min(now))
 }
 
@@ -201,7 +233,7 @@ pub fn dt_critical_at(model: &Model, positions: &[DVec3], at_rest: Option<f64>) 
 /// of its triangles', taken as `L1 L2 / 2` for the two shortest of the triangle's
 /// edges that are springs (its area where they meet at a right angle, as on the
 /// grid; more otherwise), and 0 for a triangle with fewer than two.
-fn drag_areas(model: &Model) -> Vec<f64> {
+pub(crate) fn drag_areas(model: &Model) -> Vec<f64> {
     let rest = |a: u32, b: u32| {
         (model.adjacency.springs_of(a as usize))
             .map(|(s, _)| &model.springs[s])

@@ -18,7 +18,7 @@ use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
     Adjacency, Bar, BarPairs, Divergence, Energy, EnergyBudget, ForceTerms, Grab, Integrator,
     Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path,
-    forces, implicit, integrators, springs, stability,
+    forces, grid_kernel, implicit, integrators, springs, stability,
 };
 
 /// Scratch space for a step, sized once per model and integrator.
@@ -58,6 +58,10 @@ pub struct System {
     pub(super) checked_energy: Option<(u64, Energy)>,
     /// [`Self::stability`], until the next edit.
     stability: OnceLock<Stability>,
+    /// Each particle's drag area at rest ([`stability::drag_areas`]), until the
+    /// rest lengths or the springs change: most of the estimate's work on a grid,
+    /// kept across edits of the stiffness, damping, mass or wind.
+    rest_drag_areas: OnceLock<Vec<f64>>,
 }
 
 impl System {
@@ -126,6 +130,7 @@ impl System {
             engines: fast_path::Engines::default(),
             checked_energy: None,
             stability: OnceLock::new(),
+            rest_drag_areas: OnceLock::new(),
         };
         system.engines.stencil_springs = fast_path::StencilSprings::of(&system.model);
         system.prepare_integrator();
@@ -281,23 +286,50 @@ impl System {
 
     /// Sets the stiffness (N/m) of every spring of `kind`.
     pub fn set_spring_stiffness(&mut self, kind: SpringKind, stiffness: f64) {
-        self.coefficients_edited();
-        for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
-            s.stiffness = stiffness;
-        }
-        // A whole kind changes together: the grid stays a grid, no rescan.
-        self.engines
-            .edit_stencil_springs(&self.model, kind, |c| c.k = stiffness);
+        self.set_stiffness_by_kind(|k| (k == kind).then_some(stiffness));
     }
 
     /// Sets the damping (N·s/m) of every spring of `kind`.
     pub fn set_spring_damping(&mut self, kind: SpringKind, damping: f64) {
+        self.set_damping_by_kind(|k| (k == kind).then_some(damping));
+    }
+
+    /// Sets the stiffness (N/m) of the springs of each kind that `stiffness` gives
+    /// one for, in one pass over the springs (a grid's three kinds on a slider drag).
+    pub fn set_stiffness_by_kind(&mut self, stiffness: impl Fn(SpringKind) -> Option<f64>) {
+        self.edit_springs_by_kind(stiffness, |s, k| s.stiffness = k, |c, k| c.k = k);
+    }
+
+    /// Sets the damping (N·s/m) of the springs of each kind that `damping` gives one
+    /// for, in one pass over the springs.
+    pub fn set_damping_by_kind(&mut self, damping: impl Fn(SpringKind) -> Option<f64>) {
+        self.edit_springs_by_kind(damping, |s, b| s.damping = b, |c, b| c.b = b);
+    }
+
+    /// Sets one coefficient of the springs of each kind `value` gives one for: in
+    /// the model (`spring`) and, a whole kind changing together so that the grid
+    /// stays a grid with no rescan, in the engines' stencil (`stencil`).
+    fn edit_springs_by_kind(
+        &mut self,
+        value: impl Fn(SpringKind) -> Option<f64>,
+        spring: impl Fn(&mut Spring, f64),
+        stencil: impl Fn(&mut grid_kernel::SpringCoefficients, f64),
+    ) {
         self.coefficients_edited();
-        for s in self.model.springs.iter_mut().filter(|s| s.kind == kind) {
-            s.damping = damping;
+        let values = SpringKind::ALL.map(&value);
+        if values.iter().all(Option::is_none) {
+            return;
         }
-        self.engines
-            .edit_stencil_springs(&self.model, kind, |c| c.b = damping);
+        for s in &mut self.model.springs {
+            if let Some(v) = values[s.kind as usize] {
+                spring(s, v);
+            }
+        }
+        for (kind, v) in SpringKind::ALL.into_iter().zip(values) {
+            if let Some(v) = v {
+                (self.engines).edit_stencil_springs(&self.model, kind, |c| stencil(c, v));
+            }
+        }
     }
 
     /// Multiplies every spring's and bar's rest length by `factor` (the rest-length slider).
@@ -309,6 +341,7 @@ impl System {
         for s in &mut self.model.springs {
             s.rest *= factor;
         }
+        self.forget_rest_drag_areas();
         for b in &mut self.model.bars {
             b.length *= factor;
         }
@@ -367,9 +400,14 @@ impl System {
 
     /// Stability estimate for the current parameters (computed once per edit).
     pub fn stability(&self) -> Stability {
-        *self
-            .stability
-            .get_or_init(|| stability::estimate(&self.model))
+        *self.stability.get_or_init(|| {
+            let areas = (self.model.terms.aero).then(|| {
+                (self.rest_drag_areas)
+                    .get_or_init(|| stability::drag_areas(&self.model))
+                    .as_slice()
+            });
+            stability::estimate_with(&self.model, areas)
+        })
     }
 
     /// The critical step of [`System::stability`] with the drag also taken on the
@@ -509,13 +547,24 @@ impl System {
 
     /// The energy budget, set from the state now if an edit cleared it.
     pub(super) fn budget(&mut self) -> EnergyBudget {
-        *self.budget.get_or_insert_with(|| {
-            let energy = self
-                .model
-                .energy(&self.state.positions, &self.state.velocities);
-            let stability = stability::estimate(&self.model);
-            EnergyBudget::new(&self.model, &self.state.positions, energy, &stability)
-        })
+        if let Some(budget) = self.budget {
+            return budget;
+        }
+        let energy = (self.model).energy(&self.state.positions, &self.state.velocities);
+        let budget = EnergyBudget::new(
+            &self.model,
+            &self.state.positions,
+            energy,
+            &self.stability(),
+        );
+        self.budget = Some(budget);
+        budget
+    }
+
+    /// The springs' rest lengths or the triangles changed: the drag areas at rest
+    /// are found again with the next stability estimate.
+    pub(super) fn forget_rest_drag_areas(&mut self) {
+        self.rest_drag_areas = OnceLock::new();
     }
 
     pub(super) fn prepare_integrator(&mut self) {

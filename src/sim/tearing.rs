@@ -86,6 +86,7 @@ impl System {
         }
         self.engines.stencil_springs = fast_path::StencilSprings::of(&self.model);
         self.engines.springs_changed();
+        self.forget_rest_drag_areas();
         pairs.len()
     }
 }
