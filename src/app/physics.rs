@@ -6,8 +6,10 @@
 //! frames are.
 //!
 //! One thread at a time holds the session. The window's thread takes it for each
-//! event and for the part of a frame that reads or edits it (the panel, the
-//! picking, copying the positions to draw), and hands it back before drawing; the
+//! event that reads or edits it (an action, a grab, a pin; not the cursor moving
+//! over the panel, which picks from the positions last drawn) and for the part of
+//! a frame that does (the panel, copying the positions to draw), and hands it
+//! back before drawing; the
 //! physics thread steps it in between. The window's thread goes first: while it
 //! waits, the physics thread does not take the session again. So the view shows
 //! the latest finished state, never one half stepped, and an edit never races a
