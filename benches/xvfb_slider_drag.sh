@@ -14,22 +14,24 @@ trap 'kill $APP $XVFB 2>/dev/null; rm -rf "$WORK"' EXIT
 for _ in $(seq 50); do [[ -s $WORK/display ]] && break; sleep 0.1; done
 export DISPLAY=":$(head -1 "$WORK/display")" XDG_RUNTIME_DIR=$WORK
 chmod 700 "$WORK"
-RUST_LOG=warn,cloth::frames=debug target/release/cloth --scene cloth --set width="$N" --set height="$N" 2>"$WORK/log" &
+RUST_LOG=warn,cloth::frames=debug,cloth::app=debug target/release/cloth --scene cloth --set width="$N" --set height="$N" 2>"$WORK/log" &
 APP=$!
 WID=$(timeout 30 xdotool search --sync --name cloth-sandbox | head -1)
 sleep 5
 idle_from=$(wc -l <"$WORK/log")
 sleep "$SECS"
 idle_to=$(wc -l <"$WORK/log")
-# The stiffness slider's handle (panel row at y = 261), moved back and forth by a
-# few pixels (k within about 20% of its value, so the physics costs the same): a
-# new stiffness every frame.
-xdotool mousemove --window "$WID" 82 261 mousedown 1
+# The stiffness slider's handle (panel row at y = 481 in the 1200 x 760 window),
+# moved back and forth by a few pixels (k within about 20% of its value, so the
+# physics costs the same): a new stiffness every frame. The edits are counted
+# from the app's log below, so a panel laid out anew fails loudly.
+Y=481
+xdotool mousemove --window "$WID" 82 $Y mousedown 1
 end=$((SECONDS + SECS))
 drag_from=$(wc -l <"$WORK/log")
 x=80
 while [ $SECONDS -lt $end ]; do
-  xdotool mousemove --window "$WID" $x 261
+  xdotool mousemove --window "$WID" $x $Y
   x=$(( x >= 84 ? 80 : x + 1 ))
   sleep 0.02
 done
@@ -37,9 +39,18 @@ drag_to=$(wc -l <"$WORK/log")
 [ -n "${SHOT:-}" ] && import -window root "$SHOT"
 xdotool mouseup 1
 summary() {
-  # "frame F ms, R frames/s, real-time factor X of Y asked, physics busy B%, S steps/s"
+  # "frame F ms, R frames/s, real-time factor X of Y asked, physics busy B%, S steps/s",
+  # a line about every second. F is the panel's moving average over about ten
+  # frames, seconds behind at these rates: the frame time here is from the frames
+  # counted in each line's window, 1000 / (mean of R).
   sed -n "$(($1 + 1)),$2p" "$WORK/log" | grep -o 'frame [0-9.]* ms, .*steps/s' | tr -d ',%' |
-    awk -v what="$3" '{f += $2; x += $8; b += $14; n++} END {if (n) printf "%s: frame %.1f ms, real-time factor %.3f, physics busy %.0f%% (%d samples)\n", what, f/n, x/n, b/n, n; else print what ": no samples"}'
+    awk -v what="$3" '{r += $4; x += $8; b += $14; n++} END {if (n) printf "%s: frame %.1f ms (%.2f frames/s), real-time factor %.3f, physics busy %.0f%% (%d samples)\n", what, 1000 * n / r, r / n, x/n, b/n, n; else print what ": no samples"}'
 }
 summary "$idle_from" "$idle_to" "idle    "
 summary "$drag_from" "$drag_to" "dragging"
+edits=$(sed -n "$((drag_from + 1)),${drag_to}p" "$WORK/log" | grep -c 'edit Stiffness' || true)
+echo "stiffness edits while dragging: $edits"
+if [ "$edits" -eq 0 ]; then
+  echo "the drag changed no stiffness: the slider is not at y = $Y (take a screenshot: SHOT=shot.png)" >&2
+  exit 1
+fi
