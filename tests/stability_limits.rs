@@ -239,14 +239,9 @@ fn drag_on_light_particles_limits_implicit_euler_and_xpbd() {
     }
 }
 
-/// The drag's step limit on a running cloth is taken on its triangles' areas now:
-/// at rest it is the estimate's; stretched `s` times along its height, each inner
-/// particle's share of the area is `s L²` (six triangles of `L² / 2`, a third each),
-/// and with gravity off and the springs too soft to bind, the limit is symplectic
-/// Euler's on the decay `gamma = rho C_d A |wind| / m`: `h = 2 / gamma`.
-#[test]
-fn the_drag_limit_follows_the_areas_a_cloth_is_stretched_to() {
-    use cloth_sandbox::sim::stability::{dt_critical_at, estimate};
+/// The peers' windy cloth at 8 x 8, with gravity off and springs too soft to
+/// bind: its step limit is the drag's.
+fn drag_bound_cloth() -> cloth_sandbox::sim::System {
     let mut scene = Scene::load("bench-wind").unwrap();
     let overrides = [
         "width=8",
@@ -256,7 +251,18 @@ fn the_drag_limit_follows_the_areas_a_cloth_is_stretched_to() {
         "damping_per_mass=0",
     ];
     scene.set_all(overrides).unwrap();
-    let system = scene.build().unwrap();
+    scene.build().unwrap()
+}
+
+/// The drag's step limit on a running cloth is taken on its triangles' areas now:
+/// at rest it is the estimate's; stretched `s` times along its height, each inner
+/// particle's share of the area is `s L²` (six triangles of `L² / 2`, a third each),
+/// and with gravity off and the springs too soft to bind, the limit is symplectic
+/// Euler's on the decay `gamma = rho C_d A |wind| / m`: `h = 2 / gamma`.
+#[test]
+fn the_drag_limit_follows_the_areas_a_cloth_is_stretched_to() {
+    use cloth_sandbox::sim::stability::{dt_critical_at, estimate};
+    let system = drag_bound_cloth();
     let model = system.model();
     let at_rest = estimate(model).dt_critical;
     let rest = system.positions().to_vec();
@@ -289,16 +295,7 @@ fn the_drag_limit_follows_the_areas_a_cloth_is_stretched_to() {
 fn the_systems_estimate_follows_rest_length_edits_and_cut_springs() {
     use cloth_sandbox::sim::SpringKind;
     use cloth_sandbox::sim::stability::estimate;
-    let mut scene = Scene::load("bench-wind").unwrap();
-    let overrides = [
-        "width=8",
-        "height=8",
-        "gravity=0,0,0",
-        "stiffness_per_mass=1",
-        "damping_per_mass=0",
-    ];
-    scene.set_all(overrides).unwrap();
-    let mut system = scene.build().unwrap();
+    let mut system = drag_bound_cloth();
     let limit = |system: &cloth_sandbox::sim::System| {
         let own = system.stability().dt_critical.unwrap();
         let fresh = estimate(system.model()).dt_critical.unwrap();
