@@ -1037,6 +1037,33 @@ impl System {
         self.checked_energy = None;
     }
 
+    /// The held particle `i` was put at `position`, at rest, in the f64 state (a
+    /// grab moved by the mouse): the grid kernel, when it holds the f64 state,
+    /// takes that one particle, so that dragging a particle does not reload the
+    /// whole cloth at every move; the other engines, and Verlet (whose update
+    /// velocities the hold resets), copy the whole state in again.
+    pub(super) fn held_particle_moved(&mut self, i: usize, position: DVec3) {
+        let verlet = self.model.params.integrator == Integrator::Verlet;
+        let moved_in_place = match &mut self.engines.grid {
+            Some(grid) if grid.in_sync && !verlet => {
+                match grid.held.iter_mut().find(|(j, _)| *j == i) {
+                    Some(held) => {
+                        held.1 = position;
+                        grid.kernel.set_particle(i, position, DVec3::ZERO);
+                        true
+                    }
+                    None => false,
+                }
+            }
+            _ => false,
+        };
+        self.engines.mark_stale();
+        if let Some(grid) = self.engines.grid.as_mut().filter(|_| moved_in_place) {
+            grid.in_sync = true;
+        }
+        self.checked_energy = None;
+    }
+
     /// Runs the steps from the last full check (`checked`: its time and step count,
     /// with its positions and velocities still in the f64 state) up to the current
     /// step again, one at a time, stopping at the first whose scan fails: the

@@ -242,6 +242,13 @@ impl System {
     /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
     /// hand and pulls its neighbours through their springs. Non-finite targets are ignored.
     pub fn grab(&mut self, i: usize, target: DVec3) {
+        if i < self.particle_count()
+            && target.is_finite()
+            && self.grab.is_some_and(|g| g.particle == i)
+        {
+            self.move_grab(target);
+            return;
+        }
         self.mark_edited();
         if i >= self.particle_count() || !target.is_finite() {
             return;
@@ -256,6 +263,21 @@ impl System {
         grab.hold(&mut self.state, self.model.params.dt);
         self.grab = Some(grab);
         self.model.refresh_inv_mass(Some(i));
+    }
+
+    /// The particle held moves to `target` (the mouse moved): no inverse mass
+    /// changes, so the stability estimate stays; the energy budget starts again
+    /// from the state the hand leaves, and the engines take the one particle.
+    fn move_grab(&mut self, target: DVec3) {
+        self.catch_up();
+        self.budget = None;
+        let Some(grab) = self.grab.as_mut() else {
+            return;
+        };
+        grab.target = target;
+        let grab = *grab;
+        grab.hold(&mut self.state, self.model.params.dt);
+        self.held_particle_moved(grab.particle, target);
     }
 
     /// Lets go of the held particle: it is free again unless pinned.
