@@ -828,7 +828,8 @@ impl App {
         }
     }
 
-    /// One window event; what reads or edits the session takes it first ([`Self::redraw`], [`Self::apply`], [`Self::apply_mouse`]).
+    /// One window event; what reads or edits the session takes it first
+    /// ([`Self::redraw`], [`Self::apply`], [`Self::apply_mouse`]).
     fn handle(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) {
         let consumed = match (&mut self.egui_state, &self.gfx) {
             (Some(state), Some(gfx)) => state.on_window_event(&gfx.window, &event).consumed,

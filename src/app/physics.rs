@@ -9,11 +9,10 @@
 //! event that reads or edits it (an action, a grab, a pin; not the cursor moving
 //! over the panel, which picks from the positions last drawn) and for the part of
 //! a frame that does (the panel, copying the positions to draw), and hands it
-//! back before drawing; the
-//! physics thread steps it in between. The window's thread goes first: while it
-//! waits, the physics thread does not take the session again. So the view shows
-//! the latest finished state, never one half stepped, and an edit never races a
-//! step.
+//! back before drawing; the physics thread steps it in between. The window's
+//! thread goes first: while it waits, the physics thread does not take the
+//! session again. So the view shows the latest finished state, never one half
+//! stepped, and an edit never races a step.
 
 use std::ops::{Deref, DerefMut};
 use std::sync::atomic::{AtomicBool, Ordering};

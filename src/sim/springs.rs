@@ -25,6 +25,11 @@ impl SpringKind {
     /// Every kind, in display order.
     pub const ALL: [SpringKind; 4] = [Self::Structural, Self::Shear, Self::Bend, Self::Other];
 
+    /// The kind's place in [`Self::ALL`], for tables indexed by kind.
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
     /// Lower-case name used in reports and the command line.
     pub fn name(self) -> &'static str {
         match self {
@@ -52,6 +57,15 @@ pub struct Spring {
     /// What the spring stands for.
     pub kind: SpringKind,
 }
+
+// [`SpringKind::index`] is the declaration order: `ALL` must keep it.
+const _: () = {
+    let mut i = 0;
+    while i < SpringKind::ALL.len() {
+        assert!(SpringKind::ALL[i].index() == i);
+        i += 1;
+    }
+};
 
 /// A rigid bar (seed 001): a distance constraint relaxed after each step, not a force.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -343,7 +343,7 @@ impl System {
             return;
         }
         for s in &mut self.model.springs {
-            if let Some(v) = values[s.kind as usize] {
+            if let Some(v) = values[s.kind.index()] {
                 spring(s, v);
             }
         }
