@@ -25,6 +25,28 @@ pub fn uses_threads(model: &Model) -> bool {
     model.springs.len() >= PARALLEL_SPRINGS
 }
 
+/// `part(0)` and `part(1)`, a pass over a model's particles or springs cut in
+/// two ([`half`]): on two threads where the model's forces are
+/// threaded ([`uses_threads`]), one after the other elsewhere. Each half runs in
+/// its own order whichever way, so a total made of the two is the same on one
+/// thread or several.
+pub(crate) fn in_halves<T: Send>(model: &Model, part: impl Fn(usize) -> T + Sync) -> [T; 2] {
+    if uses_threads(model) {
+        let (first, second) = rayon::join(|| part(0), || part(1));
+        [first, second]
+    } else {
+        [part(0), part(1)]
+    }
+}
+
+/// The first (`h` = 0) or the second half of `0..n`.
+pub(crate) fn half(n: usize, h: usize) -> std::ops::Range<usize> {
+    match h {
+        0 => 0..n / 2,
+        _ => n / 2..n,
+    }
+}
+
 /// Which force terms a model evaluates. Derived from the scene: a term that cannot
 /// contribute is not run.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -3,6 +3,7 @@
 
 use glam::{DVec2, DVec3};
 
+use super::forces;
 use super::{
     Adjacency, Bar, BarPairs, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
 };
@@ -213,27 +214,67 @@ impl Model {
     /// Energy of positions `x` and velocities `v`; gravity relative to y = 0, with
     /// the applied force's potential `-F·x` counted in it. With
     /// XPBD the springs hold the energy of the stiffness it simulates at its step.
+    ///
+    /// Summed in two halves ([`forces::in_halves`]), of the particles and of the
+    /// springs, added at the end: the same total on one thread or two. The app reads the energy every frame and the energy budget at
+    /// every edit; on a 256 x 256 cloth one thread took 1.4 ms over its 390,000
+    /// springs.
     pub fn energy(&self, x: &[DVec3], v: &[DVec3]) -> Energy {
-        let mut e = Energy::default();
-        for i in 0..x.len() {
-            if self.inv_mass[i] == 0.0 {
-                continue;
-            }
-            let m = self.mass[i];
-            e.kinetic += 0.5 * m * v[i].length_squared();
-            e.gravity -= m * self.params.gravity.dot(x[i]) + self.params.force.dot(x[i]);
-            if let Some(g) = self.params.ground {
-                let depth = g.height - x[i].y;
-                if depth > 0.0 {
-                    e.elastic += 0.5 * g.stiffness * depth * depth;
+        let [first, second] = forces::in_halves(self, |h| {
+            let mut e = Energy::default();
+            for i in forces::half(x.len(), h) {
+                if self.inv_mass[i] == 0.0 {
+                    continue;
+                }
+                let m = self.mass[i];
+                e.kinetic += 0.5 * m * v[i].length_squared();
+                e.gravity -= m * self.params.gravity.dot(x[i]) + self.params.force.dot(x[i]);
+                if let Some(g) = self.params.ground {
+                    let depth = g.height - x[i].y;
+                    if depth > 0.0 {
+                        e.elastic += 0.5 * g.stiffness * depth * depth;
+                    }
                 }
             }
+            let strain = |s: &Spring| self.spring_energy(s, x);
+            // Four running sums, so that a spring's addition need not wait for
+            // the one before it.
+            let springs = &self.springs[forces::half(self.springs.len(), h)];
+            let mut sums = [0.0; 4];
+            let quads = springs.chunks_exact(4);
+            let rest = quads.remainder();
+            for quad in quads {
+                for (sum, s) in sums.iter_mut().zip(quad) {
+                    *sum += strain(s);
+                }
+            }
+            for (sum, s) in sums.iter_mut().zip(rest) {
+                *sum += strain(s);
+            }
+            e.elastic += (sums[0] + sums[1]) + (sums[2] + sums[3]);
+            e
+        });
+        Energy {
+            kinetic: first.kinetic + second.kinetic,
+            gravity: first.gravity + second.gravity,
+            elastic: first.elastic + second.elastic,
         }
-        for s in &self.springs {
-            let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
-            e.elastic += 0.5 * self.stiffness_in_effect(s) * stretch * stretch;
-        }
-        e
+    }
+
+    /// Elastic energy (J) of spring `s` at positions `x`: `1/2 k (l - L)²`, with
+    /// the stiffness it acts with ([`Self::stiffness_in_effect`]).
+    pub fn spring_energy(&self, s: &Spring, x: &[DVec3]) -> f64 {
+        let stretch = (x[s.a as usize] - x[s.b as usize]).length() - s.rest;
+        0.5 * self.stiffness_in_effect(s) * stretch * stretch
+    }
+
+    /// Elastic energy (J) of the springs at particle `i`, at positions `x`: all of
+    /// the energy that moving `i` alone changes, when `i` is held (a held
+    /// particle's own kinetic and gravity terms are not counted: [`Self::energy`]).
+    pub fn energy_of_springs_at(&self, i: usize, x: &[DVec3]) -> f64 {
+        (self.adjacency.springs_of(i))
+            .map(|(s, _)| self.spring_energy(&self.springs[s], x))
+            .sum()
     }
 
     /// The stiffness (N/m) spring `s` acts with: its own, except under XPBD, which
