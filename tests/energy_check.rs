@@ -127,8 +127,8 @@ fn a_cloth_whose_stiffness_jumps_past_its_stable_step_is_caught() {
     }
 }
 
-/// Dragging a particle does work on the cloth: the budget starts again after
-/// each move, so a steady drag is never flagged.
+/// Dragging a particle does work on the cloth: the budget takes the work of each
+/// move, so a steady drag is never flagged.
 #[test]
 fn dragging_a_particle_around_is_not_flagged() {
     for fast in [false, true] {
@@ -145,6 +145,84 @@ fn dragging_a_particle_around_is_not_flagged() {
             }
         }
     }
+}
+
+/// Moving the particle held keeps the budget and adds the hand's work to it: the
+/// change in the whole system's energy, summed here over every particle and
+/// spring, before and after the move.
+#[test]
+fn moving_a_held_particle_adds_its_work_to_the_budget() {
+    for fast in [false, true] {
+        let mut system = build("cloth", &["width=16", "height=16"]);
+        system.set_fast_path(fast);
+        let i = system.particle_count() / 2;
+        let start = system.positions()[i];
+        system.grab(i, start);
+        system.run(64).unwrap();
+        let total = |s: &System| s.model().energy(s.positions(), s.velocities()).total();
+        let (before, budget) = (total(&system), system.energy_budget().unwrap());
+        system.grab(i, start + glam::DVec3::new(0.05, -0.1, 0.2));
+        let work = total(&system) - before;
+        let moved = system.energy_budget().expect("the budget was kept");
+        assert!(work.abs() > 1e-3, "the move did no work to test: {work} J");
+        let added = moved.base - budget.base;
+        assert!(
+            (added - work).abs() <= 1e-9 * work.abs(),
+            "fast {fast}: the budget took {added} J for a move that did {work} J"
+        );
+        assert_eq!(moved.scale, budget.scale + work.abs());
+        let factor = |b: cloth_sandbox::sim::EnergyBudget| b.allowed / b.scale;
+        assert!((factor(moved) / factor(budget) - 1.0).abs() < 1e-12);
+    }
+}
+
+/// Undamped explicit Euler grows at every step (`|1 + i w h| > 1`): held and
+/// moved back and forth every 16 steps, the cloth must still be caught by its
+/// energy, as it is when left alone. A new budget at every move (as before)
+/// granted it a new margin each time: it ran on until a particle passed 100 km/s,
+/// 1.65 times as many steps.
+#[test]
+fn a_run_diverging_while_a_particle_is_dragged_is_caught_by_its_energy() {
+    let overrides = [
+        "width=8",
+        "height=8",
+        "wind=0,0,0",
+        "gust=0",
+        "damping=0",
+        "integrator=\"explicit-euler\"",
+    ];
+    let omega = build("cloth", &overrides).stability().omega_max;
+    // `w h` = 0.1 on the highest mode: energy growth of about 1% a step.
+    let dt = format!("dt={}", 0.1 / omega);
+    let divergence = |drag: bool| {
+        let mut overrides = overrides.to_vec();
+        overrides.push(&dt);
+        let mut system = build("cloth", &overrides);
+        let i = system.particle_count() / 2;
+        let start = system.positions()[i];
+        for frame in 0..2000 {
+            if drag {
+                let away = glam::DVec3::new(0.0, 0.0, 0.001 * (frame % 2) as f64);
+                system.grab(i, start + away);
+            }
+            if let Err(d) = system.run(16) {
+                return d;
+            }
+        }
+        panic!("drag {drag}: not caught in 32,000 steps");
+    };
+    let (left, dragged) = (divergence(false), divergence(true));
+    assert!(matches!(left, Divergence::EnergyGrowth { .. }), "{left}");
+    assert!(
+        matches!(dragged, Divergence::EnergyGrowth { .. }),
+        "dragged: {dragged}"
+    );
+    assert!(
+        dragged.time() <= 1.1 * left.time(),
+        "dragged: caught at {} s, left alone at {} s",
+        dragged.time(),
+        left.time()
+    );
 }
 
 #[test]

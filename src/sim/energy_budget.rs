@@ -7,7 +7,12 @@
 //! can only fall: spring, air and ground damping dissipate. It rises only by
 //! 1. the user: a grab, a pin, a new parameter. Each such edit starts a new
 //!    budget from the energy just after it ([`EnergyBudget::new`]), so the edit's
-//!    own work is never counted against the run;
+//!    own work is never counted against the run. Moving the particle already
+//!    held is the exception: its work, the change in its springs' energy, is
+//!    added to the budget in effect ([`EnergyBudget::add_work`]). A drag is then
+//!    one budget, not one per mouse move (each a pass over the whole system), and
+//!    a run that diverges while it is dragged still fills its budget, where a
+//!    new budget at every move would keep granting it a new margin;
 //! 2. the wind, through aerodynamic drag. Rather than summing `f·v dt` in every
 //!    engine's hot loop, the budget allows what wind can hold in a cloth: the
 //!    kinetic energy of moving at the strongest gust's speed, `1/2 M w²`, plus the
@@ -115,6 +120,22 @@ impl EnergyBudget {
             scale,
             allowed,
         }
+    }
+
+    /// The user did `work` (J) on the system without starting a new budget (a
+    /// held particle moved): the energy may rise by that much more, and the
+    /// energy the system may legitimately hold grows by its size, with the margin
+    /// in proportion.
+    pub fn add_work(&mut self, work: f64) {
+        if !work.is_finite() {
+            return;
+        }
+        let scale = self.scale + work.abs();
+        if self.scale > 0.0 && self.allowed.is_finite() {
+            self.allowed *= scale / self.scale;
+        }
+        self.base += work;
+        self.scale = scale;
     }
 
     /// The most energy (J) the run may hold.

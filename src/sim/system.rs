@@ -266,18 +266,23 @@ impl System {
     }
 
     /// The particle held moves to `target` (the mouse moved): no inverse mass
-    /// changes, so the stability estimate stays; the energy budget starts again
-    /// from the state the hand leaves, and the engines take the one particle.
+    /// changes, so the stability estimate stays; the energy budget takes the
+    /// hand's work on the particle's springs ([`EnergyBudget::add_work`]), and the
+    /// engines take the one particle.
     fn move_grab(&mut self, target: DVec3) {
         self.catch_up();
-        self.budget = None;
         let Some(grab) = self.grab.as_mut() else {
             return;
         };
         grab.target = target;
         let grab = *grab;
+        let i = grab.particle;
+        let before = self.model.energy_of_springs_at(i, &self.state.positions);
         grab.hold(&mut self.state, self.model.params.dt);
-        self.held_particle_moved(grab.particle, target);
+        if let Some(budget) = &mut self.budget {
+            budget.add_work(self.model.energy_of_springs_at(i, &self.state.positions) - before);
+        }
+        self.held_particle_moved(i, target);
     }
 
     /// Lets go of the held particle: it is free again unless pinned.
