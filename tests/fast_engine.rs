@@ -11,7 +11,7 @@
 //! cloths move by 0.05 to 1 m over these runs).
 
 use cloth_sandbox::sim::grid_kernel::{GridCloth, GridSpec, Precision, SpringCoefficients};
-use cloth_sandbox::sim::{Engine, Integrator, System, safe};
+use cloth_sandbox::sim::{Engine, HAND_REACH, Integrator, System, safe};
 use glam::DVec3;
 
 mod common;
@@ -235,6 +235,41 @@ fn a_dragged_particle_agrees_with_the_f64_engine() {
         );
         assert_eq!(fast.positions()[i], target(11));
     }
+}
+
+/// A hand a metre away: the held particle goes towards it [`HAND_REACH`] of its
+/// shortest spring a step, in a straight line, and gets there; on both engines.
+#[test]
+fn a_held_particle_follows_a_far_hand_half_a_spring_a_step() {
+    let (mut fast, mut exact) = pair("cloth", &["width=16", "height=16"]);
+    let i = fast.particle_count() / 2 + 3;
+    let shortest = (fast.springs().iter())
+        .filter(|s| s.a as usize == i || s.b as usize == i)
+        .map(|s| s.rest)
+        .fold(f64::INFINITY, f64::min);
+    let reach = HAND_REACH * shortest;
+    for system in [&mut fast, &mut exact] {
+        let start = system.positions()[i];
+        system.grab(i, start);
+        system.run(10).unwrap();
+        let hand = start + DVec3::new(0.6, 0.0, 0.8);
+        system.grab(i, hand);
+        for k in 1..=4 {
+            system.run(1).unwrap();
+            let at = system.positions()[i];
+            let expected = start + (hand - start) * ((k + 1) as f64 * reach);
+            assert!(
+                at.distance(expected) < 1e-12,
+                "step {k}: {at} against {expected}"
+            );
+        }
+        let steps = (1.0 / reach).ceil() as u64;
+        system.run(steps).unwrap();
+        assert_eq!(system.positions()[i], hand);
+        assert_eq!(system.grabbed(), Some((i, hand)));
+    }
+    let d = max_distance(fast.positions(), exact.positions());
+    assert!(d < 1e-4, "{d:e} m apart");
 }
 
 /// Kinetic energy of the cloth after `steps` safe steps, on both engines.

@@ -48,7 +48,7 @@ pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere,
 pub use energy_budget::EnergyBudget;
 pub use fast_path::{Engine, GridShape, PrecisionRule};
 pub use forces::ForceTerms;
-pub use grab::Grab;
+pub use grab::{Grab, HAND_REACH};
 pub use grid_kernel::lattice::LatticeShape;
 pub use integrators::Integrator;
 pub use model::{Ground, Model, Params, Sphere, Topology};

@@ -16,9 +16,9 @@ use glam::{DVec2, DVec3};
 use super::divergence::Runaway;
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
-    Adjacency, Bar, BarPairs, Divergence, Energy, EnergyBudget, ForceTerms, Grab, Integrator,
-    Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints, fast_path,
-    forces, grid_kernel, implicit, integrators, springs, stability,
+    Adjacency, Bar, BarPairs, Divergence, Energy, EnergyBudget, ForceTerms, Grab, HAND_REACH,
+    Integrator, Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints,
+    fast_path, forces, grid_kernel, implicit, integrators, springs, stability,
 };
 
 /// Scratch space for a step, sized once per model and integrator.
@@ -215,7 +215,8 @@ impl System {
     pub fn solver_iterations(&self) -> usize {
         self.work.implicit.last_iterations
     }
-    /// The particle the user holds, if any, and where it is held.
+    /// The particle the user holds, if any, and where the hand holds it (the
+    /// particle may trail it for a few steps: [`Grab::at`]).
     pub fn grabbed(&self) -> Option<(usize, DVec3)> {
         self.grab.map(|g| (g.particle, g.target))
     }
@@ -240,7 +241,9 @@ impl System {
     }
 
     /// Holds particle `i` at `target` (m) until [`Self::release`]: it moves with the
-    /// hand and pulls its neighbours through their springs. Non-finite targets are ignored.
+    /// hand and pulls its neighbours through their springs. Grabbed anew, it is put
+    /// at `target` at once; held already, it follows the hand at most
+    /// [`HAND_REACH`] of its shortest link a step. Non-finite targets are ignored.
     pub fn grab(&mut self, i: usize, target: DVec3) {
         if i < self.particle_count()
             && target.is_finite()
@@ -256,33 +259,53 @@ impl System {
         if self.grab.is_some_and(|g| g.particle != i) {
             self.release();
         }
-        let grab = Grab {
-            particle: i,
-            target,
-        };
+        let grab = Grab::new(i, target);
         grab.hold(&mut self.state, self.model.params.dt);
         self.grab = Some(grab);
         self.model.refresh_inv_mass(Some(i));
     }
 
-    /// The particle held moves to `target` (the mouse moved): no inverse mass
-    /// changes, so the stability estimate stays; the energy budget takes the
-    /// hand's work on the particle's springs ([`EnergyBudget::add_work`]), and the
-    /// engines take the one particle.
+    /// The hand holding the particle moved to `target` (the mouse moved): the
+    /// particle follows it ([`Self::follow_hand`]).
     fn move_grab(&mut self, target: DVec3) {
-        self.catch_up();
-        let Some(grab) = self.grab.as_mut() else {
+        if let Some(grab) = self.grab.as_mut() {
+            grab.target = target;
+        }
+        self.follow_hand();
+    }
+
+    /// Moves the held particle towards the hand, at most [`HAND_REACH`] of its
+    /// shortest spring or bar: on each move of the hand, and before each step
+    /// until it gets there. No inverse mass changes, so the stability estimate
+    /// stays; the energy budget takes the hand's work on the particle's springs
+    /// ([`EnergyBudget::add_work`]), and the engines take the one particle.
+    fn follow_hand(&mut self) {
+        let Some(mut grab) = self.grab.filter(Grab::trails) else {
             return;
         };
-        grab.target = target;
-        let grab = *grab;
+        self.catch_up();
         let i = grab.particle;
+        grab.at = grab.towards_target(HAND_REACH * self.shortest_link_at(i));
+        self.grab = Some(grab);
         let before = self.model.energy_of_springs_at(i, &self.state.positions);
         grab.hold(&mut self.state, self.model.params.dt);
         if let Some(budget) = &mut self.budget {
             budget.add_work(self.model.energy_of_springs_at(i, &self.state.positions) - before);
         }
-        self.held_particle_moved(i, target);
+        self.held_particle_moved(i, grab.at);
+    }
+
+    /// Length (m) of the shortest spring or bar at particle `i`; infinite with
+    /// none.
+    fn shortest_link_at(&self, i: usize) -> f64 {
+        let springs = (self.model.adjacency.springs_of(i)).map(|(s, _)| self.model.springs[s].rest);
+        let bars = (self.model.bars.iter())
+            .filter(|b| b.a as usize == i || b.b as usize == i)
+            .map(|b| b.length);
+        springs
+            .chain(bars)
+            .filter(|l| *l > 0.0)
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Lets go of the held particle: it is free again unless pinned.
@@ -399,6 +422,7 @@ impl System {
         self.state.verlet.positions.iter_mut().for_each(scale);
         if let Some(grab) = &mut self.grab {
             scale(&mut grab.target);
+            scale(&mut grab.at);
         }
         self.scale_rest_lengths(factor);
         self.runaway = Runaway::around(&self.state.positions);
@@ -445,8 +469,15 @@ impl System {
     }
 
     /// Advances one step of `dt`, then checks the state. On divergence the state is
-    /// left as it is (the caller decides to reset).
+    /// left as it is (the caller decides to reset). A held particle that trails
+    /// the hand first moves towards it ([`HAND_REACH`]).
     pub fn step(&mut self) -> Result<(), Divergence> {
+        self.follow_hand();
+        self.step_held()
+    }
+
+    /// [`Self::step`] with the held particle where it is.
+    fn step_held(&mut self) -> Result<(), Divergence> {
         self.mark_changed();
         self.budget();
         if let Some(grab) = self.grab {
@@ -495,7 +526,23 @@ impl System {
         self.run_settling(n, false)
     }
 
+    /// Runs `n` steps; while a held particle trails the hand, one step at a time,
+    /// each after a move towards it ([`Self::follow_hand`]).
     fn run_settling(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
+        let mut left = n;
+        while left > 0 && self.grab.is_some_and(|g| g.trails()) {
+            self.follow_hand();
+            self.run_on_an_engine(1, settle && left == 1)?;
+            left -= 1;
+        }
+        if left == 0 && n > 0 {
+            return Ok(());
+        }
+        self.run_on_an_engine(left, settle)
+    }
+
+    /// Runs `n` steps on the fastest engine that models the system.
+    fn run_on_an_engine(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
         self.budget();
         if let Some(result) = self.run_on_grid(n, settle) {
             return result;
@@ -507,7 +554,7 @@ impl System {
             return result;
         }
         self.mark_changed();
-        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step());
+        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step_held());
         if forces::uses_threads(&self.model) {
             let mut result = Ok(());
             rayon::scope(|_| result = steps(self));
