@@ -11,7 +11,8 @@ use super::State;
 /// from its neighbours in one step, a particle of the fold scene's 4 cm cloth
 /// threw one of them at 780 m/s through the cloth's layers, and the run ran away.
 /// While the simulation is paused, each move of the hand moves the particle that
-/// far, and the steps after it take it the rest of the way.
+/// far; once it runs again, its steps take the particle the rest of the way, if
+/// it is still held.
 pub const HAND_REACH: f64 = 0.5;
 
 /// A particle held at a position until released. While held it has zero inverse

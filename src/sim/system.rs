@@ -473,11 +473,12 @@ impl System {
     /// the hand first moves towards it ([`HAND_REACH`]).
     pub fn step(&mut self) -> Result<(), Divergence> {
         self.follow_hand();
-        self.step_held()
+        self.step_hand_still()
     }
 
-    /// [`Self::step`] with the held particle where it is.
-    fn step_held(&mut self) -> Result<(), Divergence> {
+    /// [`Self::step`] with the held particle left where it is (the run's loop
+    /// moves it towards the hand before each step itself).
+    fn step_hand_still(&mut self) -> Result<(), Divergence> {
         self.mark_changed();
         self.budget();
         if let Some(grab) = self.grab {
@@ -535,10 +536,11 @@ impl System {
             self.run_on_an_engine(1, settle && left == 1)?;
             left -= 1;
         }
-        if left == 0 && n > 0 {
-            return Ok(());
+        // A run of no steps still goes to the engines, which settle it.
+        if left > 0 || n == 0 {
+            self.run_on_an_engine(left, settle)?;
         }
-        self.run_on_an_engine(left, settle)
+        Ok(())
     }
 
     /// Runs `n` steps on the fastest engine that models the system.
@@ -554,7 +556,7 @@ impl System {
             return result;
         }
         self.mark_changed();
-        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step_held());
+        let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step_hand_still());
         if forces::uses_threads(&self.model) {
             let mut result = Ok(());
             rayon::scope(|_| result = steps(self));
