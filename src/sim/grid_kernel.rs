@@ -1665,22 +1665,26 @@ impl<E: Real> Kernel<E> {
             x.chunks_mut(8 * width).enumerate().for_each(copy);
         }
 
-        // The stencil's directions whose kind of spring exists, and the springs
-        // left when some tore.
-        let springs = self
-            .stencil()
-            .map(|(direction, _, present, _)| (direction, present));
+        // The stencil direction of each step `(dr, dc)` from a particle to one after
+        // it (`dr` 0 to 2, `dc` -2 to 2) whose kind of spring exists, and the
+        // springs left when some tore. (The search asks this of every pair within
+        // its reach: by table and in 32 bits, the fold scene ran 1% fewer
+        // instructions than with a search of the stencil; valgrind, 1,500 steps.)
+        let mut direction = [[None; 5]; 3];
+        for (d, ((dr, dc), _, present, _)) in self.stencil().into_iter().enumerate() {
+            if present {
+                direction[dr][(dc + 2) as usize] = Some(d);
+            }
+        }
         let torn = self.torn.as_ref();
+        let w = width as u32;
         let joined = |i: usize, j: usize| {
-            let (a, b) = (i.min(j), i.max(j));
-            let (dr, dc) = (
-                b / width - a / width,
-                (b % width) as isize - (a % width) as isize,
-            );
-            springs
-                .iter()
-                .position(|&s| s == ((dr, dc), true))
-                .is_some_and(|d| torn.is_none_or(|t| t.has(a, d)))
+            let (a, b) = (i.min(j) as u32, i.max(j) as u32);
+            let (dr, dc) = (b / w - a / w, (b % w) as i32 - (a % w) as i32);
+            let d = (dr <= 2 && dc.abs() <= 2)
+                .then(|| direction[dr as usize][(dc + 2) as usize])
+                .flatten();
+            d.is_some_and(|d| torn.is_none_or(|t| t.has(a as usize, d)))
         };
         // Each particle's position at the start of the step (the other state
         // buffer, after the swap) and inverse mass.

@@ -384,8 +384,9 @@ impl SelfCollision {
         }
         let (cells, sorted, starts) = (&self.cells, &self.sorted, &self.cell_start);
         let reach2 = reach * reach;
-        // The entries of buckets `from .. from + len`, in one or two runs of the
-        // sorted copy (two where they wrap past the last bucket).
+        // The entries of buckets `from .. from + len`: one or two runs of the
+        // sorted copy (two where they wrap past the last bucket; the second empty
+        // otherwise).
         let entries = |from: u32, len: usize| {
             let (lo, hi) = (from as usize, from as usize + len);
             let (first, second) = if hi <= buckets {
@@ -394,7 +395,7 @@ impl SelfCollision {
                 ((lo, buckets), (0, hi - buckets))
             };
             let run = |(a, b): (usize, usize)| &sorted[starts[a] as usize..starts[b] as usize];
-            run(first).iter().chain(run(second))
+            [run(first), run(second)]
         };
         let search = |(k, out): (usize, &mut Vec<[u32; 2]>)| {
             out.clear();
@@ -412,28 +413,35 @@ impl SelfCollision {
                     }
                 };
                 // Its own bucket: the partners after it (each pair of a cell once).
-                for e in entries(own, 1) {
-                    if (e.index > me) & (p.distance_squared(e.x) < reach2) {
-                        keep(e);
-                    }
-                }
-                // The cells ahead of it: `a + 1` in its own row, and the rows
-                // `a - 1 ..= a + 1` of the cells ahead along the other two axes.
-                let ahead = std::iter::once((bucket([a.wrapping_add(1), b, c]), 1)).chain(
-                    FORWARD_ROWS.map(|(db, dc)| {
-                        let cell = [a.wrapping_sub(1), b.wrapping_add(db), c.wrapping_add(dc)];
-                        (bucket(cell), 3)
-                    }),
-                );
-                for (from, len) in ahead {
-                    for e in entries(from, len) {
-                        // Other cells that share these buckets are farther than
-                        // `reach` (or hold this particle itself).
-                        if (e.index != me) & (p.distance_squared(e.x) < reach2) {
+                for run in entries(own, 1) {
+                    for e in run {
+                        if (e.index > me) & (p.distance_squared(e.x) < reach2) {
                             keep(e);
                         }
                     }
                 }
+                // The cells ahead of it: `a + 1` in its own row, and the rows
+                // `a - 1 ..= a + 1` of the cells ahead along the other two axes.
+                // Other cells that share these buckets are farther than `reach`
+                // (or hold this particle itself).
+                let mut scan = |run: &[Entry]| {
+                    for e in run {
+                        if (e.index != me) & (p.distance_squared(e.x) < reach2) {
+                            keep(e);
+                        }
+                    }
+                };
+                // Plain loops over slices: with iterators chaining them the fold
+                // scene ran 3.6% more instructions (valgrind, 1,500 steps).
+                for (db, dc) in FORWARD_ROWS {
+                    let cell = [a.wrapping_sub(1), b.wrapping_add(db), c.wrapping_add(dc)];
+                    let [first, second] = entries(bucket(cell), 3);
+                    scan(first);
+                    scan(second);
+                }
+                let [first, second] = entries(bucket([a.wrapping_add(1), b, c]), 1);
+                scan(first);
+                scan(second);
             }
         };
         self.found_by_searcher.resize_with(blocks, Vec::new);
