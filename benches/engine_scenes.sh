@@ -18,22 +18,7 @@ STEPS=${3:-960}
 cargo build --release --quiet
 CLOTH=target/release/cloth
 
-# name | scene and settings (the grid size is added; the first case is the bench the
-# others are measured against). The bench moved 300 m off the origin is the same
-# cloth, on fixed-point positions (`grid-mixed`), which the drape and the sheet
-# need: what that precision costs by itself.
-CASES=(
-  "bench (plain)|--scene bench"
-  "bench, fixed-point positions|--scene bench --set origin=300,1,0"
-  "drape (sphere, ground, friction)|--scene drape --set self_collision=false"
-  "drape + self-collision|--scene drape"
-  "50 pins at random places|--scene bench --set pins=RANDOM50"
-  "air damping|--scene bench --set air_damping=0.0001"
-  "bench-wind (drag)|--scene bench-wind"
-  "  + Verlet|--scene bench-wind --set integrator=\"verlet\""
-  "  + Verlet, 10% stretch limit (sheet)|--scene bench-wind --set integrator=\"verlet\" --set stretch_limit=0.1 --set gust=1"
-  "sheet (the scene itself)|--scene sheet"
-)
+source benches/scene_cases.sh
 
 simd=$(grep -qw avx512f /proc/cpuinfo && echo AVX-512 || (grep -qw avx2 /proc/cpuinfo && echo AVX2 || echo baseline))
 echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of $STEPS steps"
@@ -46,12 +31,7 @@ for n in $SIZES; do
   # one: each case keeps all its runs, for the best and the median.
   declare -a args_of rates_of engine_of
   for c in "${!CASES[@]}"; do
-    args=${CASES[$c]#*|}
-    if [[ $args == *RANDOM50* ]]; then
-      pins=$(python3 -c "import random; r=random.Random(7); print('[' + ','.join(str(i) for i in sorted(r.sample(range($n*$n), 50))) + ']')")
-      args=${args/RANDOM50/$pins}
-    fi
-    args_of[$c]=$args
+    args_of[$c]=$(case_args "$c" "$n")
     rates_of[$c]=""
   done
   for _ in $(seq "$RUNS"); do
