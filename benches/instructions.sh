@@ -29,7 +29,6 @@ count() {
   local steps=$1 out
   shift
   out=$(mktemp)
-  # shellcheck disable=SC2068
   eval "RAYON_NUM_THREADS=1 valgrind --tool=callgrind --dump-instr=yes --compress-pos=no \
     --compress-strings=no --callgrind-out-file=$out $CLOTH run $* --steps $steps --warmup 0" \
     > /dev/null 2>&1
@@ -74,6 +73,17 @@ PY
   rm -f "$out"
 }
 
+# Instructions and vector operations per unit of work of `cloth run $1`: the counts
+# of 300 steps less those of 100, over 200 steps of $2 units (particles or springs).
+per_unit() {
+  local first second
+  first=$(count 100 "$1")
+  second=$(count 300 "$1")
+  python3 -c "
+a, b = [list(map(int, s.split())) for s in ('$first', '$second')]
+print(*((y - x) / (200 * $2) for x, y in zip(a, b)))"
+}
+
 echo "valgrind $(valgrind --version | sed 's/valgrind-//'): the AVX2 path; instructions per particle-step over steps 100 to 300"
 for n in $SIZES; do
   echo
@@ -82,11 +92,7 @@ for n in $SIZES; do
   base_all="" base_vec=""
   for c in "${!CASES[@]}"; do
     args="--set width=$n --set height=$n $(case_args "$c" "$n")"
-    first=$(count 100 "$args")
-    second=$(count 300 "$args")
-    read -r all vec <<< "$(python3 -c "
-a, b = [list(map(int, s.split())) for s in ('$first', '$second')]
-print(*((y - x) / (200 * $n * $n) for x, y in zip(a, b)))")"
+    read -r all vec <<< "$(per_unit "$args" $((n * n)))"
     base_all=${base_all:-$all} base_vec=${base_vec:-$vec}
     python3 -c "print('%-38s %14.1f %10.2f %14.1f %10.2f' % ('${CASES[$c]%%|*}', $all, $all / $base_all, $vec, $vec / $base_vec))"
   done
@@ -100,11 +106,7 @@ BENCH="--scene bench --set width=128 --set height=128"
 per_spring=()
 for args in "$JELLY" "$BENCH"; do
   springs=$($CLOTH run $args --steps 1 --json | python3 -c "import json, sys; print(json.load(sys.stdin)['springs'])")
-  first=$(count 100 "$args")
-  second=$(count 300 "$args")
-  per_spring+=("$(python3 -c "
-a, b = [list(map(int, s.split())) for s in ('$first', '$second')]
-print(*((y - x) / (200 * $springs) for x, y in zip(a, b)))")")
+  per_spring+=("$(per_unit "$args" "$springs")")
 done
 python3 -c "
 (ja, jv), (ba, bv) = [map(float, s.split()) for s in ('${per_spring[0]}', '${per_spring[1]}')]
