@@ -100,7 +100,7 @@ use glam::DVec3;
 use super::constraints;
 use super::duo::{Duo, run_in_pool};
 use super::lanes::LaneFloat;
-use super::springs::STENCIL_DIRECTIONS;
+use super::springs::{STENCIL_DIRECTIONS, STENCIL_KINDS};
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 use frame::{Frame, FrameRule};
 
@@ -1000,10 +1000,6 @@ struct Kernel<E: Real> {
     tear_rows: Vec<bool>,
 }
 
-/// Which kind of spring each stencil direction holds, as an index into
-/// [`GridSpec::present`]: right, two right, down-left, down, down-right, two down.
-const DIRECTION_KIND: [usize; 6] = [0, 2, 1, 0, 1, 2];
-
 /// In [`Torn::bits`], the bits of the cell's triangles `(a, b, d)` and `(b, e, d)`
 /// (after the six springs' bits).
 const TRIANGLE_BITS: [u8; 2] = [1 << 6, 1 << 7];
@@ -1045,7 +1041,10 @@ impl<E: Real> Torn<E> {
                 let mut bits = 0;
                 for (d, &(dr, dc)) in STENCIL_DIRECTIONS.iter().enumerate() {
                     let cc = c as isize + dc;
-                    if present[DIRECTION_KIND[d]] && r + dr < h && (0..w as isize).contains(&cc) {
+                    if present[STENCIL_KINDS[d].index()]
+                        && r + dr < h
+                        && (0..w as isize).contains(&cc)
+                    {
                         bits |= 1 << d;
                     }
                 }
@@ -1538,7 +1537,13 @@ impl<E: Real> Kernel<E> {
         let fixed = self.frame.fixed;
         // Per direction: first column, columns, rows, rest length, scan bound (in
         // the positions' units).
-        let lines = self.stencil().map(|((dr, dc), rest, present, _)| {
+        let lines = self.stencil().map(|stencil| {
+            let Stencil {
+                offset: (dr, dc),
+                rest,
+                present,
+                ..
+            } = stencil;
             let c0 = (-dc).max(0) as usize;
             let len = w.saturating_sub(dc.max(0) as usize).saturating_sub(c0);
             let longest = self.frame.units((1.0 + tau) * rest);
@@ -1621,22 +1626,22 @@ impl<E: Real> Kernel<E> {
         }
     }
 
-    /// The stencil in the order the springs sort (the f64 engine's order): (row,
-    /// column) offsets, rest lengths, whether the kind exists, and its coefficients.
+    /// The stencil's directions in the order the springs sort (the f64 engine's
+    /// order, [`STENCIL_DIRECTIONS`]).
     fn stencil(&self) -> [Stencil; 6] {
-        let spacing = self.spec.spacing;
-        let [structural, shear, bend] = self.spec.present;
-        let (sk, hk, bk) = (self.spec.structural, self.spec.shear, self.spec.bend);
-        let diagonal = std::f64::consts::SQRT_2 * spacing;
-        let [right, two_right, down_left, down, down_right, two_down] = STENCIL_DIRECTIONS;
-        [
-            (right, spacing, structural, sk),
-            (two_right, 2.0 * spacing, bend, bk),
-            (down_left, diagonal, shear, hk),
-            (down, spacing, structural, sk),
-            (down_right, diagonal, shear, hk),
-            (two_down, 2.0 * spacing, bend, bk),
-        ]
+        let h = self.spec.spacing;
+        // Indexed by kind: structural, shear, bend.
+        let rests = [h, std::f64::consts::SQRT_2 * h, 2.0 * h];
+        let coefficients = [self.spec.structural, self.spec.shear, self.spec.bend];
+        std::array::from_fn(|d| {
+            let i = STENCIL_KINDS[d].index();
+            Stencil {
+                offset: STENCIL_DIRECTIONS[d],
+                rest: rests[i],
+                present: self.spec.present[i],
+                coefficients: coefficients[i],
+            }
+        })
     }
 
     /// Self-collision ([`super::self_collision`]) at thickness `h_c`, on an f64
@@ -1671,8 +1676,9 @@ impl<E: Real> Kernel<E> {
         // its reach: by table and in 32 bits, the fold scene ran 1% fewer
         // instructions than with a search of the stencil; valgrind, 1,500 steps.)
         let mut direction = [[None; 5]; 3];
-        for (d, ((dr, dc), _, present, _)) in self.stencil().into_iter().enumerate() {
-            if present {
+        for (d, stencil) in self.stencil().into_iter().enumerate() {
+            if stencil.present {
+                let (dr, dc) = stencil.offset;
                 direction[dr][(dc + 2) as usize] = Some(d);
             }
         }
@@ -2326,6 +2332,14 @@ fn row_may_tear_dispatch<E: Real>(
     if fixed { scan!(true) } else { scan!(false) }
 }
 
-/// One stencil direction: (row, column) offset, rest length, whether the kind
-/// exists, and its coefficients.
-type Stencil = ((usize, isize), f64, bool, SpringCoefficients);
+/// One direction of the grid's stencil.
+#[derive(Clone, Copy)]
+struct Stencil {
+    /// (row, column) from a spring's first end to its second.
+    offset: (usize, isize),
+    /// Rest length in m.
+    rest: f64,
+    /// Whether the cloth has springs of this kind.
+    present: bool,
+    coefficients: SpringCoefficients,
+}

@@ -155,6 +155,16 @@ pub fn constraint_order(
 pub const STENCIL_DIRECTIONS: [(usize, isize); 6] =
     [(0, 1), (0, 2), (1, -1), (1, 0), (1, 1), (2, 0)];
 
+/// The kind of spring in each of [`STENCIL_DIRECTIONS`].
+pub const STENCIL_KINDS: [SpringKind; 6] = [
+    SpringKind::Structural,
+    SpringKind::Bend,
+    SpringKind::Shear,
+    SpringKind::Structural,
+    SpringKind::Shear,
+    SpringKind::Bend,
+];
+
 /// For each particle, the springs that touch it: a compressed adjacency list
 /// (`offsets[i]..offsets[i + 1]` indexes `entries`). It lets every particle gather
 /// its own spring forces, so threads never write the same memory.

@@ -13,6 +13,7 @@ use super::super::forces::EPSILON_LENGTH;
 use super::row::{difference, moved};
 use super::{
     BLOCK, Buf, Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SpringCoefficients, State,
+    Stencil,
 };
 
 /// What a [`Kernel::spring_pass`] does to each spring.
@@ -53,7 +54,12 @@ impl<E: Real> Kernel<E> {
         let stencil = self.stencil();
         let sweeps: [Option<Sweep<E>>; 12] = std::array::from_fn(|k| {
             let (d, colour) = (k / 2, k % 2);
-            let ((dr, dc), rest, present, kind) = stencil[d];
+            let Stencil {
+                offset: (dr, dc),
+                rest,
+                present,
+                coefficients,
+            } = stencil[d];
             if !present {
                 return None;
             }
@@ -69,7 +75,7 @@ impl<E: Real> Kernel<E> {
                 dr,
                 dc,
                 rest,
-                kind,
+                kind: coefficients,
             };
             Sweep::new(&rules, springs, (w, h), class)
         });
