@@ -578,45 +578,59 @@ unsafe fn block<
     } else {
         zero
     };
-    for i in 0..3 {
-        // Terms for the lane to the right (column c+1), two to the right (c+2) and,
-        // on the next row, one to the right.
-        let mut l = s.sub(anti[i], right[i]);
-        let q = s.sub(zero, right2[i]);
-        let mut m = s.sub(zero, dr[i]);
-        let mut in1 = s.sub(zero, s.add(d[i], anti[i]));
-        if DRAG {
-            let t = s.add(t1[i], t2[i]);
-            l = s.add(l, t);
-            m = s.add(m, t2[i]);
-            in1 = s.add(in1, t);
-        }
-        let in1 = s.add(in1, s.shift1(carry[2][i], m));
-        // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
-        unsafe {
-            let pa1 = k.acc.add(k.a[1] + i * nv + c);
-            s.store(pa1, s.add(s.load(pa1), in1));
-            s.store(k.acc.add(k.a[2] + i * nv + c), s.sub(zero, d2[i]));
-        }
-        if OWN {
-            let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
-            own = s.add(own, d2[i]);
+    // Each axis: the forces carried to the lanes beside and the rows below, then
+    // the step. Written out per axis where the level asks it (`Simd::UNROLL_AXES`).
+    macro_rules! axis {
+        ($i:expr) => {{
+            let i = $i;
+            // Terms for the lane to the right (column c+1), two to the right (c+2) and,
+            // on the next row, one to the right.
+            let mut l = s.sub(anti[i], right[i]);
+            let q = s.sub(zero, right2[i]);
+            let mut m = s.sub(zero, dr[i]);
+            let mut in1 = s.sub(zero, s.add(d[i], anti[i]));
             if DRAG {
-                own = s.add(own, t1[i]);
+                let t = s.add(t1[i], t2[i]);
+                l = s.add(l, t);
+                m = s.add(m, t2[i]);
+                in1 = s.add(in1, t);
             }
-            own = s.add(
-                own,
-                s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
-            );
-            // SAFETY: as above; outputs hold `lo + nv` floats.
+            let in1 = s.add(in1, s.shift1(carry[2][i], m));
+            // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
             unsafe {
-                let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
-                integrate::<S, PLAIN, FIXED>(&k.step, k.b[0] + c, k.lo + c, i, w, p00, force);
+                let pa1 = k.acc.add(k.a[1] + i * nv + c);
+                s.store(pa1, s.add(s.load(pa1), in1));
+                s.store(k.acc.add(k.a[2] + i * nv + c), s.sub(zero, d2[i]));
             }
+            if OWN {
+                let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
+                own = s.add(own, d2[i]);
+                if DRAG {
+                    own = s.add(own, t1[i]);
+                }
+                own = s.add(
+                    own,
+                    s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
+                );
+                // SAFETY: as above; outputs hold `lo + nv` floats.
+                unsafe {
+                    let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
+                    integrate::<S, PLAIN, FIXED>(&k.step, k.b[0] + c, k.lo + c, i, w, p00, force);
+                }
+            }
+            carry[0][i] = l;
+            carry[1][i] = q;
+            carry[2][i] = m;
+        }};
+    }
+    if S::UNROLL_AXES && !PLAIN {
+        axis!(0);
+        axis!(1);
+        axis!(2);
+    } else {
+        for i in 0..3 {
+            axis!(i);
         }
-        carry[0][i] = l;
-        carry[1][i] = q;
-        carry[2][i] = m;
     }
     if OWN && !PLAIN && k.step.sphere.is_some() {
         // SAFETY: as above.

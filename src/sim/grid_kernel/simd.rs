@@ -12,6 +12,10 @@ pub(super) trait Simd: Copy {
     /// A vector of `LANES` floats.
     type V: Copy;
     const LANES: usize;
+    /// Whether the row pass writes its loop over the three axes out (see
+    /// `row::block`): on AVX2 the loop, which the compiler kept, went through the
+    /// stack.
+    const UNROLL_AXES: bool = false;
     fn splat(self, a: Self::E) -> Self::V;
     /// # Safety
     /// `p .. p + LANES` must be readable.

@@ -423,6 +423,7 @@ impl Simd for Avx512 {
 }
 
 impl Simd for Avx2 {
+    const UNROLL_AXES: bool = true;
     lanes!(f32, __m256, 8;
         _mm256_set1_ps, _mm256_loadu_ps, _mm256_storeu_ps, _mm256_add_ps, _mm256_sub_ps,
         _mm256_mul_ps, _mm256_fmadd_ps, _mm256_fmsub_ps, _mm256_div_ps);
