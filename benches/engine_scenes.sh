@@ -15,8 +15,11 @@ cd "$(dirname "$0")/.."
 SIZES=${1:-"128 256"}
 RUNS=${2:-3}
 STEPS=${3:-960}
-cargo build --release --quiet
-CLOTH=target/release/cloth
+# CLOTH=path runs another build of the binary (e.g. a copy of an older commit's).
+if [[ -z ${CLOTH:-} ]]; then
+  cargo build --release --quiet
+  CLOTH=target/release/cloth
+fi
 
 source benches/scene_cases.sh
 

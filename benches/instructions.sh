@@ -20,8 +20,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 SIZES=${1:-"128"}
 command -v valgrind > /dev/null || { echo "valgrind is not installed (apt-get install valgrind)"; exit 1; }
-cargo build --release --quiet
-CLOTH=target/release/cloth
+# CLOTH=path runs another build of the binary (e.g. a copy of an older commit's).
+if [[ -z ${CLOTH:-} ]]; then
+  cargo build --release --quiet
+  CLOTH=target/release/cloth
+fi
 source benches/scene_cases.sh
 
 # Instructions and vector operations of `cloth run ARGS --steps $1`, one thread.
