@@ -725,6 +725,11 @@ pub(super) unsafe fn project_out_of_sphere<S: Simd, const FIXED: bool>(
     let d: [S::V; 3] = std::array::from_fn(|i| difference::<S, FIXED>(s, xn[i], center[i]));
     let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
     let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
+    // A block with no particle inside passes over the rest: most of a cloth
+    // bigger than the sphere.
+    if !s.any_positive(inside) {
+        return;
+    }
     let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
     for i in 0..3 {
         // The move onto the surface, `d scale - d`.
