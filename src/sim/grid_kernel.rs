@@ -741,8 +741,8 @@ struct Params<E> {
     /// Ground height (as positions are stored), penalty stiffness per unit of
     /// depth and damping.
     ground: [E; 3],
-    /// 1 for explicit Euler (positions move with the old velocity), else 0.
-    explicit: E,
+    /// Explicit Euler (positions move with the old velocity).
+    explicit: bool,
     /// `h/2` for position Verlet's velocity estimate `u + h/2 a`, else 0.
     verlet_half_dt: E,
     /// Whether the velocity of the last position update `u` is its own array (Verlet).
@@ -772,7 +772,7 @@ impl<E: Real> Params<E> {
     /// Symplectic Euler with no air damping, ground or sphere in the step.
     fn is_plain(&self) -> bool {
         !self.verlet
-            && self.explicit == E::ZERO
+            && !self.explicit
             && self.neg_air == E::ZERO
             && !self.ground_on
             && self.sphere.is_none()
@@ -823,11 +823,7 @@ impl<E: Real> Params<E> {
             neg_air: E::of(-spec.air_damping),
             ground: ground_constants(spec.ground.as_ref(), frame),
             ground_on: spec.ground.is_some(),
-            explicit: if spec.integrator == Integrator::ExplicitEuler {
-                E::ONE
-            } else {
-                E::ZERO
-            },
+            explicit: spec.integrator == Integrator::ExplicitEuler,
             verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
             fixed: frame.fixed,

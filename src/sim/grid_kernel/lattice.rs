@@ -56,6 +56,7 @@ use std::ops::Range;
 
 use glam::DVec3;
 
+use super::row::{EXPLICIT, SYMPLECTIC, VERLET};
 use super::spring_passes::{
     ColourClass, Multipliers, RowColour, SpringRule, Sweep, SweepLines, SweepMultipliers,
     SweepRules, SweepSprings, step_start,
@@ -575,11 +576,7 @@ impl<E: Real> Lattice<E> {
             neg_air: E::of(-spec.air_damping),
             ground: ground_constants(spec.ground.as_ref(), frame),
             ground_on: spec.ground.is_some(),
-            explicit: if spec.integrator == Integrator::ExplicitEuler {
-                E::ONE
-            } else {
-                E::ZERO
-            },
+            explicit: spec.integrator == Integrator::ExplicitEuler,
             verlet_half_dt: E::ZERO,
             verlet: spec.integrator == Integrator::Verlet,
             fixed: frame.fixed,
@@ -1243,7 +1240,27 @@ unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
             unsafe {
                 let earlier = s.load(k.acc[i].add(at - k.from));
                 let force = s.sub(s.add(earlier, own[i]), shifted[i]);
-                integrate::<S, PLAIN, FIXED>(&k.step, at, at - k.start, i, w, a, force);
+                macro_rules! step {
+                    ($method:ident, $ground:literal) => {
+                        integrate::<S, PLAIN, FIXED, { $method }, $ground>(
+                            &k.step,
+                            at,
+                            at - k.start,
+                            i,
+                            w,
+                            a,
+                            force,
+                        )
+                    };
+                }
+                match (k.step.method, k.step.ground_on) {
+                    (SYMPLECTIC, false) => step!(SYMPLECTIC, false),
+                    (SYMPLECTIC, true) => step!(SYMPLECTIC, true),
+                    (EXPLICIT, false) => step!(EXPLICIT, false),
+                    (EXPLICIT, true) => step!(EXPLICIT, true),
+                    (_, false) => step!(VERLET, false),
+                    (_, true) => step!(VERLET, true),
+                }
             }
         }
         if !PLAIN && k.step.sphere.is_some() {
