@@ -4,6 +4,7 @@
 //! [`super`]).
 
 use super::contact::ContactRows;
+use super::simd::align_frame;
 use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, SimdLevel};
 
 /// Read-only inputs of a step.
@@ -471,13 +472,7 @@ pub(super) fn row_step<
     } else {
         0
     };
-    // A cache line on the stack, which holds the frame, and so the blocks' spills
-    // of vectors, aligned to it: in a frame on 16 bytes half the 32-byte spills
-    // can straddle two lines (the drape ran 0.93x as fast so, on an AMD EPYC).
-    #[repr(C, align(64))]
-    struct FrameAlign([u8; 64]);
-    let mut frame_align = FrameAlign([0; 64]);
-    std::hint::black_box(&mut frame_align);
+    align_frame();
     let mut carry = [[k.step.zero; 3]; 3];
     let mut c = 0;
     // The blocks of the row, with the step's method and ground chosen once for the

@@ -11,6 +11,7 @@ use super::super::constraints::XpbdSpring;
 use super::super::duo::Duo;
 use super::super::forces::EPSILON_LENGTH;
 use super::row::{difference, moved};
+use super::simd::align_frame;
 use super::{
     BLOCK, Buf, Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, Simd, SpringCoefficients, State,
     Stencil,
@@ -440,6 +441,7 @@ pub(super) fn spring_sweep<S: Simd, const FIXED: bool>(
     base: usize,
     lines: &SweepLines<S::E>,
 ) {
+    align_frame();
     let rows = lines.sweep.lines(lines.rows.clone());
     match lines.sweep.line.rule {
         LineRule::Limit { .. } => {
