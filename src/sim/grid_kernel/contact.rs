@@ -12,7 +12,7 @@ use super::super::duo::Duo;
 use super::super::lanes::{Floats, Lanes, V3};
 use super::frame::whole_units;
 use super::row::difference;
-use super::simd::{Simd, Vector};
+use super::simd::{Simd, Vector, align_frame};
 #[cfg(target_arch = "x86_64")]
 use super::x86;
 use super::{Frame, Grid, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
@@ -169,6 +169,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
         first: usize,
         rows: impl Iterator<Item = usize>,
     ) {
+        align_frame();
         if self.frame.fixed {
             self.resolve_rows_in::<true>(out, first, rows)
         } else {
