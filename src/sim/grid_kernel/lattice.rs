@@ -1233,15 +1233,16 @@ unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
     if OWN {
         // SAFETY: as above.
         let w = unsafe { s.load(k.inv_mass.add(at)) };
-        for i in 0..3 {
-            // SAFETY: the accumulator's entries for this block are complete (every
-            // other end but the `+1` run's is a row or more back); the outputs
-            // hold the band from `start`.
-            unsafe {
-                let earlier = s.load(k.acc[i].add(at - k.from));
-                let force = s.sub(s.add(earlier, own[i]), shifted[i]);
-                macro_rules! step {
-                    ($method:ident, $ground:literal) => {
+        // The three components in the step's method and ground, chosen once.
+        macro_rules! step {
+            ($method:ident, $ground:literal) => {
+                for i in 0..3 {
+                    // SAFETY: the accumulator's entries for this block are complete
+                    // (every other end but the `+1` run's is a row or more back); the
+                    // outputs hold the band from `start`.
+                    unsafe {
+                        let earlier = s.load(k.acc[i].add(at - k.from));
+                        let force = s.sub(s.add(earlier, own[i]), shifted[i]);
                         integrate::<S, PLAIN, FIXED, { $method }, $ground>(
                             &k.step,
                             at,
@@ -1251,17 +1252,18 @@ unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
                             a,
                             force,
                         )
-                    };
+                    }
                 }
-                match (k.step.method, k.step.ground_on) {
-                    (SYMPLECTIC, false) => step!(SYMPLECTIC, false),
-                    (SYMPLECTIC, true) => step!(SYMPLECTIC, true),
-                    (EXPLICIT, false) => step!(EXPLICIT, false),
-                    (EXPLICIT, true) => step!(EXPLICIT, true),
-                    (_, false) => step!(VERLET, false),
-                    (_, true) => step!(VERLET, true),
-                }
-            }
+            };
+        }
+        match (k.step.method, k.step.ground_on) {
+            _ if PLAIN => step!(SYMPLECTIC, false),
+            (SYMPLECTIC, false) => step!(SYMPLECTIC, false),
+            (SYMPLECTIC, true) => step!(SYMPLECTIC, true),
+            (EXPLICIT, false) => step!(EXPLICIT, false),
+            (EXPLICIT, true) => step!(EXPLICIT, true),
+            (_, false) => step!(VERLET, false),
+            (_, true) => step!(VERLET, true),
         }
         if !PLAIN && k.step.sphere.is_some() {
             // SAFETY: as above, after `integrate` ran for all three components.
