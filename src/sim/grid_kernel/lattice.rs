@@ -56,7 +56,7 @@ use std::ops::Range;
 
 use glam::DVec3;
 
-use super::row::{EXPLICIT, SYMPLECTIC, VERLET};
+use super::row::{EXPLICIT, SYMPLECTIC, VERLET, with_step_constants};
 use super::spring_passes::{
     ColourClass, Multipliers, RowColour, SpringRule, Sweep, SweepLines, SweepMultipliers,
     SweepRules, SweepSprings, step_start,
@@ -1256,15 +1256,7 @@ unsafe fn block<S: Simd, const OWN: bool, const PLAIN: bool, const FIXED: bool>(
                 }
             };
         }
-        match (k.step.method, k.step.ground_on) {
-            _ if PLAIN => step!(SYMPLECTIC, false),
-            (SYMPLECTIC, false) => step!(SYMPLECTIC, false),
-            (SYMPLECTIC, true) => step!(SYMPLECTIC, true),
-            (EXPLICIT, false) => step!(EXPLICIT, false),
-            (EXPLICIT, true) => step!(EXPLICIT, true),
-            (_, false) => step!(VERLET, false),
-            (_, true) => step!(VERLET, true),
-        }
+        with_step_constants!(PLAIN, k.step, step);
         if !PLAIN && k.step.sphere.is_some() {
             // SAFETY: as above, after `integrate` ran for all three components.
             unsafe { project_out_of_sphere::<S, FIXED>(&k.step, at - k.start, w) };

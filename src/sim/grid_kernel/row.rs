@@ -314,6 +314,25 @@ pub(super) const SYMPLECTIC: u8 = 0;
 pub(super) const EXPLICIT: u8 = 1;
 pub(super) const VERLET: u8 = 2;
 
+/// Runs `$run!(METHOD, GROUND)`, a macro of the caller's that takes the step's
+/// method and ground as constants, with those of `$step` ([`StepLanes`]), or the
+/// plain step's where `$plain`: the one choice the row pass and the lattice make
+/// before their blocks.
+macro_rules! with_step_constants {
+    ($plain:expr, $step:expr, $run:ident) => {
+        match ($step.method, $step.ground_on) {
+            _ if $plain => $run!(SYMPLECTIC, false),
+            (SYMPLECTIC, false) => $run!(SYMPLECTIC, false),
+            (SYMPLECTIC, true) => $run!(SYMPLECTIC, true),
+            (EXPLICIT, false) => $run!(EXPLICIT, false),
+            (EXPLICIT, true) => $run!(EXPLICIT, true),
+            (_, false) => $run!(VERLET, false),
+            (_, true) => $run!(VERLET, true),
+        }
+    };
+}
+pub(super) use with_step_constants;
+
 /// Splatted constants and raw pointers for [`integrate`] and
 /// [`project_out_of_sphere`]: the step of a particle under its force, shared by the
 /// grid's rows and the lattice's blocks ([`super::lattice`]).
@@ -499,15 +518,7 @@ pub(super) fn row_step<
             }
         }};
     }
-    match (k.step.method, !PLAIN && p.ground_on) {
-        _ if PLAIN => blocks!(SYMPLECTIC, false),
-        (SYMPLECTIC, false) => blocks!(SYMPLECTIC, false),
-        (SYMPLECTIC, true) => blocks!(SYMPLECTIC, true),
-        (EXPLICIT, false) => blocks!(EXPLICIT, false),
-        (EXPLICIT, true) => blocks!(EXPLICIT, true),
-        (_, false) => blocks!(VERLET, false),
-        (_, true) => blocks!(VERLET, true),
-    }
+    with_step_constants!(PLAIN, k.step, blocks);
     if let Some(contact) = ctx.contact.filter(|c| OWN && c.friction_in_rows) {
         band.near_sphere[row - band.r0] =
             contact.ground_friction_row::<S, FIXED>(s, out, (b[0], lo), nv);
