@@ -332,12 +332,10 @@ impl<E: Real> Sweep<E> {
 
     /// The rows of `rows` whose springs are in the class: every row along rows
     /// (the class is a pattern of columns), else those of the class's colour.
-    fn lines(&self, rows: Range<usize>) -> impl Iterator<Item = usize> + '_ {
-        let ColourClass {
-            rows: colour_of,
-            colour,
-        } = self.class;
-        rows.filter(move |r| colour_of.is_none_or(|c| ((r % c.wrap) / c.period) % 2 == colour))
+    /// Counted along the rows ([`ClassRows`]), with two divisions a call: two a
+    /// row (the test as written) cost the sheet's pass about 40 cycles a line.
+    fn lines(&self, rows: Range<usize>) -> ClassRows {
+        ClassRows::new(self.class, rows)
     }
 
     /// The rows the sweep's lines start on.
@@ -362,6 +360,76 @@ impl<E: Real> Sweep<E> {
             b: ((r + self.dr) * stride + self.c0).wrapping_add_signed(self.dc),
             ..self.line
         }
+    }
+}
+
+/// The rows of `rows` in a colour class ([`Sweep::lines`]): runs of `period`
+/// rows, every other run of a wrap in the class, from where `rows.start` is in
+/// its wrap (`at`) and run (`into`) and that run's colour (`odd`). A run out of
+/// the class is passed over in one go.
+struct ClassRows {
+    rows: Range<usize>,
+    at: usize,
+    into: usize,
+    odd: usize,
+    wrap: usize,
+    period: usize,
+    colour: usize,
+}
+
+impl ClassRows {
+    fn new(class: ColourClass, rows: Range<usize>) -> Self {
+        let ColourClass {
+            rows: colour_of,
+            colour,
+        } = class;
+        // Every row along rows: one run of rows without end.
+        let RowColour { wrap, period } = colour_of.unwrap_or(RowColour {
+            wrap: usize::MAX,
+            period: usize::MAX,
+        });
+        let at = rows.start % wrap;
+        let odd = if colour_of.is_some() {
+            (at / period) % 2
+        } else {
+            colour
+        };
+        ClassRows {
+            rows,
+            at,
+            into: at % period,
+            odd,
+            wrap,
+            period,
+            colour,
+        }
+    }
+
+    /// Moves on `m` rows, to the end of the run or the wrap at most.
+    fn advance(&mut self, m: usize) {
+        self.rows.start += m;
+        self.at += m;
+        self.into += m;
+        if self.at == self.wrap {
+            (self.at, self.into, self.odd) = (0, 0, 0);
+        } else if self.into == self.period {
+            (self.into, self.odd) = (0, self.odd ^ 1);
+        }
+    }
+}
+
+impl Iterator for ClassRows {
+    type Item = usize;
+
+    fn next(&mut self) -> Option<usize> {
+        while self.odd != self.colour && !self.rows.is_empty() {
+            self.advance((self.period - self.into).min(self.wrap - self.at));
+        }
+        let r = self.rows.start;
+        (r < self.rows.end).then(|| {
+            self.advance(1);
+            r
+        })
     }
 }
 
@@ -432,8 +500,10 @@ pub(super) struct SweepMultipliers<E> {
 unsafe impl<E: Send> Send for SweepMultipliers<E> {}
 unsafe impl<E: Sync> Sync for SweepMultipliers<E> {}
 
-/// [`spring_line`] on each line of `lines`, in order of rows (one call for a
-/// sweep, where a call per line cost its set-up every 8 blocks at 128 columns).
+/// [`spring_line`] on each line of `lines`, in order of rows: one call for a
+/// sweep, where a call per line cost its set-up every 8 blocks at 128 columns.
+/// What the lines share ([`LineKernel`]: the rule's constants, the arrays, the
+/// bounds) is set up once; a line is then its two offsets.
 #[inline(always)]
 pub(super) fn spring_sweep<S: Simd, const FIXED: bool>(
     s: S,
@@ -442,20 +512,29 @@ pub(super) fn spring_sweep<S: Simd, const FIXED: bool>(
     lines: &SweepLines<S::E>,
 ) {
     align_frame();
-    let rows = lines.sweep.lines(lines.rows.clone());
-    match lines.sweep.line.rule {
-        LineRule::Limit { .. } => {
+    let Some(kernel) = LineKernel::new(s, out, base, lines) else {
+        return;
+    };
+    let (stride, sweep) = (lines.stride, lines.sweep);
+    let rows = sweep.lines(lines.rows.clone());
+    // The lanes' masks (torn springs, ghosts) are tested in the blocks only when
+    // there are some: a test a block cost the sheet's pass 2 instructions a block.
+    macro_rules! run {
+        ($xpbd:literal, $masked:literal) => {
             for r in rows {
-                let line = lines.sweep.line_at(r, lines.stride);
-                spring_line::<S, FIXED, false>(s, out, base, lines, &line);
+                let line = sweep.line_at(r, stride);
+                // SAFETY: every line of the sweep is inside the bounds that
+                // `LineKernel::new` asserted.
+                unsafe { spring_line::<S, FIXED, $xpbd, $masked>(&kernel, (line.a, line.b)) };
             }
-        }
-        LineRule::Xpbd { .. } => {
-            for r in rows {
-                let line = lines.sweep.line_at(r, lines.stride);
-                spring_line::<S, FIXED, true>(s, out, base, lines, &line);
-            }
-        }
+        };
+    }
+    let masked = kernel.alive.is_some() || kernel.real.is_some();
+    match (sweep.line.rule, masked) {
+        (LineRule::Limit { .. }, false) => run!(false, false),
+        (LineRule::Limit { .. }, true) => run!(false, true),
+        (LineRule::Xpbd { .. }, false) => run!(true, false),
+        (LineRule::Xpbd { .. }, true) => run!(true, true),
     }
 }
 
@@ -482,10 +561,132 @@ macro_rules! per_axis {
     };
 }
 
-/// Corrects the springs of `line` in `out` (the state's arrays from array index
-/// `base` on), in blocks of `S::LANES` springs, four blocks at a time: measures
-/// them all, then for each block with a spring to correct its corrections and at
-/// once the moves of its first ends and of its second ends.
+/// What the lines of one [`SweepLines`] share, splatted and checked once: the
+/// rule's constants, the class's lanes, and raw pointers to the arrays (the
+/// state's from array index `base` on, the rest from 0), whose bounds hold every
+/// line of the sweep.
+struct LineKernel<S: Simd> {
+    s: S,
+    /// Springs in a line, and the lanes of its blocks (`len` rounded up).
+    len: usize,
+    lanes: usize,
+    base: usize,
+    /// [`SpringLine::class`], and times the lanes inside the line in its last
+    /// block.
+    class: S::V,
+    class_tail: S::V,
+    /// 1 in the lanes past the line's end in its last block.
+    past_tail: S::V,
+    longest: S::V,
+    longest2: S::V,
+    rest: S::V,
+    alpha: S::V,
+    minus_alpha: S::V,
+    gamma: S::V,
+    one_gamma: S::V,
+    one: S::V,
+    inv_dt: S::V,
+    tiny_length2: S::E,
+    pos: [*mut S::E; 3],
+    vel: [*mut S::E; 3],
+    /// Verlet's update velocities (empty without Verlet).
+    upd: [*mut S::E; 3],
+    verlet: bool,
+    inv_mass: *const S::E,
+    start: [*const S::E; 3],
+    alive: Option<*const S::E>,
+    real: Option<*const S::E>,
+    multipliers: Option<SweepMultipliers<S::E>>,
+}
+
+impl<S: Simd> LineKernel<S> {
+    /// The kernel of `lines` on `out` (the state's arrays from array index `base`
+    /// on), after asserting that every array holds what the sweep's first and
+    /// last lines reach (lines further down reach further); `None` without lines.
+    #[inline(always)]
+    fn new(s: S, out: &mut Out<S::E>, base: usize, lines: &SweepLines<S::E>) -> Option<Self> {
+        let n = S::LANES;
+        let sweep = lines.sweep;
+        let line = &sweep.line;
+        let rows = lines.rows.clone();
+        if rows.is_empty() {
+            return None;
+        }
+        let (first, last) = (
+            sweep.line_at(rows.start, lines.stride),
+            sweep.line_at(rows.end - 1, lines.stride),
+        );
+        let len = line.len;
+        let lanes = len.next_multiple_of(n);
+        // The state's arrays, the inverse masses and the ghosts' mask from `base`:
+        // every line's ends from the first's (the second end is below or right of
+        // the first) to the last's, `lanes` floats each.
+        assert!(first.a >= base && first.b >= base);
+        // The last line's reach: from index 0 (`whole_end`), and from `base`.
+        let whole_end = last.a.max(last.b) + lanes;
+        let end = whole_end - base;
+        let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
+        let verlet = !ux.is_empty();
+        let fits = |arrays: [&[S::E]; 3], end: usize| arrays.iter().all(|p| p.len() >= end);
+        assert!(lines.inv_mass.len() >= whole_end);
+        assert!(fits([x, y, z], end) && fits([vx, vy, vz], end));
+        assert!(!verlet || fits([ux, uy, uz], end));
+        let xpbd = matches!(line.rule, LineRule::Xpbd { .. });
+        assert!(!xpbd || fits(lines.start, whole_end));
+        let multipliers = lines.multipliers.filter(|_| xpbd);
+        assert!(multipliers.is_none_or(|m| m.len >= last.a + lanes));
+        assert!(lines.alive.is_none_or(|m| m.len() >= last.a + lanes));
+        assert!(lines.real.is_none_or(|m| m.len() >= whole_end));
+        let (zero, one) = (S::E::ZERO, S::E::ONE);
+        let (longest, rest, alpha, gamma) = match line.rule {
+            LineRule::Limit { longest } => (longest, zero, zero, zero),
+            LineRule::Xpbd { rest, alpha, gamma } => (zero, rest, alpha, gamma),
+        };
+        let tail: [S::E; BLOCK] =
+            std::array::from_fn(|l| if lanes - n + l < len { one } else { zero });
+        let past: [S::E; BLOCK] = tail.map(|t| one - t);
+        let class = line.class;
+        let class_tail: [S::E; BLOCK] = std::array::from_fn(|l| class[l] * tail[l]);
+        // SAFETY: the arrays hold at least `BLOCK >= LANES` floats.
+        let splat_block = |a: &[S::E; BLOCK]| unsafe { s.load(a.as_ptr()) };
+        Some(LineKernel {
+            s,
+            len,
+            lanes,
+            base,
+            class: splat_block(&class),
+            class_tail: splat_block(&class_tail),
+            past_tail: splat_block(&past),
+            longest: s.splat(longest),
+            longest2: s.splat(longest * longest),
+            rest: s.splat(rest),
+            alpha: s.splat(alpha),
+            minus_alpha: s.splat(zero - alpha),
+            gamma: s.splat(gamma),
+            one_gamma: s.splat(one + gamma),
+            one: s.splat(one),
+            inv_dt: s.splat(line.inv_dt),
+            tiny_length2: line.tiny_length2,
+            pos: [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()],
+            vel: [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()],
+            upd: [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()],
+            verlet,
+            // SAFETY: `base <= first.a <= inv_mass.len()` (asserted).
+            inv_mass: unsafe { lines.inv_mass.as_ptr().add(base) },
+            start: lines.start.map(<[S::E]>::as_ptr),
+            alive: lines.alive.map(<[S::E]>::as_ptr),
+            // SAFETY: as for the inverse masses.
+            real: lines.real.map(|m| unsafe { m.as_ptr().add(base) }),
+            multipliers,
+        })
+    }
+}
+
+/// Corrects the springs of the line whose first ends are at array indices `line.0
+/// .. + len` and second ends at `line.1 .. + len`, in blocks of `S::LANES`
+/// springs, four blocks at a time: measures them all, then for each block with a
+/// spring to correct its corrections and at once the moves of its first ends and
+/// of its second ends.
 ///
 /// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
 ///   as [`crate::sim::constraints::length_correction`] does.
@@ -494,63 +695,53 @@ macro_rules! per_axis {
 ///
 /// Each particle has at most one spring in a class, so the moves do not interact:
 /// a lane out of the class (or past the line, or a spring that tore: 0 in the
-/// direction's mask, when some did) gets a move of 0, which leaves its particle as
-/// it was. A move `δ` adds `δ / h` to the velocity (and to Verlet's `u`): the move
-/// as computed, where fixed-point positions take it rounded to a whole unit, so
-/// that the part of it under half a unit reaches the position through the
-/// velocity at the next step rather than never (a correction that stayed under
-/// half a unit step after step, as XPBD's small ones of a cloth do, was lost
-/// whole: XPBD's drape parted from the f64 engine by 9e-5 m over 320 steps, 3e-6
-/// m so). The lanes
-/// past `len` reach ghost columns inside the row's padding (rows are [`BLOCK`]
-/// floats longer than their blocks).
+/// direction's mask, when some did, tested with `MASKED`) gets a move of 0, which
+/// leaves its particle as it was. A move `δ` adds `δ / h` to the velocity (and to
+/// Verlet's `u`): the move as computed, where fixed-point positions take it
+/// rounded to a whole unit, so that the part of it under half a unit reaches the
+/// position through the velocity at the next step rather than never (a correction
+/// that stayed under half a unit step after step, as XPBD's small ones of a cloth
+/// do, was lost whole: XPBD's drape parted from the f64 engine by 9e-5 m over 320
+/// steps, 3e-6 m so). The lanes past `len` reach ghost columns inside the row's
+/// padding (rows are [`BLOCK`] floats longer than their blocks).
+///
+/// # Safety
+/// The line is one of the sweep whose bounds `k` asserted ([`LineKernel::new`]).
 #[inline(always)]
-fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
-    s: S,
-    out: &mut Out<S::E>,
-    base: usize,
-    lines: &SweepLines<S::E>,
-    line: &SpringLine<S::E>,
+unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>(
+    k: &LineKernel<S>,
+    (line_a, line_b): (usize, usize),
 ) {
+    let s = k.s;
     let n = S::LANES;
-    let &SpringLine { len, inv_dt, .. } = line;
+    let (len, lanes) = (k.len, k.lanes);
     let (zero, one) = (S::E::ZERO, S::E::ONE);
-    let (longest, rest, alpha, gamma) = match line.rule {
-        LineRule::Limit { longest } => (longest, zero, zero, zero),
-        LineRule::Xpbd { rest, alpha, gamma } => (zero, rest, alpha, gamma),
-    };
-    let (a, b) = (line.a - base, line.b - base);
-    let lanes = len.next_multiple_of(n);
-    let end = a.max(b) + lanes;
-    let inv_mass = &lines.inv_mass[base..];
-    let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
-    let verlet = !ux.is_empty();
-    let fits = |arrays: [&[S::E]; 3], end: usize| arrays.iter().all(|p| p.len() >= end);
-    // Every block below reads and writes inside these bounds.
-    assert!(inv_mass.len() >= end && fits([x, y, z], end) && fits([vx, vy, vz], end));
-    assert!(!verlet || fits([ux, uy, uz], end));
-    let [sx, sy, sz] = lines.start;
-    let start_end = line.a.max(line.b) + lanes;
-    assert!(!XPBD || fits([sx, sy, sz], start_end));
-    let multipliers = lines.multipliers.filter(|_| XPBD);
-    assert!(multipliers.is_none_or(|m| m.len >= line.a + lanes));
-    let alive = lines.alive.map(|m| &m[line.a..line.a + lanes]);
-    let real = lines.real.map(|m| &m[base..]);
-    assert!(real.is_none_or(|m| m.len() >= end));
-    let pos = [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()];
-    let vel = [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()];
-    let upd = [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()];
-    let start = [sx.as_ptr(), sy.as_ptr(), sz.as_ptr()];
-    let (longest2, inv_dt_v) = (s.splat(longest * longest), s.splat(inv_dt));
-    let (longest_v, one_v) = (s.splat(longest), s.splat(one));
-    let (rest_v, alpha_v) = (s.splat(rest), s.splat(alpha));
-    let (gamma_v, one_gamma_v) = (s.splat(gamma), s.splat(one + gamma));
-    let minus_alpha_v = s.splat(zero - alpha);
-    let tiny_length2 = line.tiny_length2;
+    let (a, b) = (line_a - k.base, line_b - k.base);
+    let (pos, start) = (k.pos, k.start);
+    let multipliers = k.multipliers;
     // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
-    // `a + lanes` and `b + lanes` floats (asserted above; the starting positions
-    // `line.a + lanes` and `line.b + lanes`).
+    // `a + lanes` and `b + lanes` floats from `base` on (the starting positions,
+    // the masks of torn springs and the multipliers `line_a + lanes` and `line_b
+    // + lanes` from 0; asserted by `LineKernel::new`).
     let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
+    // The coordinates of the springs' first and second ends, from the line's
+    // start: a block's loads then take its offset as a constant, where an address
+    // a block cost the pass a register and an instruction.
+    // SAFETY: `a` and `b` are inside the arrays (see above).
+    // (Written out: `map` here ran as a call a line.)
+    let ends = unsafe {
+        [
+            [pos[0].add(a), pos[1].add(a), pos[2].add(a)],
+            [pos[0].add(b), pos[1].add(b), pos[2].add(b)],
+        ]
+    };
+    // The vectors `d` of the block at `j`, first end less second.
+    macro_rules! vectors {
+        ($j:expr) => {{
+            let j = $j;
+            per_axis!(|i| difference::<S, FIXED>(s, load(ends[0][i], j), load(ends[1][i], j)))
+        }};
+    }
     // Squared lengths of the vectors `d`.
     macro_rules! length2 {
         ($d:expr) => {{
@@ -561,30 +752,30 @@ fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
     // The block at `j`: its springs' vectors `d` (first end less second), their
     // squared lengths, positive where a spring is in the class (and for the
     // stretch limit over the limit), and whether any is.
+    // (`$tail`: whether the block may be the line's last, with lanes past it.)
     macro_rules! measure {
-        ($j:expr) => {{
+        ($j:expr, $tail:literal) => {{
             let j = $j;
-            let d: [S::V; 3] =
-                per_axis!(|k| difference::<S, FIXED>(s, load(pos[k], a + j), load(pos[k], b + j)));
-            let mut keep = load(line.class.as_ptr(), 0);
-            if j + n > len {
-                let tail: [S::E; BLOCK] =
-                    std::array::from_fn(|l| if j + l < len { one } else { zero });
-                keep = s.mul(keep, load(tail.as_ptr(), 0));
-            }
-            if let Some(m) = alive {
-                keep = s.mul(keep, load(m.as_ptr(), j));
-            }
-            if let Some(m) = real {
-                let both = s.mul(load(m.as_ptr(), a + j), load(m.as_ptr(), b + j));
-                keep = s.mul(keep, both);
+            let d: [S::V; 3] = vectors!(j);
+            let mut keep = if $tail && j + n > len {
+                k.class_tail
+            } else {
+                k.class
+            };
+            if MASKED {
+                if let Some(m) = k.alive {
+                    keep = s.mul(keep, load(m, line_a + j));
+                }
+                if let Some(m) = k.real {
+                    keep = s.mul(keep, s.mul(load(m, a + j), load(m, b + j)));
+                }
             }
             let l2 = length2!(d);
             // Positive where the spring is to be corrected.
             let over = if XPBD {
                 keep
             } else {
-                s.mul_sub(l2, keep, longest2)
+                s.mul_sub(l2, keep, k.longest2)
             };
             (d, l2, over, s.any_positive(over))
         }};
@@ -596,41 +787,52 @@ fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
     macro_rules! xpbd_scale {
         ($j:expr, $d:expr, $l2:expr, $w:expr) => {{
             let (j, d, l2, w) = ($j, $d, $l2, $w);
-            let moved: [S::V; 3] = per_axis!(|k| {
-                let (ia, ib) = (line.a + j, line.b + j);
+            let moved: [S::V; 3] = per_axis!(|i| {
+                let (ia, ib) = (line_a + j, line_b + j);
                 s.sub(
-                    difference::<S, FIXED>(s, load(pos[k], a + j), load(start[k], ia)),
-                    difference::<S, FIXED>(s, load(pos[k], b + j), load(start[k], ib)),
+                    difference::<S, FIXED>(s, load(pos[i], a + j), load(start[i], ia)),
+                    difference::<S, FIXED>(s, load(pos[i], b + j), load(start[i], ib)),
                 )
             });
-            let inv_l = s.rsqrt_or_zero(l2, tiny_length2);
+            let inv_l = s.rsqrt_or_zero(l2, k.tiny_length2);
             // n·Δ with n = d / l, and C + α̃ λ.
             let along = s.mul_add(
                 d[0],
                 moved[0],
                 s.mul_add(d[1], moved[1], s.mul(d[2], moved[2])),
             );
-            let stretch = s.mul_sub(l2, inv_l, rest_v);
+            let stretch = s.mul_sub(l2, inv_l, k.rest);
             let stretch = match multipliers {
-                Some(m) if m.second => s.add(stretch, load(m.values, line.a + j)),
+                Some(m) if m.second => s.add(stretch, load(m.values, line_a + j)),
                 _ => stretch,
             };
             let along = s.mul(along, inv_l);
             let t = s.div(
-                s.mul_add(gamma_v, along, stretch),
-                s.mul_add(one_gamma_v, w, alpha_v),
+                s.mul_add(k.gamma, along, stretch),
+                s.mul_add(k.one_gamma, w, k.alpha),
             );
             (s.mul(t, inv_l), t)
         }};
     }
     // Moves the ends of the block at `j` by their corrections.
+    // (The stretch limit measures its springs again: kept from `measure`, the
+    // vectors of four blocks went to the stack, where most blocks correct none.)
     macro_rules! correct {
         ($j:expr, $d:expr, $l2:expr, $over:expr) => {{
-            let (j, d, l2, over) = ($j, $d, $l2, $over);
-            let w = s.add(
-                load(inv_mass.as_ptr(), a + j),
-                load(inv_mass.as_ptr(), b + j),
-            );
+            let (j, over) = ($j, $over);
+            // The stretch limit's kernel, opaque here: else the compiler worked
+            // out the addresses of every array the correction touches before
+            // each line and kept them on the stack, about 60 instructions a line
+            // (11 a particle-step of the sheet's pass), for blocks that mostly
+            // correct nothing. XPBD corrects every block.
+            let k = if XPBD { k } else { std::hint::black_box(k) };
+            let (d, l2) = if XPBD {
+                ($d, $l2)
+            } else {
+                let d: [S::V; 3] = vectors!(j);
+                (d, length2!(d))
+            };
+            let w = s.add(load(k.inv_mass, a + j), load(k.inv_mass, b + j));
             // Positive where a spring to correct is not pinned at both ends.
             let over = s.keep_if_positive(w, over);
             let scale = if XPBD {
@@ -639,22 +841,19 @@ fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
                     // `α̃ λ` after the first correction (from `λ = 0`): `-α̃ t`, 0
                     // where no spring was corrected; lanes past the line keep
                     // what they hold (they may be the next row's springs).
-                    let mut kept = s.keep_if_positive(over, s.mul(minus_alpha_v, t));
-                    let i = line.a + j;
+                    let mut kept = s.keep_if_positive(over, s.mul(k.minus_alpha, t));
+                    let i = line_a + j;
                     if j + n > len {
-                        let past: [S::E; BLOCK] =
-                            std::array::from_fn(|l| if j + l < len { zero } else { one });
-                        let past = load(past.as_ptr(), 0);
-                        kept = s.add(kept, s.keep_if_positive(past, load(m.values, i)));
+                        kept = s.add(kept, s.keep_if_positive(k.past_tail, load(m.values, i)));
                     }
-                    // SAFETY: `i + n <= line.a + lanes <= m.len` (asserted above).
+                    // SAFETY: `i + n <= line_a + lanes <= m.len` (asserted).
                     unsafe { s.store(m.values.add(i), kept) };
                 }
                 s.keep_if_positive(over, scale)
             } else {
                 // (l - longest) / (l w), with 1 / l from the lanes' reciprocal
                 // square root.
-                let shortening = s.sub(one_v, s.mul(longest_v, s.rsqrt_or_zero(l2, zero)));
+                let shortening = s.sub(k.one, s.mul(k.longest, s.rsqrt_or_zero(l2, zero)));
                 s.keep_if_positive(over, s.div(shortening, w))
             };
             // Exactly no move where none is due: a lane out of the class or past
@@ -662,22 +861,18 @@ fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
             // once a diverging neighbour's `d` is not finite.
             let d: [S::V; 3] = per_axis!(|axis| s.keep_if_positive(over, d[axis]));
             for (start, sign) in [(a, zero - one), (b, one)] {
-                let k = s.mul(
-                    s.mul(s.splat(sign), load(inv_mass.as_ptr(), start + j)),
-                    scale,
-                );
+                let f = s.mul(s.mul(s.splat(sign), load(k.inv_mass, start + j)), scale);
                 for axis in 0..3 {
-                    let t = s.mul(k, d[axis]);
+                    let t = s.mul(f, d[axis]);
                     let i = start + j;
                     // SAFETY: as above.
                     unsafe {
-                        let new = moved::<S, FIXED>(s, load(pos[axis], i), one_v, t);
-                        s.store(pos[axis].add(i), new);
-                        let v = s.mul_add(t, inv_dt_v, load(vel[axis], i));
-                        s.store(vel[axis].add(i), v);
-                        if verlet {
-                            let u = s.mul_add(t, inv_dt_v, load(upd[axis], i));
-                            s.store(upd[axis].add(i), u);
+                        let (p, v, u) = (k.pos[axis].add(i), k.vel[axis].add(i), k.upd[axis]);
+                        s.store(p, moved::<S, FIXED>(s, s.load(p), k.one, t));
+                        s.store(v, s.mul_add(t, k.inv_dt, s.load(v)));
+                        if k.verlet {
+                            let u = u.add(i);
+                            s.store(u, s.mul_add(t, k.inv_dt, s.load(u)));
                         }
                     }
                 }
@@ -689,26 +884,65 @@ fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool>(
     // class share no particle with the next block's, and a lane out of the class
     // moves nothing, so a block's moves change nothing the next one measured.
     macro_rules! blocks {
-        ($j:expr; $($k:tt)+) => {{
+        ($tail:literal; $j:expr; $($b:tt)+) => {{
             let j = $j;
-            let m = ($(measure!(j + $k * n),)+);
+            let m = ($(measure!(j + $b * n, $tail),)+);
             $(
-                if m.$k.3 {
-                    correct!(j + $k * n, m.$k.0, m.$k.1, m.$k.2);
+                if m.$b.3 {
+                    correct!(j + $b * n, m.$b.0, m.$b.1, m.$b.2);
                 }
             )+
         }};
     }
+    // The blocks below `whole` have no lanes past the line: they take the class's
+    // lanes without a test (the test cost the sheet's pass 6 instructions a block
+    // of four).
+    let whole = len - len % n;
     let mut j = 0;
-    while j + 3 * n < lanes {
-        blocks!(j; 0 1 2 3);
+    while j + 4 * n <= whole {
+        blocks!(false; j; 0 1 2 3);
         j += 4 * n;
     }
-    if j + n < lanes {
-        blocks!(j; 0 1);
+    if j + 2 * n <= whole {
+        blocks!(false; j; 0 1);
         j += 2 * n;
     }
-    if j < lanes {
-        blocks!(j; 0);
+    while j < lanes {
+        blocks!(true; j; 0);
+        j += n;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{ClassRows, ColourClass, RowColour};
+
+    /// The rows of each class, counted along, are those the class's rule
+    /// names: `((r % wrap) / period) % 2 == colour` (every row along rows),
+    /// from every start.
+    #[test]
+    fn class_rows_are_the_rule_s() {
+        for wrap in [usize::MAX, 5, 7, 12] {
+            for period in [1, 2, 3] {
+                for colour in [0, 1] {
+                    for start in 0..30 {
+                        let rows = start..start + 25;
+                        let class = ColourClass {
+                            rows: Some(RowColour { wrap, period }),
+                            colour,
+                        };
+                        let rule: Vec<usize> = rows
+                            .clone()
+                            .filter(|r| ((r % wrap) / period) % 2 == colour)
+                            .collect();
+                        let counted: Vec<usize> = ClassRows::new(class, rows.clone()).collect();
+                        assert_eq!(counted, rule, "wrap {wrap} period {period} colour {colour}");
+                        let along = ColourClass { rows: None, colour };
+                        let all: Vec<usize> = ClassRows::new(along, rows.clone()).collect();
+                        assert_eq!(all, rows.collect::<Vec<_>>());
+                    }
+                }
+            }
+        }
     }
 }
