@@ -60,6 +60,9 @@ pub(super) trait Simd: Copy {
     fn fixed_sub(self, a: Self::V, b: Self::V) -> Self::V;
     /// Fixed-point position `x` moved by `t` units (rounded to the nearest).
     fn fixed_add(self, x: Self::V, t: Self::V) -> Self::V;
+    /// Lanes `l` and `l ^ DC` exchanged, for `DC` 1 or 2: `[v1, v0, v3, v2, ..]`
+    /// or `[v2, v3, v0, v1, ..]` (within each 128-bit part; bits moved as they are).
+    fn swap_pairs<const DC: usize>(self, v: Self::V) -> Self::V;
     /// Lanes moved up by one: `[prev[LANES-1], cur[0], .., cur[LANES-2]]`.
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V;
     /// Lanes moved up by two: `[prev[LANES-2], prev[LANES-1], cur[0], ..]`.
@@ -179,6 +182,10 @@ impl<E: Real> Simd for Portable<E> {
     #[inline(always)]
     fn fixed_add(self, x: Self::V, t: Self::V) -> Self::V {
         std::array::from_fn(|i| E::fixed_add(x[i], t[i]))
+    }
+    #[inline(always)]
+    fn swap_pairs<const DC: usize>(self, v: Self::V) -> Self::V {
+        std::array::from_fn(|i| v[i ^ DC])
     }
     #[inline(always)]
     fn shift1(self, prev: Self::V, cur: Self::V) -> Self::V {

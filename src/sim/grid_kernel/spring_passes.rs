@@ -530,6 +530,25 @@ pub(super) fn spring_sweep<S: Simd, const FIXED: bool>(
         };
     }
     let masked = kernel.alive.is_some() || kernel.real.is_some();
+    // The stretch limit along rows, without masks: by pairs of lanes
+    // ([`pair_line`]).
+    if let (LineRule::Limit { .. }, false, 0, 1 | 2) = (sweep.line.rule, masked, sweep.dr, sweep.dc)
+    {
+        let pairs = PairBlocks::new(&kernel, sweep, lines);
+        for r in rows {
+            let start = sweep.line_at(r, stride).a + pairs.offset;
+            // SAFETY: every line of the sweep is inside the bounds that
+            // `PairBlocks::new` asserted.
+            unsafe {
+                if sweep.dc == 1 {
+                    pair_line::<S, FIXED, 1>(&kernel, &pairs, start);
+                } else {
+                    pair_line::<S, FIXED, 2>(&kernel, &pairs, start);
+                }
+            }
+        }
+        return;
+    }
     match (sweep.line.rule, masked) {
         (LineRule::Limit { .. }, false) => run!(false, false),
         (LineRule::Limit { .. }, true) => run!(false, true),
@@ -559,6 +578,165 @@ macro_rules! per_axis {
             },
         ]
     };
+}
+
+/// How a sweep of springs along rows (`dr` 0, `dc` 1 or 2) covers a row by
+/// pairs of lanes ([`pair_line`]): its blocks start `offset` columns into the row
+/// (the colour's first spring), `blocks` of them, the last with the lanes of
+/// `last` (1 where both ends of the lane's spring are on the cloth).
+struct PairBlocks<V> {
+    offset: usize,
+    blocks: usize,
+    last: V,
+}
+
+impl<V: Copy> PairBlocks<V> {
+    /// The blocks of `lines`' sweep, after asserting that every array holds the
+    /// last line's.
+    #[inline(always)]
+    fn new<S: Simd<V = V>>(
+        k: &LineKernel<S>,
+        sweep: &Sweep<S::E>,
+        lines: &SweepLines<S::E>,
+    ) -> Self {
+        let n = S::LANES;
+        let dc = sweep.dc.unsigned_abs();
+        let width = sweep.line.len + dc;
+        let offset = sweep.class.colour * dc;
+        let blocks = width.saturating_sub(offset).div_ceil(n);
+        // A block's lanes pair up within it: `n` is a multiple of `2 dc`.
+        assert!(n.is_multiple_of(2 * dc) && n <= BLOCK);
+        if let Some(r) = lines.rows.clone().last() {
+            let end = sweep.line_at(r, lines.stride).a + offset + blocks * n;
+            assert!(end >= k.base && lines.inv_mass.len() >= end);
+            // SAFETY: the arrays' lengths as `LineKernel::new` found them.
+            assert!(end - k.base <= k.state_len);
+        }
+        let last: [S::E; BLOCK] = std::array::from_fn(|l| {
+            // The spring of lane `l` ends at its column, or `dc` columns on when
+            // the lane is its first end.
+            let column = offset + blocks.saturating_sub(1) * n + l;
+            let far = if (l / dc) % 2 == 0 {
+                column + dc
+            } else {
+                column
+            };
+            if l < n && far < width {
+                S::E::ONE
+            } else {
+                S::E::ZERO
+            }
+        });
+        // SAFETY: `last` holds `BLOCK >= LANES` floats.
+        let last = unsafe { k.s.load(last.as_ptr()) };
+        PairBlocks {
+            offset,
+            blocks,
+            last,
+        }
+    }
+}
+
+/// The stretch limit on the springs of one colour along a row, `dc` 1 or 2
+/// columns long, from array index `start` (the colour's first spring) in blocks of
+/// lanes that hold both ends of their springs: lanes `l` and `l ^ DC` are the two
+/// ends of one ([`Simd::swap_pairs`]). Each lane takes its end's move, `-w d s`
+/// with `d` its end less the other (the first end's `d` negated at the second)
+/// and `s` the spring's scale: the same numbers, in the same operations, as
+/// [`spring_line`] gives each end (where the class's springs take half the lanes
+/// of a block measured, the first ends' block is stored and the second ends' block,
+/// `dc` lanes on, loaded again: a load that overlaps a store just made waits for
+/// it to reach the cache).
+///
+/// # Safety
+/// The line is one of the sweep whose bounds `k` and `pairs` asserted
+/// ([`LineKernel::new`], [`PairBlocks::new`]).
+#[inline(always)]
+unsafe fn pair_line<S: Simd, const FIXED: bool, const DC: usize>(
+    k: &LineKernel<S>,
+    pairs: &PairBlocks<S::V>,
+    start: usize,
+) {
+    let s = k.s;
+    let n = S::LANES;
+    let (zero, one) = (S::E::ZERO, S::E::ONE);
+    let first = start - k.base;
+    // SAFETY (every load and store below): `j + n <= first + blocks n`, inside
+    // the arrays (asserted by `PairBlocks::new`).
+    let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
+    // The block at `j` (lanes `keep`): its positions, vectors, squared lengths,
+    // positive where a spring is over the limit, and whether any is.
+    macro_rules! measure {
+        ($j:expr, $keep:expr) => {{
+            let j = $j;
+            let x: [S::V; 3] = per_axis!(|i| load(k.pos[i], j));
+            let d: [S::V; 3] =
+                per_axis!(|i| difference::<S, FIXED>(s, x[i], s.swap_pairs::<DC>(x[i])));
+            let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
+            let over = s.mul_sub(l2, $keep, k.longest2);
+            (x, d, l2, over, s.any_positive(over))
+        }};
+    }
+    // Moves the ends of the block at `j`.
+    macro_rules! correct {
+        ($j:expr, $m:expr) => {{
+            let (j, (x, d, l2, over, _)) = ($j, $m);
+            let inv_mass = load(k.inv_mass, j);
+            let w = s.add(inv_mass, s.swap_pairs::<DC>(inv_mass));
+            let over = s.keep_if_positive(w, over);
+            let shortening = s.sub(k.one, s.mul(k.longest, s.rsqrt_or_zero(l2, zero)));
+            let scale = s.keep_if_positive(over, s.div(shortening, w));
+            let d: [S::V; 3] = per_axis!(|i| s.keep_if_positive(over, d[i]));
+            let f = s.mul(s.mul(s.splat(zero - one), inv_mass), scale);
+            for axis in 0..3 {
+                let t = s.mul(f, d[axis]);
+                // SAFETY: as above.
+                unsafe {
+                    let (p, v) = (k.pos[axis].add(j), k.vel[axis].add(j));
+                    s.store(p, moved::<S, FIXED>(s, x[axis], k.one, t));
+                    s.store(v, s.mul_add(t, k.inv_dt, s.load(v)));
+                    if k.verlet {
+                        let u = k.upd[axis].add(j);
+                        s.store(u, s.mul_add(t, k.inv_dt, s.load(u)));
+                    }
+                }
+            }
+        }};
+    }
+    // Whole blocks four at a time, measured before any moves (the blocks share no
+    // particle), then the rest one at a time, the last with its lanes.
+    let (mut m, blocks) = (0, pairs.blocks);
+    while m + 4 < blocks {
+        let j = first + m * n;
+        let group = (
+            measure!(j, k.one),
+            measure!(j + n, k.one),
+            measure!(j + 2 * n, k.one),
+            measure!(j + 3 * n, k.one),
+        );
+        if group.0.4 {
+            correct!(j, group.0);
+        }
+        if group.1.4 {
+            correct!(j + n, group.1);
+        }
+        if group.2.4 {
+            correct!(j + 2 * n, group.2);
+        }
+        if group.3.4 {
+            correct!(j + 3 * n, group.3);
+        }
+        m += 4;
+    }
+    while m < blocks {
+        let j = first + m * n;
+        let keep = if m + 1 == blocks { pairs.last } else { k.one };
+        let block = measure!(j, keep);
+        if block.4 {
+            correct!(j, block);
+        }
+        m += 1;
+    }
 }
 
 /// What the lines of one [`SweepLines`] share, splatted and checked once: the
@@ -592,6 +770,8 @@ struct LineKernel<S: Simd> {
     /// Verlet's update velocities (empty without Verlet).
     upd: [*mut S::E; 3],
     verlet: bool,
+    /// The floats every state array holds from `base` on.
+    state_len: usize,
     inv_mass: *const S::E,
     start: [*const S::E; 3],
     alive: Option<*const S::E>,
@@ -628,6 +808,13 @@ impl<S: Simd> LineKernel<S> {
         let [x, y, z, vx, vy, vz, ux, uy, uz] = &mut out.0;
         let verlet = !ux.is_empty();
         let fits = |arrays: [&[S::E]; 3], end: usize| arrays.iter().all(|p| p.len() >= end);
+        let shortest = |arrays: [&[S::E]; 3]| arrays.iter().map(|a| a.len()).min().unwrap_or(0);
+        let state_len = shortest([x, y, z]).min(shortest([vx, vy, vz]));
+        let state_len = if verlet {
+            state_len.min(shortest([ux, uy, uz]))
+        } else {
+            state_len
+        };
         assert!(lines.inv_mass.len() >= whole_end);
         assert!(fits([x, y, z], end) && fits([vx, vy, vz], end));
         assert!(!verlet || fits([ux, uy, uz], end));
@@ -671,6 +858,7 @@ impl<S: Simd> LineKernel<S> {
             vel: [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()],
             upd: [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()],
             verlet,
+            state_len,
             // SAFETY: `base <= first.a <= inv_mass.len()` (asserted).
             inv_mass: unsafe { lines.inv_mass.as_ptr().add(base) },
             start: lines.start.map(<[S::E]>::as_ptr),

@@ -403,6 +403,16 @@ impl Simd for Avx512 {
         }
     }
     #[inline(always)]
+    fn swap_pairs<const DC: usize>(self, v: __m512) -> __m512 {
+        unsafe {
+            if DC == 1 {
+                _mm512_permute_ps::<0xB1>(v)
+            } else {
+                _mm512_permute_ps::<0x4E>(v)
+            }
+        }
+    }
+    #[inline(always)]
     fn shift1(self, prev: __m512, cur: __m512) -> __m512 {
         unsafe {
             _mm512_castsi512_ps(_mm512_alignr_epi32::<15>(
@@ -478,6 +488,16 @@ impl Simd for Avx2 {
                 _mm256_castps_si256(x),
                 _mm256_cvtps_epi32(t),
             ))
+        }
+    }
+    #[inline(always)]
+    fn swap_pairs<const DC: usize>(self, v: __m256) -> __m256 {
+        unsafe {
+            if DC == 1 {
+                _mm256_permute_ps::<0xB1>(v)
+            } else {
+                _mm256_permute_ps::<0x4E>(v)
+            }
         }
     }
     #[inline(always)]
@@ -560,6 +580,16 @@ impl Simd for Avx512F64 {
         by_lanes::<_, 8>(x, t, f64::fixed_add)
     }
     #[inline(always)]
+    fn swap_pairs<const DC: usize>(self, v: __m512d) -> __m512d {
+        unsafe {
+            if DC == 1 {
+                _mm512_permute_pd::<0x55>(v)
+            } else {
+                _mm512_shuffle_f64x2::<0xB1>(v, v)
+            }
+        }
+    }
+    #[inline(always)]
     fn shift1(self, prev: __m512d, cur: __m512d) -> __m512d {
         unsafe {
             _mm512_castsi512_pd(_mm512_alignr_epi64::<7>(
@@ -628,6 +658,16 @@ impl Simd for Avx2F64 {
         by_lanes::<_, 4>(x, t, f64::fixed_add)
     }
     #[inline(always)]
+    fn swap_pairs<const DC: usize>(self, v: __m256d) -> __m256d {
+        unsafe {
+            if DC == 1 {
+                _mm256_permute_pd::<0b0101>(v)
+            } else {
+                _mm256_permute2f128_pd::<0x01>(v, v)
+            }
+        }
+    }
+    #[inline(always)]
     fn shift1(self, prev: __m256d, cur: __m256d) -> __m256d {
         unsafe {
             // [prev 2..4, cur 0..2], then per 128-bit half take 1 float up.
@@ -659,6 +699,60 @@ fn by_lanes<V: Copy, const N: usize>(a: V, b: V, f: impl Fn(f64, f64) -> f64) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Lanes `0, 1, ..` of `N` lanes after `swap_pairs::<DC>` on level `s`.
+    macro_rules! swapped {
+        ($s:expr, $t:ty, $n:literal, $dc:literal) => {{
+            let s = $s;
+            let lanes: [$t; $n] = std::array::from_fn(|l| l as $t);
+            let mut out = [0.0; $n];
+            // SAFETY: `N` lanes read from and written to arrays of `N`.
+            unsafe {
+                s.store(
+                    out.as_mut_ptr(),
+                    s.swap_pairs::<$dc>(s.load(lanes.as_ptr())),
+                )
+            };
+            out.map(|l| l as usize)
+        }};
+    }
+
+    #[target_feature(enable = "avx2,fma")]
+    fn swapped_avx2() -> [Vec<usize>; 4] {
+        [
+            swapped!(Avx2(()), f32, 8, 1).to_vec(),
+            swapped!(Avx2(()), f32, 8, 2).to_vec(),
+            swapped!(Avx2F64(()), f64, 4, 1).to_vec(),
+            swapped!(Avx2F64(()), f64, 4, 2).to_vec(),
+        ]
+    }
+
+    #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+    fn swapped_avx512() -> [Vec<usize>; 4] {
+        [
+            swapped!(Avx512(()), f32, 16, 1).to_vec(),
+            swapped!(Avx512(()), f32, 16, 2).to_vec(),
+            swapped!(Avx512F64(()), f64, 8, 1).to_vec(),
+            swapped!(Avx512F64(()), f64, 8, 2).to_vec(),
+        ]
+    }
+
+    /// Each level's `swap_pairs` exchanges lanes `l` and `l ^ DC`, as the portable
+    /// lanes do: the stretch limit along rows reads a spring's other end so.
+    #[test]
+    fn pairs_of_lanes_swap_as_the_rule_says() {
+        let rule = |n: usize, dc: usize| (0..n).map(|l| l ^ dc).collect::<Vec<_>>();
+        let expected = [rule(8, 1), rule(8, 2), rule(4, 1), rule(4, 2)];
+        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU has the features (checked).
+            assert_eq!(unsafe { swapped_avx2() }, expected);
+        }
+        if is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl") {
+            let expected = [rule(16, 1), rule(16, 2), rule(8, 1), rule(8, 2)];
+            // SAFETY: as above.
+            assert_eq!(unsafe { swapped_avx512() }, expected);
+        }
+    }
 
     /// `Avx512F64::rsqrt_or_zero` on the lanes of `x`.
     #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
