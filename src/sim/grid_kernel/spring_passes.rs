@@ -684,22 +684,12 @@ unsafe fn pair_line<S: Simd, const FIXED: bool, const DC: usize>(
             let inv_mass = load(k.inv_mass, j);
             let w = s.add(inv_mass, s.swap_pairs::<DC>(inv_mass));
             let over = s.keep_if_positive(w, over);
-            let shortening = s.sub(k.one, s.mul(k.longest, s.rsqrt_or_zero(l2, zero)));
-            let scale = s.keep_if_positive(over, s.div(shortening, w));
+            let scale = k.limit_scale(l2, w, over);
             let d: [S::V; 3] = per_axis!(|i| s.keep_if_positive(over, d[i]));
             let f = s.mul(s.mul(s.splat(zero - one), inv_mass), scale);
             for axis in 0..3 {
-                let t = s.mul(f, d[axis]);
                 // SAFETY: as above.
-                unsafe {
-                    let (p, v) = (k.pos[axis].add(j), k.vel[axis].add(j));
-                    s.store(p, moved::<S, FIXED>(s, x[axis], k.one, t));
-                    s.store(v, s.mul_add(t, k.inv_dt, s.load(v)));
-                    if k.verlet {
-                        let u = k.upd[axis].add(j);
-                        s.store(u, s.mul_add(t, k.inv_dt, s.load(u)));
-                    }
-                }
+                unsafe { k.move_by::<FIXED>(axis, j, x[axis], s.mul(f, d[axis])) };
             }
         }};
     }
@@ -780,6 +770,42 @@ struct LineKernel<S: Simd> {
 }
 
 impl<S: Simd> LineKernel<S> {
+    /// The stretch limit's scale of springs of squared lengths `l2` and summed
+    /// inverse masses `w`, where `over` is positive, else 0: `(l - longest) / (l
+    /// w)`, with `1 / l` from the lanes' reciprocal square root, as
+    /// [`crate::sim::constraints::length_correction`] corrects a spring. An end
+    /// moves by `∓` its inverse mass times the scale times the spring's vector.
+    #[inline(always)]
+    fn limit_scale(&self, l2: S::V, w: S::V, over: S::V) -> S::V {
+        let s = self.s;
+        let shortening = s.sub(
+            self.one,
+            s.mul(self.longest, s.rsqrt_or_zero(l2, S::E::ZERO)),
+        );
+        s.keep_if_positive(over, s.div(shortening, w))
+    }
+
+    /// Moves the particles at array index `i` (from `base`), at `x` along `axis`
+    /// as stored, by `t` units (rounded to a whole unit in fixed point), and adds
+    /// `t / h` to their velocities (and Verlet's): see [`spring_line`].
+    ///
+    /// # Safety
+    /// `i + LANES` is inside the state's arrays.
+    #[inline(always)]
+    unsafe fn move_by<const FIXED: bool>(&self, axis: usize, i: usize, x: S::V, t: S::V) {
+        let s = self.s;
+        // SAFETY: inside the arrays (the caller's contract).
+        unsafe {
+            s.store(self.pos[axis].add(i), moved::<S, FIXED>(s, x, self.one, t));
+            let v = self.vel[axis].add(i);
+            s.store(v, s.mul_add(t, self.inv_dt, s.load(v)));
+            if self.verlet {
+                let u = self.upd[axis].add(i);
+                s.store(u, s.mul_add(t, self.inv_dt, s.load(u)));
+            }
+        }
+    }
+
     /// The kernel of `lines` on `out` (the state's arrays from array index `base`
     /// on), after asserting that every array holds what the sweep's first and
     /// last lines reach (lines further down reach further); `None` without lines.
@@ -1039,10 +1065,7 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
                 }
                 s.keep_if_positive(over, scale)
             } else {
-                // (l - longest) / (l w), with 1 / l from the lanes' reciprocal
-                // square root.
-                let shortening = s.sub(k.one, s.mul(k.longest, s.rsqrt_or_zero(l2, zero)));
-                s.keep_if_positive(over, s.div(shortening, w))
+                k.limit_scale(l2, w, over)
             };
             // Exactly no move where none is due: a lane out of the class or past
             // the line may reach a ghost, whose move `0 d` would be NaN (and stay)
@@ -1054,15 +1077,7 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
                     let t = s.mul(f, d[axis]);
                     let i = start + j;
                     // SAFETY: as above.
-                    unsafe {
-                        let (p, v, u) = (k.pos[axis].add(i), k.vel[axis].add(i), k.upd[axis]);
-                        s.store(p, moved::<S, FIXED>(s, s.load(p), k.one, t));
-                        s.store(v, s.mul_add(t, k.inv_dt, s.load(v)));
-                        if k.verlet {
-                            let u = u.add(i);
-                            s.store(u, s.mul_add(t, k.inv_dt, s.load(u)));
-                        }
-                    }
+                    unsafe { k.move_by::<FIXED>(axis, i, load(k.pos[axis], i), t) };
                 }
             }
         }};
