@@ -950,6 +950,7 @@ impl<E: Real> Lattice<E> {
             real: Some(self.real.as_slice()),
             start,
             multipliers,
+            both_colours: false,
         };
         // A line from row `r` touches rows `r` to `r + dr` and, through its lanes
         // past the end (up to `BLOCK` more), the rows after those.

@@ -100,6 +100,20 @@ impl<E: Real> Kernel<E> {
         // `t - skew[k]`), and the other starts at or below `t - skew[k']`, no
         // higher: they share no particle. (Lines of one sweep share none.)
         let cut = |k: usize, t: usize| t.saturating_sub(skew[k]);
+        // Whether sweep `k`, colour 0 of a direction along rows, runs with
+        // colour 1 (sweep `k + 1`), row by row ([`row_line`]): under the
+        // stretch limit without tears. A line along rows changes only its own
+        // row, so rows apart need no order, and the two sweeps' rows in every
+        // band and on every thread are the same (`dr` 0 adds no skew).
+        let joined = |k: usize| {
+            matches!(rule, SpringRule::StretchLimit(_))
+                && torn.is_none()
+                && k.is_multiple_of(2)
+                && sweeps[k + 1].is_some()
+                && sweeps[k]
+                    .as_ref()
+                    .is_some_and(|s| s.dr == 0 && matches!(s.dc, 1 | 2))
+        };
         // Bands of about 192 KiB of the state's arrays, with the rows that the skew
         // adds: each band's sweeps then find its rows in the core's cache (at 256
         // columns the twelve sweeps over the whole cloth each went to memory).
@@ -114,6 +128,9 @@ impl<E: Real> Kernel<E> {
                     let next = t + band;
                     for (k, sweep) in sweeps.iter().enumerate() {
                         let Some(sweep) = sweep else { continue };
+                        if k % 2 == 1 && joined(k - 1) {
+                            continue;
+                        }
                         let all = rows(k);
                         let start_row = all.start.max(if t == from { 0 } else { cut(k, t) });
                         let end = all.end.min(cut(k, next)).min(sweep.rows);
@@ -129,6 +146,7 @@ impl<E: Real> Kernel<E> {
                             real: None,
                             start,
                             multipliers: None,
+                            both_colours: joined(k),
                         };
                         E::spring_sweep(simd, out, first * st, &lines);
                     }
@@ -450,6 +468,9 @@ pub(super) struct SweepLines<'a, E> {
     pub(super) real: Option<&'a [E]>,
     pub(super) start: [&'a [E]; 3],
     pub(super) multipliers: Option<SweepMultipliers<E>>,
+    /// Whether the sweep (colour 0 of the stretch limit along rows) runs with
+    /// its colour 1, row by row ([`row_line`]).
+    pub(super) both_colours: bool,
 }
 
 /// XPBD's multipliers of one sweep's springs, kept from a spring's first
@@ -530,20 +551,22 @@ pub(super) fn spring_sweep<S: Simd, const FIXED: bool>(
         };
     }
     let masked = kernel.alive.is_some() || kernel.real.is_some();
-    // The stretch limit along rows, without masks: by pairs of lanes
-    // ([`pair_line`]).
-    if let (LineRule::Limit { .. }, false, 0, 1 | 2) = (sweep.line.rule, masked, sweep.dr, sweep.dc)
-    {
-        let pairs = PairBlocks::new(&kernel, sweep, lines);
+    // Both colours of the stretch limit along rows, row by row ([`row_line`]).
+    if lines.both_colours {
+        assert!(
+            matches!(sweep.line.rule, LineRule::Limit { .. }) && !masked && sweep.dr == 0,
+            "both colours run together only for the stretch limit along rows, without masks"
+        );
+        let blocks = RowBlocks::new(&kernel, sweep, lines);
         for r in rows {
-            let start = sweep.line_at(r, stride).a + pairs.offset;
-            // SAFETY: every line of the sweep is inside the bounds that
-            // `PairBlocks::new` asserted.
+            let row = sweep.line_at(r, stride).a;
+            // SAFETY: every row of the sweep is inside the bounds that
+            // `RowBlocks::new` asserted.
             unsafe {
-                if sweep.dc == 1 {
-                    pair_line::<S, FIXED, 1>(&kernel, &pairs, start);
-                } else {
-                    pair_line::<S, FIXED, 2>(&kernel, &pairs, start);
+                match sweep.dc {
+                    1 => row_line::<S, FIXED, 1>(&kernel, &blocks, row),
+                    2 => row_line::<S, FIXED, 2>(&kernel, &blocks, row),
+                    dc => unreachable!("no direction along rows is {dc} columns long"),
                 }
             }
         }
@@ -580,19 +603,22 @@ macro_rules! per_axis {
     };
 }
 
-/// How a sweep of springs along rows (`dr` 0, `dc` 1 or 2) covers a row by
-/// pairs of lanes ([`pair_line`]): its blocks start `offset` columns into the row
-/// (the colour's first spring), `blocks` of them, the last with the lanes of
-/// `last` (1 where both ends of the lane's spring are on the cloth).
-struct PairBlocks<V> {
-    offset: usize,
+/// How a row's springs along it (`dr` 0, `dc` 1 or 2) are covered when both
+/// colour classes run together ([`row_line`]): in `blocks` blocks of `LANES`
+/// springs from the row's first column, every spring of a block measured once for
+/// both colours; the lanes of the last block on the row (`keep_last`), and per
+/// colour the lanes of its [`pair_block`] in the last block with both ends on the
+/// cloth (`pairs_last`).
+struct RowBlocks<V> {
     blocks: usize,
-    last: V,
+    keep_last: V,
+    pairs_last: [V; 2],
 }
 
-impl<V: Copy> PairBlocks<V> {
-    /// The blocks of `lines`' sweep, after asserting that every array holds the
-    /// last line's.
+impl<V: Copy> RowBlocks<V> {
+    /// The blocks of `lines`' sweep (colour 0 of a direction along rows, the
+    /// class whose blocks start on a row's first column), after asserting that
+    /// every array holds what the last line reaches.
     #[inline(always)]
     fn new<S: Simd<V = V>>(
         k: &LineKernel<S>,
@@ -601,131 +627,188 @@ impl<V: Copy> PairBlocks<V> {
     ) -> Self {
         let n = S::LANES;
         let dc = sweep.dc.unsigned_abs();
-        let width = sweep.line.len + dc;
-        let offset = sweep.class.colour * dc;
-        let blocks = width.saturating_sub(offset).div_ceil(n);
-        // A block's lanes pair up within it: `n` is a multiple of `2 dc`.
+        let len = sweep.line.len;
+        let width = len + dc;
+        let blocks = len.div_ceil(n);
+        // A block's lanes pair up within it (`n` is a multiple of `2 dc`), and
+        // its lanes' colours are the same pattern in every block.
         assert!(n.is_multiple_of(2 * dc) && n <= BLOCK);
+        assert!(sweep.class.colour == 0 && sweep.c0 == 0 && blocks > 0);
         if let Some(r) = lines.rows.clone().last() {
-            let end = sweep.line_at(r, lines.stride).a + offset + blocks * n;
+            // The furthest a line reaches: its second colour's pair block in
+            // its last block, `dc` columns on.
+            let end = sweep.line_at(r, lines.stride).a + dc + blocks * n;
             assert!(end >= k.base && lines.inv_mass.len() >= end);
             // The state's arrays, as long as `LineKernel::new` found them.
             assert!(end - k.base <= k.state_len);
         }
-        let last: [S::E; BLOCK] = std::array::from_fn(|l| {
-            // The spring of lane `l` ends at its column, or `dc` columns on when
-            // the lane is its first end.
-            let column = offset + blocks.saturating_sub(1) * n + l;
-            let far = if (l / dc) % 2 == 0 {
-                column + dc
-            } else {
-                column
-            };
-            if l < n && far < width {
-                S::E::ONE
-            } else {
-                S::E::ZERO
-            }
+        let (zero, one) = (S::E::ZERO, S::E::ONE);
+        let lanes = |f: &dyn Fn(usize) -> bool| -> V {
+            let a: [S::E; BLOCK] = std::array::from_fn(|l| if l < n && f(l) { one } else { zero });
+            // SAFETY: `a` holds `BLOCK >= LANES` floats.
+            unsafe { k.s.load(a.as_ptr()) }
+        };
+        // The colour of lane `l`'s spring, and whether the lane is a first end
+        // of its pair block's spring.
+        let colour = |l: usize| (l / dc) % 2;
+        let last = (blocks - 1) * n;
+        let keep_last = lanes(&|l| last + l < len);
+        let pairs_last = [0, 1].map(|c| {
+            lanes(&|l| {
+                let column = c * dc + last + l;
+                let far = if colour(l) == 0 { column + dc } else { column };
+                far < width
+            })
         });
-        // SAFETY: `last` holds `BLOCK >= LANES` floats.
-        let last = unsafe { k.s.load(last.as_ptr()) };
-        PairBlocks {
-            offset,
+        RowBlocks {
             blocks,
-            last,
+            keep_last,
+            pairs_last,
         }
     }
 }
 
-/// The stretch limit on the springs of one colour along a row, `dc` 1 or 2
-/// columns long, from array index `start` (the colour's first spring) in blocks of
-/// lanes that hold both ends of their springs: lanes `l` and `l ^ DC` are the two
-/// ends of one ([`Simd::swap_pairs`]). Each lane takes its end's move, `-w d s`
-/// with `d` its end less the other (the first end's `d` negated at the second)
-/// and `s` the spring's scale: the same numbers, in the same operations, as
-/// [`spring_line`] gives each end (where the class's springs take half the lanes
-/// of a block measured, the first ends' block is stored and the second ends' block,
-/// `dc` lanes on, loaded again: a load that overlaps a store just made waits for
-/// it to reach the cache).
+/// The stretch limit on both colour classes of a row's springs along it, `dc` 1
+/// or 2 columns long, the row's first column at array index `row`: the two
+/// sweeps' Gauss-Seidel order, each spring measured once where nothing moves it.
+///
+/// A colour's springs share no particle, and a spring of colour 1 shares
+/// particles only with springs of colour 0 in its own block and the next one
+/// (its second end is at most `dc` columns past its block). The row's blocks of
+/// `LANES` springs are measured first, both colours at once. Colour 0 is then
+/// corrected in the blocks with a spring over the limit, and colour 1 in those
+/// and in the blocks before them (where colour 0 may have moved a particle), by
+/// [`pair_block`], which measures the colour's springs again: every other
+/// spring of colour 1 is as it was measured, within the limit. Each particle
+/// sees its colour-0 move before its colour-1 move, and each colour-1 spring
+/// every colour-0 move, as when the two sweeps run one after the other. (A row
+/// of more than 64 blocks runs in chunks of 64, a chunk's last block's colour 1
+/// after the next chunk's colour 0.) Where few springs are over the limit, a
+/// spring costs a lane of one block, not the two of a block of pairs.
 ///
 /// # Safety
-/// The line is one of the sweep whose bounds `k` and `pairs` asserted
-/// ([`LineKernel::new`], [`PairBlocks::new`]).
+/// The row is one of the sweep whose bounds `k` and `blocks` asserted
+/// ([`LineKernel::new`], [`RowBlocks::new`]).
 #[inline(always)]
-unsafe fn pair_line<S: Simd, const FIXED: bool, const DC: usize>(
+unsafe fn row_line<S: Simd, const FIXED: bool, const DC: usize>(
     k: &LineKernel<S>,
-    pairs: &PairBlocks<S::V>,
-    start: usize,
+    blocks: &RowBlocks<S::V>,
+    row: usize,
 ) {
     let s = k.s;
     let n = S::LANES;
-    let (zero, one) = (S::E::ZERO, S::E::ONE);
-    let first = start - k.base;
-    // SAFETY (every load and store below): `j + n <= first + blocks n`, inside
-    // the arrays (asserted by `PairBlocks::new`).
+    let first = row - k.base;
+    // SAFETY (every load below): `j + DC + n <= first + DC + blocks n`, inside
+    // the arrays (asserted by `RowBlocks::new`).
     let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
-    // The block at `j` (lanes `keep`): its positions, vectors, squared lengths,
-    // positive where a spring is over the limit, and whether any is.
-    macro_rules! measure {
+    // Whether a spring of the block at `j` is over the limit (`$keep`: the lanes
+    // on the row). (Macros, not closures: closures did not take the function's
+    // target features, and their vector operations ran as calls.)
+    macro_rules! over {
         ($j:expr, $keep:expr) => {{
             let j = $j;
-            let x: [S::V; 3] = per_axis!(|i| load(k.pos[i], j));
             let d: [S::V; 3] =
-                per_axis!(|i| difference::<S, FIXED>(s, x[i], s.swap_pairs::<DC>(x[i])));
+                per_axis!(|i| difference::<S, FIXED>(s, load(k.pos[i], j), load(k.pos[i], j + DC)));
             let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
-            let over = s.mul_sub(l2, $keep, k.longest2);
-            (x, d, l2, over, s.any_positive(over))
+            s.any_positive(s.mul_sub(l2, $keep, k.longest2))
         }};
     }
-    // Moves the ends of the block at `j`.
+    // Colour `c`'s springs in block `m`, corrected.
     macro_rules! correct {
-        ($j:expr, $m:expr) => {{
-            let (j, (x, d, l2, over, _)) = ($j, $m);
-            let inv_mass = load(k.inv_mass, j);
-            let w = s.add(inv_mass, s.swap_pairs::<DC>(inv_mass));
-            let over = s.keep_if_positive(w, over);
-            let scale = k.limit_scale(l2, w, over);
-            let d: [S::V; 3] = per_axis!(|i| s.keep_if_positive(over, d[i]));
-            let f = s.mul(s.mul(s.splat(zero - one), inv_mass), scale);
-            for axis in 0..3 {
-                // SAFETY: as above.
-                unsafe { k.move_by::<FIXED>(axis, j, x[axis], s.mul(f, d[axis])) };
-            }
+        ($c:expr, $m:expr) => {{
+            let (c, m) = ($c, $m);
+            let keep = if m + 1 == blocks.blocks {
+                blocks.pairs_last[c]
+            } else {
+                k.one
+            };
+            // SAFETY: the pair block is inside the row's reach (see above).
+            unsafe { pair_block::<S, FIXED, DC>(k, first + c * DC + m * n, keep) };
         }};
     }
-    // Whole blocks four at a time, measured before any moves (the blocks share no
-    // particle), then the rest one at a time, the last with its lanes.
-    let (mut m, blocks) = (0, pairs.blocks);
-    while m + 4 < blocks {
-        let j = first + m * n;
-        let group = (
-            measure!(j, k.one),
-            measure!(j + n, k.one),
-            measure!(j + 2 * n, k.one),
-            measure!(j + 3 * n, k.one),
-        );
-        if group.0.4 {
-            correct!(j, group.0);
+    // The row in chunks of up to 64 blocks: each chunk's blocks measured, then
+    // its colour 0 corrected where a block has a spring over the limit, then its
+    // colour 1 there and where colour 0 may have moved a particle (in the block
+    // or the next one), each by `pair_block`, which measures its colour's
+    // springs again. A chunk's last block's colour 1 waits for the next chunk's
+    // colour 0.
+    let mut carried = false;
+    let mut m0 = 0;
+    while m0 < blocks.blocks {
+        let count = (blocks.blocks - m0).min(64);
+        let whole = if m0 + count == blocks.blocks {
+            count - 1
+        } else {
+            count
+        };
+        // Bit `i`: a spring of block `m0 + i` is over.
+        let mut over = 0u64;
+        for i in 0..whole {
+            over |= (over!(first + (m0 + i) * n, k.one) as u64) << i;
         }
-        if group.1.4 {
-            correct!(j + n, group.1);
+        if whole < count {
+            over |= (over!(first + (m0 + whole) * n, blocks.keep_last) as u64) << whole;
         }
-        if group.2.4 {
-            correct!(j + 2 * n, group.2);
+        let mut todo = over;
+        while todo != 0 {
+            correct!(0, m0 + todo.trailing_zeros() as usize);
+            todo &= todo - 1;
         }
-        if group.3.4 {
-            correct!(j + 3 * n, group.3);
+        if m0 > 0 && (carried || over & 1 != 0) {
+            correct!(1, m0 - 1);
         }
-        m += 4;
+        let mut todo = over | (over >> 1);
+        if m0 + count < blocks.blocks {
+            let last = 1u64 << (count - 1);
+            carried = todo & last != 0;
+            todo &= !last;
+        }
+        while todo != 0 {
+            correct!(1, m0 + todo.trailing_zeros() as usize);
+            todo &= todo - 1;
+        }
+        m0 += count;
     }
-    while m < blocks {
-        let j = first + m * n;
-        let keep = if m + 1 == blocks { pairs.last } else { k.one };
-        let block = measure!(j, keep);
-        if block.4 {
-            correct!(j, block);
-        }
-        m += 1;
+}
+
+/// The stretch limit on the springs of one colour along a row, `DC` columns
+/// long, in the block of lanes at array index `j` (from the kernel's base) that
+/// holds both ends of its springs: lanes `l` and `l ^ DC` are the two ends of one
+/// ([`Simd::swap_pairs`]), the lanes of `keep` on the cloth. Each lane takes its
+/// end's move, `-w d s` with `d` its end less the other (the first end's `d`
+/// negated at the second) and `s` the spring's scale: the same numbers, in the
+/// same operations, as [`spring_line`] gives each end (which stores the first
+/// ends' block and loads the second ends' block `dc` lanes on: a load that
+/// overlaps a store just made waits for it to reach the cache).
+///
+/// # Safety
+/// `j + LANES` is inside the state's arrays and the inverse masses.
+#[inline(always)]
+unsafe fn pair_block<S: Simd, const FIXED: bool, const DC: usize>(
+    k: &LineKernel<S>,
+    j: usize,
+    keep: S::V,
+) {
+    let s = k.s;
+    let (zero, one) = (S::E::ZERO, S::E::ONE);
+    // SAFETY (every load below): the caller's contract.
+    let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
+    let x: [S::V; 3] = per_axis!(|i| load(k.pos[i], j));
+    let d: [S::V; 3] = per_axis!(|i| difference::<S, FIXED>(s, x[i], s.swap_pairs::<DC>(x[i])));
+    let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
+    let over = s.mul_sub(l2, keep, k.longest2);
+    if !s.any_positive(over) {
+        return;
+    }
+    let inv_mass = load(k.inv_mass, j);
+    let w = s.add(inv_mass, s.swap_pairs::<DC>(inv_mass));
+    let over = s.keep_if_positive(w, over);
+    let scale = k.limit_scale(l2, w, over);
+    let d: [S::V; 3] = per_axis!(|i| s.keep_if_positive(over, d[i]));
+    let f = s.mul(s.mul(s.splat(zero - one), inv_mass), scale);
+    for axis in 0..3 {
+        // SAFETY: as above.
+        unsafe { k.move_by::<FIXED>(axis, j, x[axis], s.mul(f, d[axis])) };
     }
 }
 
