@@ -2,8 +2,10 @@
 //! Provot's stretch limit and XPBD's springs ([`SpringRule`]). Each is one
 //! Gauss-Seidel pass over the springs in twelve sweeps (six stencil directions,
 //! two colour classes each), a class's springs of one row corrected together in
-//! SIMD blocks ([`spring_line`]), in bands of rows that stay in the core's cache,
-//! and most rows on two threads in one hand-over ([`Kernel::spring_pass`]).
+//! SIMD blocks ([`spring_line`]; the stretch limit's springs along rows both
+//! colours of a row at once, [`row_line`]), in bands of rows that stay in the
+//! core's cache, and most rows on two threads in one hand-over
+//! ([`Kernel::spring_pass`]).
 
 use std::ops::Range;
 
