@@ -711,8 +711,7 @@ unsafe fn row_line<S: Simd, const FIXED: bool, const DC: usize>(
             let j = $j;
             let d: [S::V; 3] =
                 per_axis!(|i| difference::<S, FIXED>(s, load(k.pos[i], j), load(k.pos[i], j + DC)));
-            let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
-            s.any_positive(s.mul_sub(l2, $keep, k.longest2))
+            s.any_positive(k.over_limit(k.length2(d), $keep))
         }};
     }
     // Colour `c`'s springs in block `m`, corrected.
@@ -738,18 +737,19 @@ unsafe fn row_line<S: Simd, const FIXED: bool, const DC: usize>(
     let mut m0 = 0;
     while m0 < blocks.blocks {
         let count = (blocks.blocks - m0).min(64);
-        let whole = if m0 + count == blocks.blocks {
+        // The chunk's blocks with every lane on the row: all but the row's last.
+        let on_row = if m0 + count == blocks.blocks {
             count - 1
         } else {
             count
         };
         // Bit `i`: a spring of block `m0 + i` is over.
         let mut over = 0u64;
-        for i in 0..whole {
+        for i in 0..on_row {
             over |= (over!(first + (m0 + i) * n, k.one) as u64) << i;
         }
-        if whole < count {
-            over |= (over!(first + (m0 + whole) * n, blocks.keep_last) as u64) << whole;
+        if on_row < count {
+            over |= (over!(first + (m0 + on_row) * n, blocks.keep_last) as u64) << on_row;
         }
         let mut todo = over;
         while todo != 0 {
@@ -797,8 +797,8 @@ unsafe fn pair_block<S: Simd, const FIXED: bool, const DC: usize>(
     let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
     let x: [S::V; 3] = per_axis!(|i| load(k.pos[i], j));
     let d: [S::V; 3] = per_axis!(|i| difference::<S, FIXED>(s, x[i], s.swap_pairs::<DC>(x[i])));
-    let l2 = s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])));
-    let over = s.mul_sub(l2, keep, k.longest2);
+    let l2 = k.length2(d);
+    let over = k.over_limit(l2, keep);
     if !s.any_positive(over) {
         return;
     }
@@ -855,6 +855,22 @@ struct LineKernel<S: Simd> {
 }
 
 impl<S: Simd> LineKernel<S> {
+    /// The squared lengths of springs of vectors `d`. Every path of the pass
+    /// measures with this one sum, so that a spring `row_line` found within the
+    /// limit is found within it when measured again.
+    #[inline(always)]
+    fn length2(&self, d: [S::V; 3]) -> S::V {
+        let s = self.s;
+        s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])))
+    }
+
+    /// Positive in the lanes of `keep` (1 or 0) whose squared length `l2` is
+    /// over the stretch limit's.
+    #[inline(always)]
+    fn over_limit(&self, l2: S::V, keep: S::V) -> S::V {
+        self.s.mul_sub(l2, keep, self.longest2)
+    }
+
     /// The stretch limit's scale of springs of squared lengths `l2` and summed
     /// inverse masses `w`, where `over` is positive, else 0: `(l - longest) / (l
     /// w)`, with `1 / l` from the lanes' reciprocal square root, as
@@ -1041,13 +1057,6 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
             per_axis!(|i| difference::<S, FIXED>(s, load(ends[0][i], j), load(ends[1][i], j)))
         }};
     }
-    // Squared lengths of the vectors `d`.
-    macro_rules! length2 {
-        ($d:expr) => {{
-            let d = $d;
-            s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])))
-        }};
-    }
     // The block at `j`: its springs' vectors `d` (first end less second), their
     // squared lengths, positive where a spring is in the class (and for the
     // stretch limit over the limit), and whether any is.
@@ -1069,13 +1078,9 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
                     keep = s.mul(keep, s.mul(load(m, a + j), load(m, b + j)));
                 }
             }
-            let l2 = length2!(d);
+            let l2 = k.length2(d);
             // Positive where the spring is to be corrected.
-            let over = if XPBD {
-                keep
-            } else {
-                s.mul_sub(l2, keep, k.longest2)
-            };
+            let over = if XPBD { keep } else { k.over_limit(l2, keep) };
             (d, l2, over, s.any_positive(over))
         }};
     }
@@ -1130,7 +1135,7 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
                 ($d, $l2)
             } else {
                 let d: [S::V; 3] = vectors!(j);
-                (d, length2!(d))
+                (d, k.length2(d))
             };
             let w = s.add(load(k.inv_mass, a + j), load(k.inv_mass, b + j));
             // Positive where a spring to correct is not pinned at both ends.
