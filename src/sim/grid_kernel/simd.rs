@@ -51,6 +51,8 @@ pub(super) trait Simd: Copy {
     /// Yes where both `a` and `b` say yes; where `a` does and `b` does not.
     fn both(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
     fn but_not(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
+    /// Yes where `a` or `b` says yes.
+    fn either(self, a: Self::Mask, b: Self::Mask) -> Self::Mask;
     /// Whether any lane of `m` says yes, and whether every lane does.
     fn any(self, m: Self::Mask) -> bool;
     fn all(self, m: Self::Mask) -> bool;
@@ -162,6 +164,10 @@ impl<E: Real> Simd for Portable<E> {
     #[inline(always)]
     fn but_not(self, a: Self::Mask, b: Self::Mask) -> Self::Mask {
         std::array::from_fn(|i| a[i] & !b[i])
+    }
+    #[inline(always)]
+    fn either(self, a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        std::array::from_fn(|i| a[i] | b[i])
     }
     #[inline(always)]
     fn any(self, m: Self::Mask) -> bool {

@@ -703,15 +703,16 @@ unsafe fn row_line<S: Simd, const FIXED: bool, const DC: usize>(
     // SAFETY (every load below): `j + DC + n <= first + DC + blocks n`, inside
     // the arrays (asserted by `RowBlocks::new`).
     let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
-    // Whether a spring of the block at `j` is over the limit (`$keep`: the lanes
-    // on the row). (Macros, not closures: closures did not take the function's
+    let zero = s.splat(S::E::ZERO);
+    // The lanes of the block at `j` whose spring is over the limit (`$keep`: the
+    // lanes on the row). (Macros, not closures: closures did not take the function's
     // target features, and their vector operations ran as calls.)
     macro_rules! over {
         ($j:expr, $keep:expr) => {{
             let j = $j;
             let d: [S::V; 3] =
                 per_axis!(|i| difference::<S, FIXED>(s, load(k.pos[i], j), load(k.pos[i], j + DC)));
-            s.any_positive(k.over_limit(k.length2(d), $keep))
+            s.gt(k.over_limit(k.length2(d), $keep), zero)
         }};
     }
     // Colour `c`'s springs in block `m`, corrected.
@@ -743,13 +744,42 @@ unsafe fn row_line<S: Simd, const FIXED: bool, const DC: usize>(
         } else {
             count
         };
-        // Bit `i`: a spring of block `m0 + i` is over.
+        // Bit `i`: a spring of block `m0 + i` is over. Four blocks are tested
+        // at once, and each of them only where one is over; the last four
+        // blocks on the row close the chunk (setting again the bits of those
+        // tested before), where single blocks cost more.
         let mut over = 0u64;
-        for i in 0..on_row {
-            over |= (over!(first + (m0 + i) * n, k.one) as u64) << i;
+        macro_rules! four_from {
+            ($i:expr) => {{
+                let i = $i;
+                let j = first + (m0 + i) * n;
+                let some = s.either(
+                    s.either(over!(j, k.one), over!(j + n, k.one)),
+                    s.either(over!(j + 2 * n, k.one), over!(j + 3 * n, k.one)),
+                );
+                if s.any(some) {
+                    for b in 0..4 {
+                        over |= (s.any(over!(j + b * n, k.one)) as u64) << (i + b);
+                    }
+                }
+            }};
+        }
+        let mut i = 0;
+        while i + 4 <= on_row {
+            four_from!(i);
+            i += 4;
+        }
+        if i < on_row && on_row >= 4 {
+            four_from!(on_row - 4);
+        } else {
+            while i < on_row {
+                over |= (s.any(over!(first + (m0 + i) * n, k.one)) as u64) << i;
+                i += 1;
+            }
         }
         if on_row < count {
-            over |= (over!(first + (m0 + on_row) * n, blocks.keep_last) as u64) << on_row;
+            let last = over!(first + (m0 + on_row) * n, blocks.keep_last);
+            over |= (s.any(last) as u64) << on_row;
         }
         let mut todo = over;
         while todo != 0 {
@@ -1192,10 +1222,42 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
     // lanes without a test (the sheet at 128: 0.45 instructions a particle-step
     // fewer).
     let whole = len - len % n;
+    // The stretch limit without masks tests four blocks at once first, with
+    // nothing kept from it: most groups of blocks have no spring to correct.
+    let zero_lanes = s.splat(zero);
+    macro_rules! over {
+        ($j:expr) => {
+            over!($j, k.class)
+        };
+        ($j:expr, $keep:expr) => {
+            s.gt(k.over_limit(k.length2(vectors!($j)), $keep), zero_lanes)
+        };
+    }
     let mut j = 0;
     while j + 4 * n <= whole {
-        blocks!(false; j; 0 1 2 3);
+        if XPBD
+            || MASKED
+            || s.any(s.either(
+                s.either(over!(j), over!(j + n)),
+                s.either(over!(j + 2 * n), over!(j + 3 * n)),
+            ))
+        {
+            blocks!(false; j; 0 1 2 3);
+        }
         j += 4 * n;
+    }
+    // The blocks left (at most four), likewise tested together first.
+    if !XPBD && !MASKED {
+        let mut some = s.gt(zero_lanes, zero_lanes);
+        let mut i = j;
+        while i < lanes {
+            let keep = if i + n > len { k.class_tail } else { k.class };
+            some = s.either(some, over!(i, keep));
+            i += n;
+        }
+        if !s.any(some) {
+            return;
+        }
     }
     if j + 2 * n <= whole {
         blocks!(false; j; 0 1);

@@ -287,6 +287,10 @@ macro_rules! masked_compares {
             a & !b
         }
         #[inline(always)]
+        fn either(self, a: $mask, b: $mask) -> $mask {
+            a | b
+        }
+        #[inline(always)]
         fn any(self, m: $mask) -> bool {
             m != 0
         }
@@ -302,9 +306,9 @@ macro_rules! masked_compares {
 }
 
 /// [`Simd`]'s comparisons, select and root with AVX2's vector masks: `all
-/// lanes' sign bits, compare, blend, sign bits, sqrt, and, and-not`.
+/// lanes' sign bits, compare, blend, sign bits, sqrt, and, and-not, or`.
 macro_rules! vector_compares {
-    ($all:expr, $cmp:ident, $blend:ident, $signs:ident, $sqrt:ident, $and:ident, $andnot:ident) => {
+    ($all:expr, $cmp:ident, $blend:ident, $signs:ident, $sqrt:ident, $and:ident, $andnot:ident, $or:ident) => {
         type Mask = Self::V;
         #[inline(always)]
         fn lt(self, a: Self::V, b: Self::V) -> Self::V {
@@ -331,6 +335,10 @@ macro_rules! vector_compares {
         fn but_not(self, a: Self::V, b: Self::V) -> Self::V {
             // (`andnot` negates its first operand.)
             unsafe { $andnot(b, a) }
+        }
+        #[inline(always)]
+        fn either(self, a: Self::V, b: Self::V) -> Self::V {
+            unsafe { $or(a, b) }
         }
         #[inline(always)]
         fn any(self, m: Self::V) -> bool {
@@ -444,7 +452,8 @@ impl Simd for Avx2 {
         _mm256_movemask_ps,
         _mm256_sqrt_ps,
         _mm256_and_ps,
-        _mm256_andnot_ps
+        _mm256_andnot_ps,
+        _mm256_or_ps
     );
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m256, eps: f32) -> __m256 {
@@ -620,7 +629,8 @@ impl Simd for Avx2F64 {
         _mm256_movemask_pd,
         _mm256_sqrt_pd,
         _mm256_and_pd,
-        _mm256_andnot_pd
+        _mm256_andnot_pd,
+        _mm256_or_pd
     );
     #[inline(always)]
     fn rsqrt_or_zero(self, x: __m256d, eps: f64) -> __m256d {
