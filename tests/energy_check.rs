@@ -170,7 +170,14 @@ fn moving_a_held_particle_adds_its_work_to_the_budget() {
             (added - work).abs() <= 1e-9 * work.abs(),
             "fast {fast}: the budget took {added} J for a move that did {work} J"
         );
-        assert_eq!(moved.scale, budget.scale + work.abs());
+        // The scale grows by the work's size, to the same tolerance: the engine
+        // counts the work from the held particle's springs, this test from the
+        // whole cloth's sum, and the two round apart by an ulp or so.
+        let grown = moved.scale - budget.scale;
+        assert!(
+            (grown - work.abs()).abs() <= 1e-9 * work.abs(),
+            "fast {fast}: the scale grew by {grown} J for a move that did {work} J"
+        );
         let factor = |b: cloth_sandbox::sim::EnergyBudget| b.allowed / b.scale;
         assert!((factor(moved) / factor(budget) - 1.0).abs() < 1e-12);
     }

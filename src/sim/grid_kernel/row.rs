@@ -252,7 +252,8 @@ pub(super) fn spring<S: Simd, const FIXED: bool>(
 /// both negated) and relative air velocity `vr`, times `mask`: `-(ρ C_d / 12)
 /// |v_rel| (v_rel·m) m / |m|` with `m = e1 × e2`, `|m| = 2A`; `|v_rel| / |m|` is
 /// computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`. The edges are the springs' `d`
-/// (or their difference), accurate to their own size as those are.
+/// (or their difference), accurate to their own size as those are. Returns the
+/// drag as `a m`: `a` and `m`, for the sums that take it to fuse its product.
 #[inline(always)]
 fn triangle<S: Simd>(
     s: S,
@@ -260,7 +261,7 @@ fn triangle<S: Simd>(
     vr: &[S::V; 3],
     neg_drag: S::V,
     mask: Option<S::V>,
-) -> [S::V; 3] {
+) -> (S::V, [S::V; 3]) {
     let m = [
         s.mul_sub(e1[1], e2[2], s.mul(e1[2], e2[1])),
         s.mul_sub(e1[2], e2[0], s.mul(e1[0], e2[2])),
@@ -275,7 +276,7 @@ fn triangle<S: Simd>(
         Some(m) => s.mul(a, m),
         None => a,
     };
-    [s.mul(a, m[0]), s.mul(a, m[1]), s.mul(a, m[2])]
+    (a, m)
 }
 
 /// Splatted constants and raw pointers of one row, shared by its blocks.
@@ -596,9 +597,11 @@ unsafe fn block<
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
         let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
-        let bd: [S::V; 3] = std::array::from_fn(|i| s.add(vb[i], vd[i]));
-        let vr1 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], va[i]), k.third, k.neg_wind[i]));
-        let vr2 = std::array::from_fn(|i| s.mul_add(s.add(bd[i], ve[i]), k.third, k.neg_wind[i]));
+        // (`b + d` a third of the way, less the wind, shared by both.)
+        let bd: [S::V; 3] =
+            std::array::from_fn(|i| s.mul_add(s.add(vb[i], vd[i]), k.third, k.neg_wind[i]));
+        let vr1 = std::array::from_fn(|i| s.mul_add(va[i], k.third, bd[i]));
+        let vr2 = std::array::from_fn(|i| s.mul_add(ve[i], k.third, bd[i]));
         (
             // (a, b, d): edges b - a and d - a, the springs right and down negated.
             triangle(s, [e_right, e_down], &vr1, k.neg_drag, mask(6)),
@@ -616,7 +619,7 @@ unsafe fn block<
             ),
         )
     } else {
-        ([zero; 3], [zero; 3])
+        ((zero, [zero; 3]), (zero, [zero; 3]))
     };
     let nv = k.nv;
     // SAFETY: as above.
@@ -636,10 +639,13 @@ unsafe fn block<
             let q = s.sub(zero, right2[i]);
             let mut m = s.sub(zero, dr[i]);
             let mut in1 = s.sub(zero, s.add(d[i], anti[i]));
+            // The triangles' drag `a m`, each product fused into a sum.
+            let ((a1, m1), (a2, m2)) = (t1, t2);
             if DRAG {
-                let t = s.add(t1[i], t2[i]);
+                let second = s.mul(a2, m2[i]);
+                let t = s.mul_add(a1, m1[i], second);
                 l = s.add(l, t);
-                m = s.add(m, t2[i]);
+                m = s.add(m, second);
                 in1 = s.add(in1, t);
             }
             let in1 = s.add(in1, s.shift1(carry[2][i], m));
@@ -653,7 +659,7 @@ unsafe fn block<
                 let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
                 own = s.add(own, d2[i]);
                 if DRAG {
-                    own = s.add(own, t1[i]);
+                    own = s.mul_add(a1, m1[i], own);
                 }
                 own = s.add(
                     own,
