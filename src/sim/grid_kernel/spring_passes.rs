@@ -1031,7 +1031,9 @@ impl<S: Simd> LineKernel<S> {
 /// .. + len` and second ends at `line.1 .. + len`, in blocks of `S::LANES`
 /// springs, four blocks at a time: measures them all, then for each block with a
 /// spring to correct its corrections and at once the moves of its first ends and
-/// of its second ends.
+/// of its second ends. The stretch limit without masks first tests the four
+/// blocks (and the blocks left at the line's end) with nothing kept, and goes on
+/// only where a spring is over the limit.
 ///
 /// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
 ///   as [`crate::sim::constraints::length_correction`] does.
