@@ -107,8 +107,9 @@ use frame::{Frame, FrameRule};
 /// Squared spring length (m²) under which a spring is treated as degenerate and
 /// gives no force.
 const EPS2: f32 = 1e-24;
-/// `|v_rel|² |2A|²` (m⁶/s²) under which a triangle gives no drag (degenerate
-/// triangle or no relative wind).
+/// Added to `|v_rel|² |2A|²` (m⁶/s²) before its reciprocal square root, so that
+/// a triangle with no area or no relative wind gives no drag rather than NaN
+/// (see `row::triangle`).
 const TINY: f32 = 1e-30;
 
 /// Grids with fewer particles than this run on the calling thread even when
@@ -493,7 +494,8 @@ trait Real:
     const LOWEST: Self;
     /// Squared spring length (m²) under which a spring is degenerate (no force).
     const EPS2: Self;
-    /// `|v_rel|² |2A|²` (m⁶/s²) under which a triangle gives no drag.
+    /// Added to `|v_rel|² |2A|²` (m⁶/s²) so that a triangle with no area or no
+    /// relative wind gives no drag.
     const TINY: Self;
     /// The float's bits as an unsigned integer.
     type Bits: Copy + Ord;

@@ -228,10 +228,22 @@ pub(super) fn spring<S: Simd, const FIXED: bool>(
     s: S,
     (xi, vi): Particle<S::V>,
     (xj, vj): Particle<S::V>,
+    kind: [S::V; 3],
+    mask: Option<S::V>,
+) -> ([S::V; 3], [S::V; 3]) {
+    let d = std::array::from_fn(|a| difference::<S, FIXED>(s, xi[a], xj[a]));
+    spring_of(s, d, (vi, vj), kind, mask)
+}
+
+/// [`spring`] of the vector `d = x_i - x_j` as already computed.
+#[inline(always)]
+fn spring_of<S: Simd>(
+    s: S,
+    d: [S::V; 3],
+    (vi, vj): (&[S::V; 3], &[S::V; 3]),
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
 ) -> ([S::V; 3], [S::V; 3]) {
-    let d: [S::V; 3] = std::array::from_fn(|a| difference::<S, FIXED>(s, xi[a], xj[a]));
     let u = [
         s.sub(vi[0], vj[0]),
         s.sub(vi[1], vj[1]),
@@ -251,9 +263,14 @@ pub(super) fn spring<S: Simd, const FIXED: bool>(
 /// Drag on each vertex of a triangle with edges `e1 = q - p` and `e2 = d - p` (or
 /// both negated) and relative air velocity `vr`, times `mask`: `-(ρ C_d / 12)
 /// |v_rel| (v_rel·m) m / |m|` with `m = e1 × e2`, `|m| = 2A`; `|v_rel| / |m|` is
-/// computed as `|v_rel|² / sqrt(|v_rel|² |m|²)`. The edges are the springs' `d`
-/// (or their difference), accurate to their own size as those are. Returns the
-/// drag as `a m`: `a` and `m`, for the sums that take it to fuse its product.
+/// computed as `|v_rel|² / sqrt(|v_rel|² |m|² + TINY)`. The `TINY` keeps a
+/// triangle with no area or no relative wind at a drag of 0 (then `v_rel·m` or
+/// `|v_rel|²` is 0) without a test; elsewhere it moves the drag by the relative
+/// `TINY / (2 |v_rel|² |m|²)`, under f32's rounding wherever `|v_rel|² |m|²`
+/// is over 1e-23 (in the kernel's units). The edges
+/// are the springs' `d` (or their difference), accurate to their own size as
+/// those are. Returns the drag as `a m`: `a` and `m`, for the sums that take it
+/// to fuse its product.
 #[inline(always)]
 fn triangle<S: Simd>(
     s: S,
@@ -270,7 +287,7 @@ fn triangle<S: Simd>(
     let m2 = s.mul_add(m[2], m[2], s.mul_add(m[1], m[1], s.mul(m[0], m[0])));
     let vr2 = s.mul_add(vr[2], vr[2], s.mul_add(vr[1], vr[1], s.mul(vr[0], vr[0])));
     let vm = s.mul_add(vr[2], m[2], s.mul_add(vr[1], m[1], s.mul(vr[0], m[0])));
-    let ratio = s.mul(vr2, s.rsqrt_or_zero(s.mul(vr2, m2), S::E::TINY));
+    let ratio = s.mul(vr2, s.rsqrt(s.mul_add(vr2, m2, s.splat(S::E::TINY))));
     let a = s.mul(s.mul(neg_drag, vm), ratio);
     let a = match mask {
         Some(m) => s.mul(a, m),
@@ -592,7 +609,16 @@ unsafe fn block<
     let (right2, _) = spring::<S, FIXED>(s, p00, p02, bend, mask(1));
     let (d, e_down) = spring::<S, FIXED>(s, p00, p10, structural, mask(2));
     let (dr, e_diagonal) = spring::<S, FIXED>(s, p00, p11, shear, mask(3));
-    let (anti, e_anti) = spring::<S, FIXED>(s, p01, p10, shear, mask(4));
+    // The other diagonal: with fixed-point positions, `x_01 - x_10` as the down
+    // spring's vector less the right one's, rather than as a difference of
+    // positions, which costs a conversion more. Exact while the three are under
+    // 2^24 units; else rounded to its own size, as a difference is.
+    let (anti, e_anti) = if FIXED {
+        let d = std::array::from_fn(|i| s.sub(e_down[i], e_right[i]));
+        spring_of(s, d, (p01.1, p10.1), shear, mask(4))
+    } else {
+        spring::<S, FIXED>(s, p01, p10, shear, mask(4))
+    };
     let (d2, _) = spring::<S, FIXED>(s, p00, p20, bend, mask(5));
     let (t1, t2) = if DRAG {
         // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
@@ -635,19 +661,24 @@ unsafe fn block<
             let i = $i;
             // Terms for the lane to the right (column c+1), two to the right (c+2) and,
             // on the next row, one to the right.
-            let mut l = s.sub(anti[i], right[i]);
             let q = s.sub(zero, right2[i]);
-            let mut m = s.sub(zero, dr[i]);
-            let mut in1 = s.sub(zero, s.add(d[i], anti[i]));
-            // The triangles' drag `a m`, each product fused into a sum.
+            // With the triangles' drag `a m` (the first triangle's on this lane and
+            // the lane beside and below; the second's on the lane beside, below, and
+            // beside below), each product fused into a sum.
             let ((a1, m1), (a2, m2)) = (t1, t2);
-            if DRAG {
-                let second = s.mul(a2, m2[i]);
-                let t = s.mul_add(a1, m1[i], second);
-                l = s.add(l, t);
-                m = s.add(m, second);
-                in1 = s.add(in1, t);
-            }
+            let (l, m, in1) = if DRAG {
+                (
+                    s.mul_add(a1, m1[i], s.mul_add(a2, m2[i], s.sub(anti[i], right[i]))),
+                    s.mul_sub(a2, m2[i], dr[i]),
+                    s.mul_add(a1, m1[i], s.mul_sub(a2, m2[i], s.add(d[i], anti[i]))),
+                )
+            } else {
+                (
+                    s.sub(anti[i], right[i]),
+                    s.sub(zero, dr[i]),
+                    s.sub(zero, s.add(d[i], anti[i])),
+                )
+            };
             let in1 = s.add(in1, s.shift1(carry[2][i], m));
             // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
             unsafe {

@@ -32,6 +32,9 @@ pub(super) trait Simd: Copy {
     fn mul_add(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V;
     /// `a * b - c` (fused where the ISA has FMA).
     fn mul_sub(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V;
+    /// `1 / sqrt(x)`, for `x` positive and finite only (0, infinity or NaN give
+    /// NaN or infinity on some levels).
+    fn rsqrt(self, x: Self::V) -> Self::V;
     /// `1 / sqrt(x)` where `x > eps`, else 0.
     fn rsqrt_or_zero(self, x: Self::V, eps: Self::E) -> Self::V;
     /// `a` where `m > 0`, else 0.
@@ -116,6 +119,10 @@ impl<E: Real> Simd for Portable<E> {
     #[inline(always)]
     fn mul_sub(self, a: Self::V, b: Self::V, c: Self::V) -> Self::V {
         std::array::from_fn(|i| a[i].mul_add(b[i], E::ZERO - c[i]))
+    }
+    #[inline(always)]
+    fn rsqrt(self, x: Self::V) -> Self::V {
+        std::array::from_fn(|i| E::ONE / x[i].sqrt())
     }
     #[inline(always)]
     fn rsqrt_or_zero(self, x: Self::V, eps: E) -> Self::V {
