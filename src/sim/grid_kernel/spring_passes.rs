@@ -397,7 +397,8 @@ enum ClassRuns {
         end: usize,
         period: usize,
     },
-    /// With a wrap (a lattice's sweeps across its planes), counted along.
+    /// With a wrap (a lattice's sweeps across the rows of a plane, whose colours
+    /// start again at each plane's first row), counted along.
     Wrapping(ClassRows),
 }
 
@@ -723,7 +724,7 @@ impl<V: Copy> RowBlocks<V> {
         // of its pair block's spring.
         let colour = |l: usize| (l / dc) % 2;
         let last = (blocks - 1) * n;
-        let limit_last = lanes_of(&|l| k.limit2_of(last + l < len));
+        let limit_last = lanes_of(&|l| limit2_of(k.longest2_value, last + l < len));
         let pairs_last = [0, 1].map(|c| {
             lanes(&|l| {
                 let column = c * dc + last + l;
@@ -943,7 +944,7 @@ struct LineKernel<S: Simd> {
     past_tail: S::V,
     longest: S::V,
     longest2: S::V,
-    /// `longest2`'s value.
+    /// `longest2`'s value, for the limits of [`limit2_of`].
     longest2_value: S::E,
     rest: S::V,
     alpha: S::V,
@@ -985,7 +986,7 @@ impl<S: Simd> LineKernel<S> {
     }
 
     /// The lanes whose spring of vector `d` is over `limit2`: the squared limit
-    /// in the lanes kept, infinite in the others ([`Self::limit2_of`]). The one
+    /// in the lanes kept, infinite in the others ([`limit2_of`]). The one
     /// test of the sweeps that skip blocks, so that a block skipped is one that
     /// [`pair_block`] and `spring_line`'s correction would leave as it is: they
     /// measure with [`Self::length2`] and correct where [`Self::over_limit`] is
@@ -996,11 +997,6 @@ impl<S: Simd> LineKernel<S> {
     #[inline(always)]
     fn over(&self, d: [S::V; 3], limit2: S::V) -> S::Mask {
         self.s.gt(self.length2(d), limit2)
-    }
-
-    /// A lane's squared limit for [`Self::over`] ([`limit2_of`]).
-    fn limit2_of(&self, kept: bool) -> S::E {
-        limit2_of(self.longest2_value, kept)
     }
 
     /// The stretch limit's scale of springs of squared lengths `l2` and summed
