@@ -519,7 +519,12 @@ trait Real:
     /// Fixed-point `x` moved by `t` units, rounded to the nearest.
     fn fixed_add(x: Self, t: Self) -> Self;
     /// Runs one band of a step, with the best code this CPU has for this type.
-    fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>);
+    fn band_dispatch(
+        ctx: &Ctx<Self>,
+        band: &mut Band<Self>,
+        out: Out<Self>,
+        rows: std::ops::Range<usize>,
+    );
     /// Runs one band of a lattice's step, likewise.
     fn lattice_band(ctx: &lattice::Ctx<Self>, band: &mut lattice::Band<Self>, out: Out<Self>);
     /// Runs [`spring_sweep`], likewise.
@@ -585,24 +590,37 @@ macro_rules! real {
                     (x.to_bits() as $int).wrapping_add(t.round_ties_even() as $int) as $bits,
                 )
             }
-            fn band_dispatch(ctx: &Ctx<Self>, band: &mut Band<Self>, out: Out<Self>) {
+            fn band_dispatch(
+                ctx: &Ctx<Self>,
+                band: &mut Band<Self>,
+                out: Out<Self>,
+                rows: std::ops::Range<usize>,
+            ) {
                 match ctx.simd {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2
                     // and FMA.
-                    SimdLevel::Avx512 => {
-                        band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                    SimdLevel::Avx512 => band_rows(
+                        ctx,
+                        band,
+                        out,
+                        rows,
+                        |ctx, band, row, out, lo, own| unsafe {
                             x86::$avx512(ctx, band, row, out, lo, own)
-                        })
-                    }
+                        },
+                    ),
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-                    SimdLevel::Avx2 => {
-                        band_rows(ctx, band, out, |ctx, band, row, out, lo, own| unsafe {
+                    SimdLevel::Avx2 => band_rows(
+                        ctx,
+                        band,
+                        out,
+                        rows,
+                        |ctx, band, row, out, lo, own| unsafe {
                             x86::$avx2(ctx, band, row, out, lo, own)
-                        })
-                    }
-                    _ => band_rows(ctx, band, out, row_portable::<$t>),
+                        },
+                    ),
+                    _ => band_rows(ctx, band, out, rows, row_portable::<$t>),
                 }
             }
             fn lattice_band(
@@ -1366,6 +1384,17 @@ impl<E: Real> Kernel<E> {
                 (self.params.verlet, true),
             )
         });
+        // The spring pass after the step, run by the step on each band's rows.
+        let planned = self
+            .spring_pass_in_step(parallel)
+            .map(|rule| (rule, self.sweep_plan(rule, dt)));
+        let springs = planned.map(|(rule, plan)| SpringPass {
+            plan,
+            inv_mass: self.inv_mass.as_slice(),
+            simd: self.simd,
+            torn: self.torn.as_ref(),
+            start: step_start(rule, &self.cur),
+        });
         let ctx = Ctx {
             grid: self.grid,
             p: self.params,
@@ -1388,6 +1417,8 @@ impl<E: Real> Kernel<E> {
             drag: self.drag_on,
             simd: self.simd,
             contact: contact.as_ref(),
+            springs: springs.as_ref(),
+            rows_in_cache: self.rows_in_cache(),
         };
         let real = self.grid.h * self.grid.stride;
         fn rows<E: Real>(arrays: &mut [Buf<E>; 3], real: usize) -> [&mut [E]; 3] {
@@ -1400,13 +1431,20 @@ impl<E: Real> Kernel<E> {
         let State { x, v, u } = &mut self.next;
         let ([x0, x1, x2], [v0, v1, v2], [u0, u1, u2]) =
             (rows(x, real), rows(v, real), rows(u, real));
-        let out = Out([x0, x1, x2, v0, v1, v2, u0, u1, u2]);
-        if let Some(duo) = duo {
-            run_two_bands(&ctx, &mut self.par_bands, out, duo);
-        } else if parallel && self.par_bands.len() > 1 {
-            run_bands(&ctx, &mut self.par_bands, out, true);
+        let mut out = Out([x0, x1, x2, v0, v1, v2, u0, u1, u2]);
+        let bands = if parallel && self.par_bands.len() > 1 {
+            &mut self.par_bands
         } else {
-            run_bands(&ctx, &mut self.seq_band, out, false);
+            &mut self.seq_band
+        };
+        if let Some(duo) = duo {
+            run_two_bands(&ctx, bands, out.reborrow(), duo);
+        } else {
+            run_bands(&ctx, bands, out.reborrow(), parallel);
+        }
+        // The spring pass's lines between the two bands, once both have run.
+        if let (Some(springs), [_, second]) = (&springs, &bands[..]) {
+            springs.between_bands(&mut out, second.r0);
         }
         std::mem::swap(&mut self.cur, &mut self.next);
     }
@@ -1420,11 +1458,14 @@ impl<E: Real> Kernel<E> {
     /// that mode).
     fn constrain(&mut self, dt: f64, parallel: bool, duo: Option<&Duo>) {
         let parallel_pooled = parallel && duo.is_none();
-        if self.spec.integrator == Integrator::Xpbd {
-            self.spring_pass(SpringRule::Xpbd, dt, parallel, duo);
-        }
-        if let Some(tau) = self.spec.stretch_limit {
-            self.spring_pass(SpringRule::StretchLimit(tau), dt, parallel, duo);
+        // Unless the step ran it ([`Self::spring_pass_in_step`]).
+        if self.spring_pass_in_step(parallel).is_none() {
+            if self.spec.integrator == Integrator::Xpbd {
+                self.spring_pass(SpringRule::Xpbd, dt, parallel, duo);
+            }
+            if let Some(tau) = self.spec.stretch_limit {
+                self.spring_pass(SpringRule::StretchLimit(tau), dt, parallel, duo);
+            }
         }
         let parallel = parallel_pooled;
         if let Some(thickness) = self.spec.self_collision {
@@ -1443,6 +1484,24 @@ impl<E: Real> Kernel<E> {
         if let Some(tau) = self.spec.tear_strain {
             self.tear_pass(tau, parallel, duo);
         }
+    }
+
+    /// The spring pass that the step runs on each band's rows as soon as they are
+    /// stepped, in the same hand-over ([`SpringPass`]), while the rows are in the
+    /// core's cache: the only spring pass after the step (XPBD's or the stretch
+    /// limit's, not both), when the step runs in one band or two (the pass's
+    /// own halves, [`Self::spring_pass`]). The pass's lines then see the same
+    /// positions as after the whole step: a band's lines touch only rows it has
+    /// stepped, and the step reads only the positions before it.
+    fn spring_pass_in_step(&self, parallel: bool) -> Option<SpringRule> {
+        let rule = match (self.spec.integrator, self.spec.stretch_limit) {
+            (Integrator::Xpbd, None) => SpringRule::Xpbd,
+            (Integrator::Xpbd, Some(_)) => return None,
+            (_, Some(tau)) => SpringRule::StretchLimit(tau),
+            (_, None) => return None,
+        };
+        let bands = if parallel { self.par_bands.len() } else { 1 };
+        (bands <= 2).then_some(rule)
     }
 
     /// The colliders' contact after a step of `dt`.
@@ -1970,7 +2029,7 @@ use row::{
     row_variant, run_bands, run_two_bands, spring,
 };
 use simd::{Portable, Simd};
-use spring_passes::{SpringRule, SweepLines, spring_sweep};
+use spring_passes::{SpringPass, SpringRule, SweepLines, spring_sweep, step_start};
 
 impl GridCloth {
     /// Builds the cloth at rest, flat in the x-y plane (see [`GridSpec`]), in the

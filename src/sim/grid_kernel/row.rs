@@ -3,8 +3,11 @@
 //! integrated as soon as its force is complete (see the module doc of
 //! [`super`]).
 
+use std::ops::Range;
+
 use super::contact::ContactRows;
 use super::simd::align_frame;
+use super::spring_passes::SpringPass;
 use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, SimdLevel};
 
 /// Read-only inputs of a step.
@@ -28,22 +31,45 @@ pub(super) struct Ctx<'a, E> {
     /// ([`super::Kernel::contact_in_step`]); the ground's friction on each row
     /// right after the row ([`ContactRows::ground_friction_row`]).
     pub(super) contact: Option<&'a ContactRows<'a, E>>,
+    /// The spring pass after the step, run on each band's rows as soon as they
+    /// are stepped, when it is the only thing after the step
+    /// ([`super::Kernel::spring_pass_in_step`]).
+    pub(super) springs: Option<&'a SpringPass<'a, E>>,
+    /// Rows stepped before the contact or the spring pass runs on them: few
+    /// enough that they are still in the core's cache.
+    pub(super) rows_in_cache: usize,
 }
 
-/// One band of the step, then the contact of its rows if the step has it (with
+/// One band of the step, and the contact of its rows if the step has it (with
 /// the ground's friction given in the step, that of the rows with a particle near
-/// the sphere).
+/// the sphere) or the spring pass after the step, each on a few rows at a time as
+/// soon as they are stepped ([`Ctx::rows_in_cache`]).
 fn run_band<E: Real>(ctx: &Ctx<E>, band: &mut Band<E>, mut out: Out<E>) {
-    E::band_dispatch(ctx, band, out.reborrow());
-    if let Some(contact) = ctx.contact {
-        let rows = band.r0..band.r1;
-        if contact.friction_in_rows {
-            let near = &band.near_sphere;
-            let rows = rows.filter(|r| near[r - band.r0]);
-            contact.resolve(&mut out, band.r0, rows);
-        } else {
-            contact.resolve(&mut out, band.r0, rows);
+    if ctx.contact.is_none() && ctx.springs.is_none() {
+        E::band_dispatch(ctx, band, out, band.r0..band.r1);
+        return;
+    }
+    let mut springs = ctx.springs.map(|pass| pass.band(band.r0, band.r1));
+    let mut r = band.r0;
+    while r < band.r1 {
+        let end = (r + ctx.rows_in_cache).min(band.r1);
+        E::band_dispatch(ctx, band, out.reborrow(), r..end);
+        if let Some(contact) = ctx.contact {
+            if contact.friction_in_rows {
+                let near = &band.near_sphere;
+                let rows = (r..end).filter(|r| near[r - band.r0]);
+                contact.resolve(&mut out, band.r0, rows);
+            } else {
+                contact.resolve(&mut out, band.r0, r..end);
+            }
         }
+        if let Some(springs) = &mut springs {
+            springs.advance(&mut out, end);
+        }
+        r = end;
+    }
+    if let Some(springs) = &mut springs {
+        springs.finish(&mut out);
     }
 }
 
@@ -170,24 +196,30 @@ pub(super) fn row_variant<E: Real>(
     }
 }
 
-/// The rows of one band: prime the accumulator ring with the two rows above the
-/// band, then compute and integrate the band's rows one by one. Each row is one
-/// call of `row`, compiled for the chosen SIMD level.
+/// The rows `rows` of one band: from the band's first row, prime the
+/// accumulator ring with the two rows above the band; then compute and integrate
+/// the rows one by one (the ring carries what a row adds to the next two into
+/// the band's next call). Each row is one call of `row`, compiled for the chosen
+/// SIMD level.
 pub(super) fn band_rows<E: Real>(
     ctx: &Ctx<E>,
     band: &mut Band<E>,
     mut out: Out<E>,
+    rows: Range<usize>,
     row: impl Fn(&Ctx<E>, &mut Band<E>, usize, &mut Out<E>, usize, bool),
 ) {
-    // Rows 0 and 1 get nothing from rows above the cloth.
-    if band.r0 < 2 {
-        band.acc.as_mut_slice().fill(E::ZERO);
-    }
-    for r in band.r0.saturating_sub(2)..band.r0 {
-        row(ctx, band, r, &mut out, 0, false);
+    debug_assert!(band.r0 <= rows.start && rows.end <= band.r1);
+    if rows.start == band.r0 {
+        // Rows 0 and 1 get nothing from rows above the cloth.
+        if band.r0 < 2 {
+            band.acc.as_mut_slice().fill(E::ZERO);
+        }
+        for r in band.r0.saturating_sub(2)..band.r0 {
+            row(ctx, band, r, &mut out, 0, false);
+        }
     }
     let st = ctx.grid.stride;
-    for r in band.r0..band.r1 {
+    for r in rows {
         row(ctx, band, r, &mut out, (r - band.r0) * st, true);
     }
 }
