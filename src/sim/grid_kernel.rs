@@ -596,30 +596,28 @@ macro_rules! real {
                 out: Out<Self>,
                 rows: std::ops::Range<usize>,
             ) {
+                // The rows with one row function of `x86`.
+                macro_rules! rows_with {
+                    ($row:path) => {
+                        band_rows(
+                            ctx,
+                            band,
+                            out,
+                            rows,
+                            |ctx, band, row, out, lo, own| unsafe {
+                                $row(ctx, band, row, out, lo, own)
+                            },
+                        )
+                    };
+                }
                 match ctx.simd {
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: the level is Avx512 only when the CPU has AVX-512F/VL, AVX2
                     // and FMA.
-                    SimdLevel::Avx512 => band_rows(
-                        ctx,
-                        band,
-                        out,
-                        rows,
-                        |ctx, band, row, out, lo, own| unsafe {
-                            x86::$avx512(ctx, band, row, out, lo, own)
-                        },
-                    ),
+                    SimdLevel::Avx512 => rows_with!(x86::$avx512),
                     #[cfg(target_arch = "x86_64")]
                     // SAFETY: the level is Avx2 only when the CPU has AVX2 and FMA.
-                    SimdLevel::Avx2 => band_rows(
-                        ctx,
-                        band,
-                        out,
-                        rows,
-                        |ctx, band, row, out, lo, own| unsafe {
-                            x86::$avx2(ctx, band, row, out, lo, own)
-                        },
-                    ),
+                    SimdLevel::Avx2 => rows_with!(x86::$avx2),
                     _ => band_rows(ctx, band, out, rows, row_portable::<$t>),
                 }
             }
