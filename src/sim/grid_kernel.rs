@@ -26,11 +26,13 @@
 //! (its velocity is 0). After the step, particles inside the sphere are projected
 //! onto it (fused into the step when there is no stretch limit) and the stretch limit
 //! runs a Gauss-Seidel pass in the f64 engine's colour order; a move `δ` adds `δ/h`
-//! to the velocity, as in `super::constraints`. With friction, the colliders'
+//! to the velocity, as in `super::constraints` (when it is the only spring pass,
+//! the step runs it on each band's few rows as soon as it has stepped them, with
+//! the same result). With friction, the colliders'
 //! contact is the f64 engine's rule (`super::constraints::Contact`) after the
 //! step (`contact`); when nothing else comes after the step before it, it goes
 //! into the step: the ground's friction to each row as soon as the row is stepped,
-//! the sphere's to each band's rows after them.
+//! the sphere's to each band's few rows after them.
 //!
 //! # Precision
 //! * Float32 positions lose the low bits of each move `x += h v`, and the lost bits
@@ -1368,8 +1370,10 @@ impl<E: Real> Kernel<E> {
         self.spec.self_collision.is_some()
     }
 
-    /// One step of `dt` (the one [`Self::params`] holds, in f64), and the
-    /// colliders' contact after it when it comes first ([`Self::contact_in_step`]).
+    /// One step of `dt` (the one [`Self::params`] holds, in f64), and what comes
+    /// first after it when the step can run it on its rows as it writes them: the
+    /// colliders' contact ([`Self::contact_in_step`]) or the one spring pass
+    /// ([`Self::spring_pass_in_step`]).
     fn one_step(&mut self, dt: f64, parallel: bool, duo: Option<&Duo>) {
         let colliders = self.contact(dt);
         let contact = self.contact_in_step().then(|| {

@@ -5,7 +5,9 @@
 //! SIMD blocks ([`spring_line`]; the stretch limit's springs along rows both
 //! colours of a row at once, [`row_line`]), in bands of rows that stay in the
 //! core's cache, and most rows on two threads in one hand-over
-//! ([`Kernel::spring_pass`]).
+//! ([`Kernel::spring_pass`]). When a pass is the only one after the step, the
+//! step's own bands run it on their rows as soon as they have stepped them
+//! ([`SpringPass`], [`BandSweeps`]).
 
 use std::ops::Range;
 
