@@ -136,8 +136,7 @@ impl<E: Real> Kernel<E> {
         let joined = std::array::from_fn(|k| {
             matches!(rule, SpringRule::StretchLimit(_))
                 && torn.is_none()
-                && k % 2 == 0
-                && k + 1 < 12
+                && k.is_multiple_of(2)
                 && sweeps[k + 1].is_some()
                 && sweeps[k]
                     .as_ref()
@@ -298,16 +297,16 @@ pub(super) struct BandSweeps<'p, 'a, E> {
 impl<E: Real> BandSweeps<'_, '_, E> {
     /// The band's lines in rows `r0 .. r1` of sweep `k`.
     fn rows(&self, k: usize) -> Range<usize> {
-        let pass = &self.pass.plan;
+        let plan = &self.pass.plan;
         let first = if self.r0 == 0 {
             0
         } else {
-            pass.below(k, self.r0)
+            plan.below(k, self.r0)
         };
-        let last = if self.r1 == pass.height {
-            pass.height
+        let last = if self.r1 == plan.height {
+            plan.height
         } else {
-            pass.cut(k, self.r1)
+            plan.cut(k, self.r1)
         };
         first..last
     }
