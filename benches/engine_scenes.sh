@@ -15,6 +15,8 @@ cd "$(dirname "$0")/.."
 SIZES=${1:-"128 256"}
 RUNS=${2:-3}
 STEPS=${3:-960}
+# SIMD=avx2 (or baseline) runs every case's loops at that level (`cloth run --simd`),
+# e.g. the AVX2 path on an AVX-512 machine.
 # CLOTH=path runs another build of the binary (e.g. a copy of an older commit's).
 if [[ -z ${CLOTH:-} ]]; then
   cargo build --release --quiet
@@ -24,6 +26,11 @@ fi
 source benches/scene_cases.sh
 
 simd=$(grep -qw avx512f /proc/cpuinfo && echo AVX-512 || (grep -qw avx2 /proc/cpuinfo && echo AVX2 || echo baseline))
+SIMD_ARGS=""
+if [[ -n ${SIMD:-} ]]; then
+  simd="$SIMD (asked for; the CPU has $simd)"
+  SIMD_ARGS="--simd $SIMD"
+fi
 echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of $STEPS steps"
 for n in $SIZES; do
   echo
@@ -40,7 +47,7 @@ for n in $SIZES; do
   for _ in $(seq "$RUNS"); do
     for c in "${!CASES[@]}"; do
       # shellcheck disable=SC2086
-      out=$(eval "$CLOTH run --set width=$n --set height=$n ${args_of[$c]} --steps $STEPS --warmup 16 --json" 2>/dev/null | tail -1) || true
+      out=$(eval "$CLOTH run $SIMD_ARGS --set width=$n --set height=$n ${args_of[$c]} --steps $STEPS --warmup 16 --json" 2>/dev/null | tail -1) || true
       read -r rate engine < <(python3 -c "import json,sys; d=json.loads(sys.argv[1]); print(d['particle_steps_per_second'], d['engine'] + ('' if d['steps'] == $STEPS else '(diverged)'))" "$out")
       engine_of[$c]=$engine
       rates_of[$c]="${rates_of[$c]} $rate"
@@ -70,7 +77,7 @@ BENCH="--scene bench --set width=128 --set height=128 --steps $STEPS"
 for _ in $(seq "$RUNS"); do
   for args in "$JELLY" "$BENCH"; do
     # shellcheck disable=SC2086
-    echo "$args|$($CLOTH run $args --warmup 16 --json 2>/dev/null | tail -1 || true)"
+    echo "$args|$($CLOTH run $SIMD_ARGS $args --warmup 16 --json 2>/dev/null | tail -1 || true)"
   done
 done | python3 -c "
 import json, sys

@@ -92,10 +92,7 @@ fn main() {
                     .unwrap_or(quiet_wait)
             }
             "--simd" => {
-                let name = args.next();
-                simd = [SimdLevel::Avx512, SimdLevel::Avx2, SimdLevel::Baseline]
-                    .into_iter()
-                    .find(|level| name.as_deref() == Some(level.name()));
+                simd = args.next().as_deref().and_then(SimdLevel::from_name);
             }
             "--wind" => winds = vec![true],
             "--calm" => winds = vec![false],

@@ -11,7 +11,7 @@ use std::time::Instant;
 use clap::{Parser, Subcommand};
 use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
-use cloth_sandbox::sim::grid_kernel::Precision;
+use cloth_sandbox::sim::grid_kernel::{Precision, SimdLevel};
 use cloth_sandbox::sim::safe::{
     DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas, safe_step,
 };
@@ -147,6 +147,11 @@ pub struct RunArgs {
     /// (as the peers' benchmarks warm up).
     #[arg(long, default_value_t = 0, value_name = "N")]
     warmup: u64,
+    /// Run the fast engines' loops at this SIMD level at most, to compare levels on
+    /// one machine: avx512, avx2 or baseline (default: the best this CPU has; a
+    /// level it lacks is refused).
+    #[arg(long, value_name = "LEVEL")]
+    simd: Option<String>,
 }
 
 /// `cloth info`.
@@ -303,6 +308,12 @@ fn load_scene(scene: &SceneArgs, args: &StepArgs) -> Result<Scene, String> {
 }
 
 fn run(args: RunArgs) -> Result<ExitCode, String> {
+    if let Some(name) = &args.simd {
+        let names = SimdLevel::ALL.map(SimdLevel::name).join(", ");
+        let level = SimdLevel::from_name(name)
+            .ok_or_else(|| format!("--simd: `{name}` is not a SIMD level; use one of {names}"))?;
+        SimdLevel::cap(level).map_err(|e| format!("--simd {name}: {e}"))?;
+    }
     let scene = load_scene(&args.scene, &args.step)?;
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;

@@ -95,6 +95,7 @@
 //!   physics on a 3-D lattice (the jelly cube).
 
 use std::sync::OnceLock;
+use std::sync::atomic::{AtomicU8, Ordering};
 
 use bytemuck::Pod;
 use glam::DVec3;
@@ -423,8 +424,9 @@ pub fn stencil_counts(w: usize, h: usize) -> [usize; 3] {
     ]
 }
 
-/// Which compiled version of the loops runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// Which compiled version of the loops runs (in order: each level's CPU has the
+/// ones before it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum SimdLevel {
     /// Portable code (vectorised by the compiler for the baseline target: SSE2 on
     /// x86-64, NEON on aarch64).
@@ -435,9 +437,16 @@ pub enum SimdLevel {
     Avx512,
 }
 
+/// The highest level the engines may run at, as set by [`SimdLevel::cap`]
+/// (`u8::MAX`: no cap).
+static SIMD_CAP: AtomicU8 = AtomicU8::new(u8::MAX);
+
 impl SimdLevel {
-    /// Name for reports: `avx512`, `avx2` or `baseline` (as `grid_timing --simd`
-    /// takes them).
+    /// Every level, lowest first.
+    pub const ALL: [Self; 3] = [Self::Baseline, Self::Avx2, Self::Avx512];
+
+    /// Name for reports: `avx512`, `avx2` or `baseline` (as `cloth run --simd`
+    /// and `grid_timing --simd` take them).
     pub fn name(self) -> &'static str {
         match self {
             Self::Baseline => "baseline",
@@ -446,8 +455,25 @@ impl SimdLevel {
         }
     }
 
-    /// The best level this CPU supports (detected once).
+    /// The level named `name` ([`Self::name`]), if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|level| level.name() == name)
+    }
+
+    /// The level the engines built from now on run at: the best this CPU has
+    /// ([`Self::best`]), or the lower one [`Self::cap`] asked for.
     pub fn detect() -> Self {
+        let cap = SIMD_CAP.load(Ordering::Relaxed);
+        Self::best().min(
+            Self::ALL
+                .get(usize::from(cap))
+                .copied()
+                .unwrap_or(Self::Avx512),
+        )
+    }
+
+    /// The best level this CPU supports (detected once).
+    pub fn best() -> Self {
         static LEVEL: OnceLock<SimdLevel> = OnceLock::new();
         *LEVEL.get_or_init(|| {
             #[cfg(target_arch = "x86_64")]
@@ -465,6 +491,28 @@ impl SimdLevel {
             }
             SimdLevel::Baseline
         })
+    }
+
+    /// Whether this CPU can run the level's loops.
+    pub fn is_supported(self) -> bool {
+        self <= Self::best()
+    }
+
+    /// Runs every engine built from now on in this process at `level` at most
+    /// (for measuring one level against another on one machine: `cloth run
+    /// --simd avx2`). Engines already built keep their level. A level this CPU
+    /// lacks is refused, with the reason.
+    pub fn cap(level: Self) -> Result<(), String> {
+        if !level.is_supported() {
+            return Err(format!(
+                "this CPU cannot run the {} loops (the best it has is {})",
+                level.name(),
+                Self::best().name()
+            ));
+        }
+        let index = Self::ALL.iter().position(|&l| l == level).unwrap_or(0);
+        SIMD_CAP.store(index as u8, Ordering::Relaxed);
+        Ok(())
     }
 }
 
@@ -1298,13 +1346,7 @@ impl<E: Real> Kernel<E> {
     /// Force a SIMD level (for tests and benches). A level this CPU lacks is
     /// ignored.
     pub fn set_simd_level(&mut self, level: SimdLevel) {
-        let best = SimdLevel::detect();
-        let ok = match level {
-            SimdLevel::Baseline => true,
-            SimdLevel::Avx2 => best != SimdLevel::Baseline,
-            SimdLevel::Avx512 => best == SimdLevel::Avx512,
-        };
-        if ok {
+        if level.is_supported() {
             self.simd = level;
         }
     }

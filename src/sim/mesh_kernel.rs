@@ -391,13 +391,10 @@ fn spring_pass(ctx: &SpringCtx, start: usize, out: [&mut [f64]; 3]) {
 }
 
 /// The compiled version of the spring pass this CPU runs: its AVX2 build where
-/// the CPU has AVX2, else the baseline one.
+/// the grid kernels may run AVX2 or better ([`SimdLevel::detect`]), else the
+/// baseline one.
 pub(crate) fn simd_level() -> SimdLevel {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        return SimdLevel::Avx2;
-    }
-    SimdLevel::Baseline
+    SimdLevel::detect().min(SimdLevel::Avx2)
 }
 
 /// [`spring_pass`] compiled for AVX2: four springs per instruction (IEEE square

@@ -300,8 +300,8 @@ pub(super) fn span<E: Real>(
     rows: impl Iterator<Item = std::ops::Range<usize>>,
 ) -> (([f64; 3], [f64; 3]), f64) {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2.
+    if super::SimdLevel::detect() >= super::SimdLevel::Avx2 {
+        // SAFETY: the CPU has AVX2 (the level needs it).
         return unsafe { span_avx2(frame, x, v, rows) };
     }
     span_in(frame, x, v, rows)

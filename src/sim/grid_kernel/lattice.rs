@@ -686,13 +686,7 @@ impl<E: Real> Lattice<E> {
     /// Force a SIMD level (for tests and benches). A level this CPU lacks is
     /// ignored.
     fn set_simd_level(&mut self, level: SimdLevel) {
-        let best = SimdLevel::detect();
-        let ok = match level {
-            SimdLevel::Baseline => true,
-            SimdLevel::Avx2 => best != SimdLevel::Baseline,
-            SimdLevel::Avx512 => best == SimdLevel::Avx512,
-        };
-        if ok {
+        if level.is_supported() {
             self.simd = level;
         }
     }
