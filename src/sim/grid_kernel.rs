@@ -463,13 +463,8 @@ impl SimdLevel {
     /// The level the engines built from now on run at: the best this CPU has
     /// ([`Self::best`]), or the lower one [`Self::cap`] asked for.
     pub fn detect() -> Self {
-        let cap = SIMD_CAP.load(Ordering::Relaxed);
-        Self::best().min(
-            Self::ALL
-                .get(usize::from(cap))
-                .copied()
-                .unwrap_or(Self::Avx512),
-        )
+        let cap = Self::ALL.get(usize::from(SIMD_CAP.load(Ordering::Relaxed)));
+        cap.map_or(Self::best(), |&cap| Self::best().min(cap))
     }
 
     /// The best level this CPU supports (detected once).
@@ -510,8 +505,8 @@ impl SimdLevel {
                 Self::best().name()
             ));
         }
-        let index = Self::ALL.iter().position(|&l| l == level).unwrap_or(0);
-        SIMD_CAP.store(index as u8, Ordering::Relaxed);
+        // (`ALL` lists the levels in their declared order: `level as u8` indexes it.)
+        SIMD_CAP.store(level as u8, Ordering::Relaxed);
         Ok(())
     }
 }
