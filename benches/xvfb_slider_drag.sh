@@ -1,12 +1,31 @@
 #!/usr/bin/env bash
 # The app's frame time while idle and while the stiffness slider is dragged
 # continuously (a live edit every frame), under Xvfb on this machine's renderer.
-# Usage: bash benches/xvfb_slider_drag.sh [N] [SECONDS]   (default: the 256x256 cloth, 8 s)
+# Usage: [ROUNDS=R] bash benches/xvfb_slider_drag.sh [N] [SECONDS]
+# (default: the 256x256 cloth, 8 s, one round). With ROUNDS, each round starts the
+# app afresh, and the last line gives every round's frame while dragging against
+# idle and their median: one round's 20 or so frames part by as much as the drag
+# changes them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 N=${1:-256}
 SECS=${2:-8}
+ROUNDS=${ROUNDS:-1}
 cargo build --release --quiet
+if [ "$ROUNDS" -gt 1 ]; then
+  OUT=$(mktemp)
+  trap 'rm -f "$OUT"' EXIT
+  for r in $(seq "$ROUNDS"); do
+    echo "round $r"
+    ROUNDS=1 bash "$0" "$N" "$SECS" | tee -a "$OUT"
+  done
+  # "idle    : frame F ms" then "dragging: frame F ms", a pair a round.
+  awk '/^idle/ {idle = $4} /^dragging/ {print 100 * ($3 / idle - 1)}' "$OUT" | sort -g |
+    awk '{r[NR] = $1; s = s sprintf(" %+.1f%%", $1)}
+      END {m = NR % 2 ? r[(NR + 1) / 2] : (r[NR / 2] + r[NR / 2 + 1]) / 2
+        printf "frame while dragging against idle, %d rounds (sorted):%s; median %+.1f%%\n", NR, s, m}'
+  exit 0
+fi
 WORK=$(mktemp -d)
 Xvfb -displayfd 3 -screen 0 1280x800x24 -nolisten tcp 3>"$WORK/display" 2>/dev/null &
 XVFB=$!
