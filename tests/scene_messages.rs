@@ -76,3 +76,44 @@ fn a_scene_file_error_shows_its_line_and_a_caret() {
     assert_eq!(lines[2].find('^'), lines[1].find('w'), "{message}");
     assert!(lines[3].contains("did you mean `width`?"), "{message}");
 }
+
+#[test]
+fn none_turns_off_what_the_scene_file_turned_on_and_only_that() {
+    // The drape has a ground and a sphere, the sheet a stretch limit, the tear
+    // scene a tear strain: `none` removes each, as if the file never had it.
+    for (scene, key) in [
+        ("drape", "ground_height"),
+        ("drape", "sphere_center"),
+        ("sheet", "stretch_limit"),
+        ("tear", "tear_strain"),
+    ] {
+        let mut s = Scene::load(scene).unwrap();
+        assert!(s.resolve().is_ok());
+        s.set(key, "none").unwrap();
+        let p = s.resolve().unwrap().params;
+        let off = match key {
+            "ground_height" => p.ground.is_none(),
+            "sphere_center" => p.sphere.is_none(),
+            "stretch_limit" => p.stretch_limit.is_none(),
+            _ => p.tear_strain.is_none(),
+        };
+        assert!(off, "{scene}: {key}=none left it on");
+        let saved = toml::to_string(&s.spec).unwrap();
+        assert!(!saved.contains(key), "{scene}: {key} still saved:\n{saved}");
+    }
+    let mut s = Scene::load("cloth").unwrap();
+    s.set("max_speed", "3").unwrap();
+    s.set("max_speed", "none").unwrap();
+    assert_eq!(s.resolve().unwrap().params.max_speed, None);
+    // A key that is never off is refused `none`, and the off keys' messages offer it.
+    let message = set_error("stiffness", "none");
+    assert!(
+        message.contains("`stiffness` must be a number, got"),
+        "{message}"
+    );
+    let message = set_error("stretch_limit", "off");
+    assert!(
+        message.contains("`stretch_limit` must be a number or `none` (off), got"),
+        "{message}"
+    );
+}

@@ -37,7 +37,7 @@ fn live_edits() -> Vec<Edit> {
         Edit::Dt(0.0005),
         Edit::Substeps(7),
         Edit::Integrator(Integrator::Verlet),
-        Edit::StretchLimit(0.2),
+        Edit::StretchLimit(Some(0.2)),
         Edit::TearStrain(Some(0.8)),
         Edit::MaxSpeed(Some(7.0)),
         Edit::Friction(0.4),
@@ -84,7 +84,7 @@ fn assert_applied(s: &Session, edit: Edit) {
         Edit::Substeps(n) => assert_eq!(s.substeps(), n),
         Edit::Integrator(i) => assert_eq!(p.integrator, i),
         Edit::BarIterations(n) => assert_eq!(p.bar_iterations, n),
-        Edit::StretchLimit(t) => assert_eq!(p.stretch_limit, Some(t)),
+        Edit::StretchLimit(t) => assert_eq!(p.stretch_limit, t),
         Edit::TearStrain(t) => assert_eq!(p.tear_strain, t),
         Edit::MaxSpeed(v) => assert_eq!(p.max_speed, v),
         Edit::Friction(mu) => assert_eq!(p.friction, mu),
@@ -226,7 +226,11 @@ fn bad_values_are_refused_with_the_field_and_range_and_change_nothing() {
             "bar_iterations",
             "does not apply to a grid",
         ),
-        (Edit::StretchLimit(f64::NAN), "stretch_limit", "[0, 100]"),
+        (
+            Edit::StretchLimit(Some(f64::NAN)),
+            "stretch_limit",
+            "[0, 100]",
+        ),
         (Edit::Width(0), "width", "[1, 1024]"),
         (Edit::Height(5000), "height", "[1, 1024]"),
         (Edit::Depth(3), "depth", "does not apply to a grid"),
@@ -280,7 +284,6 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::Gust(x)
         | Edit::AirDamping(x)
         | Edit::Dt(x)
-        | Edit::StretchLimit(x)
         | Edit::Friction(x)
         | Edit::Thickness(x) => x.to_string(),
         Edit::Gravity(v) | Edit::Wind(v) | Edit::Force(v) => vec3(v),
@@ -291,9 +294,10 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::Depth(n) => n.to_string(),
         Edit::Integrator(i) => i.name().to_string(),
         Edit::SelfCollision(on) => on.to_string(),
-        // Tearing off is the key's absence, which has no `--set` form.
-        Edit::TearStrain(t) => t.expect("tearing on").to_string(),
-        Edit::MaxSpeed(v) => v.expect("a speed limit").to_string(),
+        // Off is the key's absence, which `none` asks for.
+        Edit::StretchLimit(x) | Edit::TearStrain(x) | Edit::MaxSpeed(x) => {
+            x.map_or("none".to_string(), |x| x.to_string())
+        }
     };
     (edit.key(), value)
 }
@@ -328,7 +332,12 @@ fn a_typed_edit_matches_the_same_value_set_as_text_in_every_scene() {
         Edit::Substeps(9),
         Edit::Integrator(Integrator::Rk4),
         Edit::BarIterations(3),
-        Edit::StretchLimit(0.3),
+        Edit::StretchLimit(Some(0.3)),
+        Edit::StretchLimit(None),
+        Edit::TearStrain(Some(0.6)),
+        Edit::TearStrain(None),
+        Edit::MaxSpeed(Some(5.0)),
+        Edit::MaxSpeed(None),
         Edit::Width(9),
         Edit::Height(5),
         Edit::Depth(3),
@@ -453,5 +462,42 @@ fn only_layout_edits_rebuild_and_the_session_agrees() {
         .chain([Edit::Width(4), Edit::Height(4), Edit::Depth(4)])
     {
         assert_eq!(s.needs_rebuild(edit.key()), edit.rebuilds(), "{edit:?}");
+    }
+}
+
+#[test]
+fn the_stretch_limit_turns_on_and_off_in_place_as_if_the_scene_had_it() {
+    // Each scene as loaded, the limit turned on (or off) in place, against the same
+    // scene loaded with it: the same engine, and the same state to the bit after
+    // the steps; and the limit must change the run (against the scene as loaded).
+    let cases = [
+        ("cloth", Some(0.0), "0"),
+        ("sheet", None, "none"),
+        ("jelly", Some(0.0), "0"),
+        ("chain", Some(0.0), "0"),
+        ("flag", Some(0.0), "0"),
+    ];
+    for (scene, limit, text) in cases {
+        let mut plain = Session::load_with(scene, &[]).unwrap();
+        let mut edited = Session::load_with(scene, &[]).unwrap();
+        let mut built = Session::load_with(scene, &[format!("stretch_limit={text}")]).unwrap();
+        edited.apply(Edit::StretchLimit(limit)).unwrap();
+        assert_eq!(built.system().params().stretch_limit, limit, "{scene}");
+        for _ in 0..60 {
+            for s in [&mut plain, &mut edited, &mut built] {
+                s.single_step();
+            }
+        }
+        let (a, b) = (edited.system(), built.system());
+        assert_eq!(a.engine(), b.engine(), "{scene}");
+        assert!(a.positions() == b.positions(), "{scene}: positions differ");
+        assert!(
+            a.velocities() == b.velocities(),
+            "{scene}: velocities differ"
+        );
+        assert!(
+            a.positions() != plain.system().positions(),
+            "{scene}: no effect"
+        );
     }
 }

@@ -702,10 +702,23 @@ fn contents(
                     edit(Edit::BarIterations(it));
                 }
             }
-            if let Some(limit) = p.stretch_limit {
-                let mut l = limit;
-                if slider(ui, &mut l, 0.0..=1.0, "stretch limit", false, "Maximum stretch tau (Provot): springs are kept no longer than (1 + tau) times their rest length; 0.1 = 10%") {
-                    edit(Edit::StretchLimit(l));
+            if !system.springs().is_empty() {
+                let mut on = p.stretch_limit.is_some();
+                if ui
+                    .checkbox(&mut on, "stretch limit")
+                    .on_hover_text(
+                        "Provot's stretch limit (seed 004): after each step, every spring \
+                         longer than (1 + tau) times its rest length is pulled back to it; \
+                         without it a soft cloth stretches like taffy",
+                    )
+                    .changed()
+                {
+                    edit(Edit::StretchLimit(on.then_some(p.stretch_limit.unwrap_or(0.1))));
+                }
+                if let Some(mut tau) = p.stretch_limit
+                    && slider(ui, &mut tau, 0.0..=1.0, "max stretch (tau)", false, "Maximum stretch tau (Provot): springs are kept no longer than (1 + tau) times their rest length; 0.1 = 10% (0 to 100)")
+                {
+                    edit(Edit::StretchLimit(Some(tau)));
                 }
             }
             let surface = !system.triangles().is_empty();

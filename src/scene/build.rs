@@ -825,7 +825,7 @@ impl Resolved {
             Edit::Substeps(n) => self.substeps = n,
             Edit::Integrator(i) => p.integrator = i,
             Edit::BarIterations(n) => p.bar_iterations = n,
-            Edit::StretchLimit(t) => p.stretch_limit = Some(t),
+            Edit::StretchLimit(t) => p.stretch_limit = t,
             Edit::TearStrain(t) => p.tear_strain = t,
             Edit::MaxSpeed(v) => p.max_speed = v,
             Edit::Friction(mu) => {

@@ -42,8 +42,9 @@ pub enum Edit {
     Integrator(Integrator),
     /// Rigid-bar relaxation passes per step (`bar_iterations`).
     BarIterations(u32),
-    /// Maximum stretch tau (`stretch_limit`): springs no longer than (1 + tau) L.
-    StretchLimit(f64),
+    /// Maximum stretch tau (`stretch_limit`): springs no longer than (1 + tau) L;
+    /// `None`: no limit.
+    StretchLimit(Option<f64>),
     /// Strain past which a spring tears (`tear_strain`); `None`: springs never tear.
     TearStrain(Option<f64>),
     /// Speed limit in m/s (`max_speed`); `None`: no limit.

@@ -244,6 +244,16 @@ const ALTERNATIVES: &[&[&str]] = &[
     &["damping", "damping_ratio", "damping_per_mass"],
 ];
 
+/// Keys whose absence turns their part of the scene off, which `--set KEY=none`
+/// does: no ground, no sphere, no stretch limit, no tearing, no speed limit.
+const OFF_WHEN_ABSENT: &[&str] = &[
+    "ground_height",
+    "sphere_center",
+    "stretch_limit",
+    "tear_strain",
+    "max_speed",
+];
+
 /// A scene error: always names where the input came from, and the field when there is one.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -400,6 +410,11 @@ fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
             (false, _) if expected == "f64" => "a number".to_string(),
             (false, _) => expected.to_string(),
         };
+        let takes = if OFF_WHEN_ABSENT.contains(&key) {
+            format!("{takes} or `none` (off)")
+        } else {
+            takes
+        };
         return format!("`{}` must be {takes}, got {}", echo(key), clip(got));
     }
     clip(message)
@@ -536,8 +551,11 @@ impl Scene {
 
     /// Sets one key from text, as `--set key=value` does: the value is read as TOML
     /// (`32`, `0.5`, `[0, 5]`, `true`) or, failing that, as a string (`corners`,
-    /// `1,0,0`). Setting one of a group of alternative keys clears the others. On
-    /// error the scene is unchanged.
+    /// `1,0,0`). `none` removes a key whose absence turns its part off
+    /// (`stretch_limit=none`: no stretch limit; so do `ground_height`,
+    /// `sphere_center`, `tear_strain` and `max_speed`). Setting
+    /// one of a group of alternative keys clears the others. On error the scene is
+    /// unchanged.
     pub fn set(&mut self, key: &str, value: &str) -> Result<(), SceneError> {
         let origin = format!("--set {}={}", echo(key), echo(value));
         if let Some(c) = value.chars().find(|c| c.is_control() && *c != '\t') {
@@ -563,7 +581,11 @@ impl Scene {
                 table.remove(*other);
             }
         }
-        table.insert(key.to_string(), parsed);
+        if value.trim() == "none" && OFF_WHEN_ABSENT.contains(&key) {
+            table.remove(key);
+        } else {
+            table.insert(key.to_string(), parsed);
+        }
         let spec: SceneSpec = table
             .try_into()
             .map_err(|e: toml::de::Error| SceneError::Parse {
@@ -641,7 +663,9 @@ impl Scene {
                 let bars = spec.bars.unwrap_or(false);
                 spec.bar_iterations = Some(build::bar_iterations(o, spec.layout, bars, n)?)
             }
-            Edit::StretchLimit(t) => spec.stretch_limit = Some(STRETCH_LIMIT.check(o, t)?),
+            Edit::StretchLimit(t) => {
+                spec.stretch_limit = t.map(|t| STRETCH_LIMIT.check(o, t)).transpose()?
+            }
             Edit::TearStrain(t) => {
                 spec.tear_strain = t.map(|t| TEAR_STRAIN.check(o, t)).transpose()?
             }
