@@ -35,7 +35,7 @@ echo "SIMD level: $simd; $(nproc) cores; best of $RUNS runs of $STEPS steps"
 for n in $SIZES; do
   echo
   echo "N = $n"
-  printf '%-34s %-10s %14s %10s %10s %10s\n' "case" "engine" "M p-steps/s" "cost/bench" "(medians)" "(paired)"
+  printf '%-38s %-12s %14s %10s %10s %10s\n' "case" "engine" "M p-steps/s" "cost/bench" "(medians)" "(paired)"
   # The runs go round the cases (case 1, 2, ..., then again), so that a spell of
   # contention on a shared machine slows one run of every case, not every run of
   # one: each case keeps all its runs, for the best and the median.
@@ -60,7 +60,7 @@ base, rates = [list(map(float, a.split())) for a in sys.argv[1:]]
 paired = statistics.median(b / r for b, r in zip(base, rates))
 print(max(rates) / 1e6, max(base) / max(rates), statistics.median(base) / statistics.median(rates), paired)
 " "${rates_of[0]}" "${rates_of[$c]}")
-    printf '%-34s %-10s %14.1f %10.2f %10.2f %10.2f\n' "${CASES[$c]%%|*}" "${engine_of[$c]}" "$best" "$ratio" "$median_ratio" "$paired"
+    printf '%-38s %-12s %14.1f %10.2f %10.2f %10.2f\n' "${CASES[$c]%%|*}" "${engine_of[$c]}" "$best" "$ratio" "$median_ratio" "$paired"
   done
 done
 

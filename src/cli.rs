@@ -879,6 +879,7 @@ fn print_info(value: &serde_json::Value) {
         match v {
             serde_json::Value::String(s) => s.clone(),
             serde_json::Value::Null => "none".to_string(),
+            serde_json::Value::Array(items) if items.is_empty() => "none".to_string(),
             serde_json::Value::Array(items) => {
                 items.iter().map(compact).collect::<Vec<_>>().join(", ")
             }

@@ -638,3 +638,25 @@ fn integrator_names_are_taken_in_any_case() {
         stderr(&o)
     );
 }
+
+/// `--set stretch_limit=none` takes the sheet's limit away, as `cloth info` and a
+/// run show (an empty list reads "none"), and a word other than `none` is refused
+/// with what the key takes.
+#[test]
+fn none_takes_the_sheets_stretch_limit_away() {
+    let info = |args: &[&str]| {
+        let o = cloth(&[&["info", "--scene", "sheet"], args].concat());
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        stdout(&o)
+    };
+    assert!(info(&[]).contains("constraints: stretch limit (10%)"));
+    let off = info(&["--set", "stretch_limit=none"]);
+    assert!(off.contains("constraints: none"), "{off}");
+    let o = cloth(&["run", "--scene", "sheet", "--set", "stretch_limit=off"]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("`stretch_limit` must be a number or `none` (off)"),
+        "{}",
+        stderr(&o)
+    );
+}
