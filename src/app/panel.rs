@@ -708,8 +708,8 @@ fn contents(
                     .checkbox(&mut on, "stretch limit")
                     .on_hover_text(
                         "Provot's stretch limit (seed 004): after each step, every spring \
-                         longer than (1 + tau) times its rest length is pulled back to it; \
-                         without it a soft cloth stretches like taffy",
+                         longer than (1 + tau) times its rest length is pulled back to it, \
+                         so that a soft cloth does not stretch like taffy",
                     )
                     .changed()
                 {
