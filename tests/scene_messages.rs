@@ -103,7 +103,7 @@ fn none_turns_off_what_the_scene_file_turned_on_and_only_that() {
     }
     let mut s = Scene::load("cloth").unwrap();
     s.set("max_speed", "3").unwrap();
-    s.set("max_speed", "none").unwrap();
+    s.set("max_speed", "None").unwrap();
     assert_eq!(s.resolve().unwrap().params.max_speed, None);
     // A key that is never off is refused `none`, and the off keys' messages offer it.
     let message = set_error("stiffness", "none");

@@ -581,7 +581,7 @@ impl Scene {
                 table.remove(*other);
             }
         }
-        if value.trim() == "none" && OFF_WHEN_ABSENT.contains(&key) {
+        if value.trim().eq_ignore_ascii_case("none") && OFF_WHEN_ABSENT.contains(&key) {
             table.remove(key);
         } else {
             table.insert(key.to_string(), parsed);
