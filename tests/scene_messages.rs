@@ -116,4 +116,9 @@ fn none_turns_off_what_the_scene_file_turned_on_and_only_that() {
         message.contains("`stretch_limit` must be a number or `none` (off), got"),
         "{message}"
     );
+    let message = set_error("sphere_center", "off");
+    assert!(
+        message.contains("not a vector") && message.ends_with("or `none` (off)"),
+        "{message}"
+    );
 }

@@ -417,7 +417,12 @@ fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
         };
         return format!("`{}` must be {takes}, got {}", echo(key), clip(got));
     }
-    clip(message)
+    match key {
+        Some(key) if OFF_WHEN_ABSENT.contains(&key) => {
+            format!("{}, or `none` (off)", clip(message))
+        }
+        _ => clip(message),
+    }
 }
 
 /// Levenshtein distance between two keys.
