@@ -655,7 +655,8 @@ fn none_takes_the_sheets_stretch_limit_away() {
     let o = cloth(&["run", "--scene", "sheet", "--set", "stretch_limit=off"]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("`stretch_limit` must be a number or `none` (off)"),
+        stderr(&o)
+            .contains("`stretch_limit` must be a number, got string \"off\"; `none` turns it off"),
         "{}",
         stderr(&o)
     );

@@ -113,12 +113,22 @@ fn none_turns_off_what_the_scene_file_turned_on_and_only_that() {
     );
     let message = set_error("stretch_limit", "off");
     assert!(
-        message.contains("`stretch_limit` must be a number or `none` (off), got"),
+        message.contains("`stretch_limit` must be a number, got")
+            && message.ends_with("; `none` turns it off"),
         "{message}"
     );
     let message = set_error("sphere_center", "off");
     assert!(
-        message.contains("not a vector") && message.ends_with("or `none` (off)"),
+        message.contains("not a vector") && message.ends_with("; `none` turns it off"),
+        "{message}"
+    );
+    assert!(!set_error("stiffness", "none").contains("`none`"));
+    // A scene file turns a part off by leaving its key out: no `none` offered there.
+    let message = Scene::parse("layout = \"grid\"\nstretch_limit = \"off\"\n", "test.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("`stretch_limit` must be a number") && !message.contains("none"),
         "{message}"
     );
 }

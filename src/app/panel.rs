@@ -702,7 +702,7 @@ fn contents(
                     edit(Edit::BarIterations(it));
                 }
             }
-            if !system.springs().is_empty() {
+            if has_springs {
                 let mut on = p.stretch_limit.is_some();
                 if ui
                     .checkbox(&mut on, "stretch limit")

@@ -410,19 +410,9 @@ fn plain_words(message: &str, key: Option<&str>, layout: Layout) -> String {
             (false, _) if expected == "f64" => "a number".to_string(),
             (false, _) => expected.to_string(),
         };
-        let takes = if OFF_WHEN_ABSENT.contains(&key) {
-            format!("{takes} or `none` (off)")
-        } else {
-            takes
-        };
         return format!("`{}` must be {takes}, got {}", echo(key), clip(got));
     }
-    match key {
-        Some(key) if OFF_WHEN_ABSENT.contains(&key) => {
-            format!("{}, or `none` (off)", clip(message))
-        }
-        _ => clip(message),
-    }
+    clip(message)
 }
 
 /// Levenshtein distance between two keys.
@@ -591,12 +581,17 @@ impl Scene {
         } else {
             table.insert(key.to_string(), parsed);
         }
-        let spec: SceneSpec = table
-            .try_into()
-            .map_err(|e: toml::de::Error| SceneError::Parse {
+        let spec: SceneSpec = table.try_into().map_err(|e: toml::de::Error| {
+            let mut message = plain_words(e.message().trim(), Some(key), self.spec.layout);
+            // Only `--set` takes `none` (a scene file leaves the key out).
+            if OFF_WHEN_ABSENT.contains(&key) {
+                message.push_str("; `none` turns it off");
+            }
+            SceneError::Parse {
                 origin: origin.clone(),
-                message: plain_words(e.message().trim(), Some(key), self.spec.layout),
-            })?;
+                message,
+            }
+        })?;
         let candidate = Self {
             spec,
             origin: self.origin.clone(),
