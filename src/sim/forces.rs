@@ -13,9 +13,9 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::Model;
+use super::laws::{self, SpringCoefficients, V3};
 
-/// Below this length (m) a spring or triangle edge is treated as degenerate.
-pub const EPSILON_LENGTH: f64 = 1e-12;
+pub use super::laws::EPSILON_LENGTH;
 
 /// Spring count above which spring forces are computed on several threads.
 const PARALLEL_SPRINGS: usize = 20_000;
@@ -104,7 +104,9 @@ impl Model {
             DVec3::ZERO
         };
         for (a, &w) in out.iter_mut().zip(&self.inv_mass) {
-            *a = if w > 0.0 { *a * w + g } else { DVec3::ZERO };
+            *a = V3::from(*a)
+                .zip(V3::from(g), |f, g| laws::acceleration(f, w, g))
+                .into();
         }
     }
 
@@ -125,9 +127,11 @@ impl Model {
             self.add_aero_forces(x, v, t, out);
         }
         if self.terms.air_damping {
-            let c = self.params.air_damping;
+            let neg_c = -self.params.air_damping;
             for (f, &vi) in out.iter_mut().zip(v) {
-                *f -= c * vi;
+                *f = V3::from(*f)
+                    .zip(V3::from(vi), |f, v| laws::air_damped(f, neg_c, v))
+                    .into();
             }
         }
         if self.terms.ground {
@@ -197,56 +201,30 @@ impl Model {
     }
 }
 
-/// Upward force (N) of the ground on a particle at `x` moving at `v`: `k_c d - c_g
-/// v_y` at depth `d = height - y > 0`, else 0.
+/// Upward force (N) of the ground on a particle at `x` moving at `v`
+/// ([`laws::ground_support`] at depth `height - y`).
 #[inline]
 pub fn ground_force(ground: &super::Ground, x: DVec3, v: DVec3) -> f64 {
-    ground_support(ground, ground.height - x.y, v.y)
+    laws::ground_support(ground.height - x.y, v.y, ground.stiffness, ground.damping)
 }
 
-/// [`ground_force`] of particles `depth` m below the ground moving up at `vy`,
-/// one per lane.
-#[inline(always)]
-pub(crate) fn ground_support<T: super::lanes::Lanes>(ground: &super::Ground, depth: T, vy: T) -> T {
-    let pressed = depth.splat(ground.stiffness) * depth - depth.splat(ground.damping) * vy;
-    T::select(depth.gt(depth.splat(0.0)), pressed, depth.splat(0.0))
-}
-
-/// Force on end `a` of a damped spring, given `d = x_a - x_b` and `dv = v_a - v_b`.
-/// Zero for coincident endpoints (no direction to push along).
+/// Force on end `a` of a damped spring, given `d = x_a - x_b` and `dv = v_a - v_b`
+/// ([`laws::spring_force`]). Zero for coincident endpoints.
 #[inline]
 pub fn spring_force(d: DVec3, dv: DVec3, rest: f64, k: f64, b: f64) -> DVec3 {
-    let l = d.length();
-    if l <= EPSILON_LENGTH {
-        return DVec3::ZERO;
-    }
-    let u = d / l;
-    -(k * (l - rest) + b * dv.dot(u)) * u
+    let c = SpringCoefficients::new(k, rest, b);
+    laws::spring_force(V3::from(d), V3::from(dv), c).into()
 }
 
 /// The drag on each vertex of a triangle with corners `x` moving at `v` in a
-/// `wind`: a third of [`aero_force`], with `v_rel` the mean vertex velocity less
-/// the wind (every engine's per-triangle drag). Written with one division a
-/// triangle: nine (the mean, the normal, the third) were most of the mesh engine's
-/// drag pass.
+/// `wind` ([`laws::triangle_drag`]), with `half_rho_cd = ρ C_d / 2`.
 #[inline]
 pub fn triangle_drag(x: [DVec3; 3], v: [DVec3; 3], wind: DVec3, half_rho_cd: f64) -> DVec3 {
-    let v_rel = (v[0] + v[1] + v[2]) * (1.0 / 3.0) - wind;
-    aero_force(x[0], x[1], x[2], v_rel, half_rho_cd * (1.0 / 3.0))
-}
-
-/// Aerodynamic drag on a triangle `(a, b, c)` moving at `v_rel` relative to the air:
-/// `-1/2 rho C_d A (v_rel·n) |v_rel| n`, with `half_rho_cd = rho C_d / 2`. With `m`
-/// the edges' cross product (`|m| = 2A`, `n = m / |m|`) that is
-/// `-(half_rho_cd / 2) (v_rel·m) |v_rel| m / |m|`. Zero for a zero-area triangle or
-/// zero relative velocity.
-#[inline]
-pub fn aero_force(a: DVec3, b: DVec3, c: DVec3, v_rel: DVec3, half_rho_cd: f64) -> DVec3 {
-    let cross = (b - a).cross(c - a);
-    let twice_area = cross.length();
-    let speed = v_rel.length();
-    if twice_area <= EPSILON_LENGTH * EPSILON_LENGTH || speed <= EPSILON_LENGTH {
-        return DVec3::ZERO;
-    }
-    (-0.5 * half_rho_cd * v_rel.dot(cross) * speed / twice_area) * cross
+    laws::triangle_drag(
+        x.map(V3::from),
+        v.map(V3::from),
+        V3::from(wind),
+        half_rho_cd,
+    )
+    .into()
 }

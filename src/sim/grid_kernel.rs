@@ -29,7 +29,7 @@
 //! to the velocity, as in `super::constraints` (when it is the only spring pass,
 //! the step runs it on each band's few rows as soon as it has stepped them, with
 //! the same result). With friction, the colliders'
-//! contact is the f64 engine's rule (`super::constraints::Contact`) after the
+//! contact is the f64 engine's rule (`super::laws::Contact`) after the
 //! step (`contact`); when nothing else comes after the step before it, it goes
 //! into the step: the ground's friction to each row as soon as the row is stepped,
 //! the sphere's to each band's few rows after them.
@@ -100,20 +100,12 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use bytemuck::Pod;
 use glam::DVec3;
 
-use super::constraints;
 use super::duo::{Duo, run_in_pool};
 use super::lanes::LaneFloat;
+use super::laws;
 use super::springs::{STENCIL_DIRECTIONS, STENCIL_KINDS};
 use super::{Ground, Integrator, SelfCollision, Sphere, Wind};
 use frame::{Frame, FrameRule};
-
-/// Squared spring length (m²) under which a spring is treated as degenerate and
-/// gives no force.
-const EPS2: f32 = 1e-24;
-/// Added to `|v_rel|² |2A|²` (m⁶/s²) before its reciprocal square root, so that
-/// a triangle with no area or no relative wind gives no drag rather than NaN
-/// (see `row::triangle`).
-const TINY: f32 = 1e-30;
 
 /// Grids with fewer particles than this run on the calling thread even when
 /// several threads are allowed (threading costs more than it saves there).
@@ -178,7 +170,7 @@ pub struct GridSpec {
     /// Sphere collider, if any: particles inside are projected onto its surface.
     pub sphere: Option<Sphere>,
     /// Coulomb friction coefficient μ of the sphere (the ground's is its own, see
-    /// `constraints::Contact::resolve`); with friction on either the sphere is
+    /// `laws::Contact::resolve`); with friction on either the sphere is
     /// resolved after the step rather than inside it.
     pub friction: f64,
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart
@@ -189,7 +181,7 @@ pub struct GridSpec {
     /// Tear strain `tau`, if springs tear ([`super::tearing`]): a spring longer
     /// than `(1 + tau) L` at the end of a step breaks.
     pub tear_strain: Option<f64>,
-    /// Speed limit in m/s, if any ([`constraints::speed_limit`]).
+    /// Speed limit in m/s, if any ([`laws::speed_limit`]).
     pub max_speed: Option<f64>,
     /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
     pub integrator: Integrator,
@@ -537,11 +529,6 @@ trait Real:
     const ONE: Self;
     /// Below any height: the ground height when there is no ground.
     const LOWEST: Self;
-    /// Squared spring length (m²) under which a spring is degenerate (no force).
-    const EPS2: Self;
-    /// Added to `|v_rel|² |2A|²` (m⁶/s²) so that a triangle with no area or no
-    /// relative wind gives no drag.
-    const TINY: Self;
     /// The float's bits as an unsigned integer.
     type Bits: Copy + Ord;
     fn of(x: f64) -> Self;
@@ -578,14 +565,12 @@ trait Real:
 
 /// `Real` for a float type: its constants and the row functions of each SIMD level.
 macro_rules! real {
-    ($t:ident, bits: $bits:ty, int: $int:ty, eps2: $eps2:expr, tiny: $tiny:expr, avx512: $avx512:ident, avx2: $avx2:ident,
+    ($t:ident, bits: $bits:ty, int: $int:ty, avx512: $avx512:ident, avx2: $avx2:ident,
      lattice: $lattice512:ident, $lattice2:ident, springs: $springs512:ident, $springs2:ident) => {
         impl Real for $t {
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
             const LOWEST: Self = $t::MIN;
-            const EPS2: Self = $eps2;
-            const TINY: Self = $tiny;
             type Bits = $bits;
             fn of(x: f64) -> Self {
                 x as $t
@@ -716,10 +701,10 @@ macro_rules! real {
 
 // Both types: the intrinsics of `x86` at AVX2 and AVX-512, the portable lanes
 // below those.
-real!(f32, bits: u32, int: i32, eps2: EPS2, tiny: TINY, avx512: row_avx512, avx2: row_avx2,
+real!(f32, bits: u32, int: i32, avx512: row_avx512, avx2: row_avx2,
       lattice: lattice_band_avx512, lattice_band_avx2,
       springs: spring_sweep_avx512, spring_sweep_avx2);
-real!(f64, bits: u64, int: i64, eps2: 1e-24, tiny: 1e-30, avx512: row_avx512_f64, avx2: row_avx2_f64,
+real!(f64, bits: u64, int: i64, avx512: row_avx512_f64, avx2: row_avx2_f64,
       lattice: lattice_band_avx512_f64, lattice_band_avx2_f64,
       springs: spring_sweep_avx512_f64, spring_sweep_avx2_f64);
 
@@ -849,7 +834,7 @@ impl<E: Real> Params<E> {
         // XPBD's springs are constraints (`constrain`), not forces: the fused pass
         // predicts with every other force.
         let xpbd = spec.integrator == Integrator::Xpbd;
-        let frictional = constraints::Contact {
+        let frictional = laws::Contact {
             sphere: spec.sphere,
             ground: spec.ground,
             friction: spec.friction,
@@ -1544,8 +1529,8 @@ impl<E: Real> Kernel<E> {
     }
 
     /// The colliders' contact after a step of `dt`.
-    fn contact(&self, dt: f64) -> constraints::Contact {
-        constraints::Contact {
+    fn contact(&self, dt: f64) -> laws::Contact {
+        laws::Contact {
             sphere: self.spec.sphere,
             ground: self.spec.ground,
             friction: self.spec.friction,
@@ -1568,7 +1553,7 @@ impl<E: Real> Kernel<E> {
             && self.contact(0.0).is_active()
     }
 
-    /// The speed limit, as the f64 engine applies it ([`constraints::speed_limit`]):
+    /// The speed limit, as the f64 engine applies it ([`laws::speed_limit`]):
     /// a cheap check in the kernel's precision, then the particle's velocity (and
     /// Verlet's update velocity) scaled in f64.
     fn limit_speed(&mut self, max_speed: f64) {
@@ -1596,7 +1581,7 @@ impl<E: Real> Kernel<E> {
                 if !faster(v, limit2) {
                     continue;
                 }
-                let factor = constraints::speed_limit(DVec3::from(v.map(E::f64)), max_speed);
+                let factor = laws::speed_limit(DVec3::from(v.map(E::f64)), max_speed);
                 for a in 0..3 {
                     let v = &mut self.cur.v[a].as_mut_slice()[i];
                     *v = E::of(v.f64() * factor);
@@ -2053,6 +2038,8 @@ macro_rules! forward {
 }
 
 // After `forward!`, which the lattice kernel uses too.
+#[cfg(test)]
+mod conformance;
 mod contact;
 pub mod frame;
 pub mod lattice;

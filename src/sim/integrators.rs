@@ -15,6 +15,7 @@
 
 use glam::DVec3;
 
+use super::laws::{Method, step_particle};
 use super::{Model, State, VerletHistory, Workspace, implicit};
 
 /// Integration method, chosen at run time.
@@ -37,7 +38,7 @@ pub enum Integrator {
     /// constraint iteration per step, the "small steps" of Macklin et al. (2019):
     /// every force but the springs moves the particles by symplectic Euler, then
     /// each spring is a distance constraint of compliance `1/k`
-    /// (`constraints::xpbd_correction`) and the moves become velocities.
+    /// (`laws::xpbd_correction`) and the moves become velocities.
     /// Order 1; no step limit from the springs, at any stiffness.
     Xpbd,
 }
@@ -112,13 +113,14 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
             // XPBD predicts with symplectic Euler; its springs are not a force term
             // (`ForceTerms::springs` is off) but constraints, applied after.
             let symplectic = model.params.integrator != Integrator::ExplicitEuler;
-            for ((x, v), a) in state
+            for (((x, v), a), &w) in state
                 .positions
                 .iter_mut()
                 .zip(&mut state.velocities)
                 .zip(a.iter())
+                .zip(&model.inv_mass)
             {
-                (*x, *v) = euler_update(symplectic, *x, *v, *a, h);
+                (*x, *v) = euler_update(symplectic, *x, *v, *a, w, h);
             }
         }
         Integrator::Verlet => verlet(model, state, work, h, t),
@@ -129,20 +131,30 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
 }
 
 /// One Euler step of a particle at `x` moving at `v` with acceleration `a` (of the
-/// old state): symplectic Euler moves with the new velocity, `v' = v + h a; x' = x +
-/// h v'`, explicit Euler with the old one, `x' = x + h v; v' = v + h a`.
+/// old state) and inverse mass `w`, [`update`](super::laws::update): symplectic
+/// Euler moves with the new velocity, explicit Euler with the old one. Returns the
+/// new position and velocity.
 #[inline]
-pub fn euler_update(symplectic: bool, x: DVec3, v: DVec3, a: DVec3, h: f64) -> (DVec3, DVec3) {
-    let v_new = v + h * a;
-    if symplectic {
-        (x + h * v_new, v_new)
+pub fn euler_update(
+    symplectic: bool,
+    x: DVec3,
+    v: DVec3,
+    a: DVec3,
+    w: f64,
+    h: f64,
+) -> (DVec3, DVec3) {
+    let method = if symplectic {
+        Method::SymplecticEuler
     } else {
-        (x + h * v, v_new)
-    }
+        Method::ExplicitEuler
+    };
+    let [x, _, v] = step_particle(method, x, v, a, w, h);
+    (x, v)
 }
 
-/// Position Verlet. The velocity the forces see is the second-order estimate
-/// `v = (x - x_prev)/h + h/2 a_prev`, so damping keeps the method second order.
+/// Position Verlet in velocity form ([`update`](super::laws::update)), its update velocity `u =
+/// (x - x_prev) / h` taken from the positions. The velocity the forces see is the
+/// second-order estimate `u' + h/2 a`, so damping keeps the method second order.
 fn verlet(model: &Model, state: &mut State, work: &mut Workspace, h: f64, t: f64) {
     let a = &mut work.accelerations;
     model.accelerations(
@@ -168,10 +180,11 @@ fn verlet(model: &Model, state: &mut State, work: &mut Workspace, h: f64, t: f64
             continue;
         }
         let x = positions[i];
-        let next = 2.0 * x - prev_positions[i] + h * h * a[i];
+        let u = (x - prev_positions[i]) / h;
+        let [next, _, v] = step_particle(Method::Verlet, x, u, a[i], model.inv_mass[i], h);
         prev_positions[i] = x;
         positions[i] = next;
-        velocities[i] = (next - x) / h + 0.5 * h * a[i];
+        velocities[i] = v;
         prev_accelerations[i] = a[i];
     }
 }

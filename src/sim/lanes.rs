@@ -1,5 +1,5 @@
 //! Lanes for the physics every engine shares but the fast engines apply to many
-//! particles at once (contact and friction, [`super::constraints::Contact`]).
+//! particles at once (contact and friction, [`super::laws::Contact`]).
 //! The physics is written once over [`Lanes`]: `f64` for one particle (the f64
 //! engine), [`Floats`] for a block of them (the grid and lattice kernels). Branches
 //! become per-lane selects, so each lane computes exactly what the `f64` version
@@ -33,6 +33,22 @@ pub(crate) trait Lanes:
 
     /// `a` in the lanes where `m` says yes, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+
+    /// `self * b + c`: fused where an engine's lanes fuse it (the vector
+    /// kernels'), rounded twice in `f64` and [`Floats`] (the reference's rounding).
+    fn mul_add(self, b: Self, c: Self) -> Self;
+    /// `self * b - c`, fused as [`Lanes::mul_add`] is.
+    fn mul_sub(self, b: Self, c: Self) -> Self;
+    /// `1 / sqrt(self)` where `self > eps2`, else 0 (a degenerate length has no
+    /// direction). The vector kernels take an estimate refined by a Newton step.
+    fn rsqrt_or_zero(self, eps2: f64) -> Self;
+    /// `1 / sqrt(self)`, for `self` positive and finite.
+    fn rsqrt(self) -> Self;
+    /// `a` where `self > 0`, else 0.
+    #[inline(always)]
+    fn keep_if_positive(self, a: Self) -> Self {
+        Self::select(self.gt(self.splat(0.0)), a, self.splat(0.0))
+    }
 }
 
 impl Lanes for f64 {
@@ -69,6 +85,22 @@ impl Lanes for f64 {
     #[inline(always)]
     fn select(m: bool, a: Self, b: Self) -> Self {
         if m { a } else { b }
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        self * b + c
+    }
+    #[inline(always)]
+    fn mul_sub(self, b: Self, c: Self) -> Self {
+        self * b - c
+    }
+    #[inline(always)]
+    fn rsqrt_or_zero(self, eps2: f64) -> Self {
+        if self > eps2 { 1.0 / self.sqrt() } else { 0.0 }
+    }
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        1.0 / self.sqrt()
     }
 }
 
@@ -221,6 +253,27 @@ impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
         Floats(std::array::from_fn(|i| F::pick(m[i], a.0[i], b.0[i])))
     }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        self * b + c
+    }
+    #[inline(always)]
+    fn mul_sub(self, b: Self, c: Self) -> Self {
+        self * b - c
+    }
+    #[inline(always)]
+    fn rsqrt_or_zero(self, eps2: f64) -> Self {
+        let (one, zero, eps2) = (F::of_f64(1.0), F::of_f64(0.0), F::of_f64(eps2));
+        Floats(std::array::from_fn(|i| {
+            let x = self.0[i];
+            if x > eps2 { one / x.root() } else { zero }
+        }))
+    }
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        let one = F::of_f64(1.0);
+        Floats(std::array::from_fn(|i| one / self.0[i].root()))
+    }
 }
 
 /// A 3-vector of lanes, with the operations of [`DVec3`] that the shared physics
@@ -242,9 +295,28 @@ impl<T: Lanes> V3<T> {
             z: like.splat(v.z),
         }
     }
+    /// `x x' + y y' + z z'`, summed in that order (fused where the lanes fuse).
     #[inline(always)]
     pub fn dot(self, o: Self) -> T {
-        self.x * o.x + self.y * o.y + self.z * o.z
+        o.z.mul_add(self.z, o.y.mul_add(self.y, self.x * o.x))
+    }
+    /// The cross product, each component `a b - c d` fused where the lanes fuse.
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        V3 {
+            x: self.y.mul_sub(o.z, self.z * o.y),
+            y: self.z.mul_sub(o.x, self.x * o.z),
+            z: self.x.mul_sub(o.y, self.y * o.x),
+        }
+    }
+    /// The components of `f(self, o)` axis by axis.
+    #[inline(always)]
+    pub fn zip(self, o: Self, f: impl Fn(T, T) -> T) -> Self {
+        V3 {
+            x: f(self.x, o.x),
+            y: f(self.y, o.y),
+            z: f(self.z, o.z),
+        }
     }
     #[inline(always)]
     pub fn length(self) -> T {

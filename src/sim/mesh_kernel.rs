@@ -45,13 +45,16 @@
 
 use glam::DVec3;
 
-use super::constraints::{Contact, length_correction, speed_limit, xpbd_pass, xpbd_sweeps_back};
+use super::constraints::{xpbd_pass, xpbd_sweeps_back};
 use super::forces::{ground_force, spring_force, triangle_drag};
 use super::grid_kernel::SimdLevel;
 use super::integrators::euler_update;
+use super::laws::overstretched;
+use super::laws::{self, Method, V3, step_particle};
+use super::laws::{Contact, length_correction, speed_limit};
 use super::springs;
 use super::springs::{Adjacency, BarPairs};
-use super::tearing::{overstretched, remove_broken};
+use super::tearing::remove_broken;
 use super::{
     Bar, GridShape, Ground, Integrator, LatticeShape, Model, SelfCollision, Sphere, Spring, Wind,
 };
@@ -103,7 +106,7 @@ pub struct MeshParams {
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart
     /// ([`super::self_collision`]).
     pub self_collision: Option<f64>,
-    /// Speed limit in m/s, if any ([`super::constraints::speed_limit`]).
+    /// Speed limit in m/s, if any ([`super::laws::speed_limit`]).
     pub max_speed: Option<f64>,
     /// Whether the springs are forces; under XPBD they are constraints instead,
     /// one Gauss-Seidel pass of `xpbd_pass` after the prediction.
@@ -619,32 +622,34 @@ fn advance(ctx: &Ctx, mut out: Out) {
             }
         }
         if p.air_damping > 0.0 {
-            f -= p.air_damping * vi;
+            let neg_c = -p.air_damping;
+            f = V3::from(f)
+                .zip(V3::from(vi), |f, v| laws::air_damped(f, neg_c, v))
+                .into();
         }
         if let Some(ground) = &p.ground {
             f.y += ground_force(ground, xi, vi);
         }
         f += p.force;
         let w = ctx.inv_mass[i];
-        let a = if w > 0.0 {
-            f * w + p.gravity
-        } else {
-            DVec3::ZERO
-        };
+        let a: DVec3 = V3::from(f)
+            .zip(V3::from(p.gravity), |f, g| laws::acceleration(f, w, g))
+            .into();
         let (x_new, v_new) = match p.integrator {
-            Integrator::ExplicitEuler => euler_update(false, xi, vi, a, h),
+            Integrator::ExplicitEuler => euler_update(false, xi, vi, a, w, h),
             Integrator::Verlet if verlet => {
                 if w == 0.0 {
                     // Held in place: the f64 engine sets `x_prev = x` and keeps `v`.
                     store(&mut out.u, local, DVec3::ZERO);
                     (xi, vi)
                 } else {
-                    let u = load(out.u.each_ref().map(|s| &**s), local) + h * a;
+                    let u = load(out.u.each_ref().map(|s| &**s), local);
+                    let [x, u, v] = step_particle(Method::Verlet, xi, u, a, w, h);
                     store(&mut out.u, local, u);
-                    (xi + h * u, u + 0.5 * h * a)
+                    (x, v)
                 }
             }
-            _ => euler_update(true, xi, vi, a, h),
+            _ => euler_update(true, xi, vi, a, w, h),
         };
         store(&mut out.x, local, x_new);
         store(&mut out.v, local, v_new);

@@ -18,7 +18,7 @@ use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
     Adjacency, Bar, BarPairs, Divergence, Energy, EnergyBudget, ForceTerms, Grab, HAND_REACH,
     Integrator, Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints,
-    fast_path, forces, grid_kernel, implicit, integrators, springs, stability,
+    fast_path, forces, grid_kernel, implicit, integrators, laws, springs, stability,
 };
 
 /// Scratch space for a step, sized once per model and integrator.
@@ -582,7 +582,7 @@ impl System {
         (!self.model.bars.is_empty() && p.bar_iterations > 0)
             || (p.integrator == Integrator::Xpbd && !self.model.springs.is_empty())
             || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
-            || constraints::Contact::of(p).is_active()
+            || laws::Contact::of(p).is_active()
             || p.self_collides()
     }
 
@@ -688,7 +688,7 @@ impl System {
         verlet.restart(&self.model, positions, velocities, *time, &mut self.work);
     }
 
-    /// The speed limit ([`constraints::speed_limit`]): every particle faster than
+    /// The speed limit ([`laws::speed_limit`]): every particle faster than
     /// `max_speed` is slowed to it, and under Verlet its history with it.
     fn limit_speed(&mut self, max_speed: f64) {
         let State {
@@ -698,7 +698,7 @@ impl System {
             ..
         } = &mut self.state;
         for (i, v) in velocities.iter_mut().enumerate() {
-            let factor = constraints::speed_limit(*v, max_speed);
+            let factor = laws::speed_limit(*v, max_speed);
             if factor < 1.0 {
                 *v *= factor;
                 if let Some(prev) = verlet.positions.get_mut(i) {

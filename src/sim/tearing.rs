@@ -18,16 +18,8 @@
 //!   ([`super::fast_path`]). The mesh engine does the same on its own copy of the
 //!   springs and triangles (`remove_broken`, shared with the model).
 
-use glam::DVec3;
-
+pub use super::laws::overstretched;
 use super::{Adjacency, Spring, System, fast_path, springs};
-
-/// Whether a spring of rest length `rest` between `a` and `b` is past the tear
-/// strain `tau`: longer than `(1 + tau) rest`, with a finite length.
-pub fn overstretched(a: DVec3, b: DVec3, rest: f64, tau: f64) -> bool {
-    let l = (a - b).length();
-    l.is_finite() && l > (1.0 + tau) * rest
-}
 
 impl System {
     /// Springs broken so far (torn or cut) since the system was built.

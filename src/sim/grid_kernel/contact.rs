@@ -1,29 +1,30 @@
 //! Contact with the colliders after the step, where friction (or a stretch limit,
 //! XPBD or self-collision before it) keeps it out of the fused step: the shared
-//! [`constraints::Contact::resolve_lanes`] on blocks of particles, on the rows
+//! [`laws::Contact::resolve_lanes`] on blocks of particles, on the rows
 //! that may touch; in float64 near the sphere, the ground's friction alone in the
 //! kernel's float. When the contact comes first after the step, each band
 //! resolves its rows as soon as it has stepped them, and the ground's friction
 //! is given to each row right after it, on the kernel's own vectors
 //! ([`ContactRows::ground_friction_row`]).
 
-use super::super::constraints::Near;
 use super::super::duo::Duo;
 use super::super::lanes::{Floats, Lanes, V3};
+use super::super::laws::Near;
 use super::frame::whole_units;
 use super::row::difference;
 use super::simd::{Simd, Vector, align_frame};
 #[cfg(target_arch = "x86_64")]
 use super::x86;
-use super::{Frame, Grid, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel, constraints};
+use super::{Frame, Grid, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel};
+use crate::sim::laws;
 
 impl<E: Real> Kernel<E> {
     /// The colliders' contact of every free particle that touches one, as the f64
-    /// engine resolves it ([`constraints::Contact::resolve`]), on the pool's two
+    /// engine resolves it ([`laws::Contact::resolve`]), on the pool's two
     /// threads when it has them: see [`ContactRows`].
     pub(super) fn resolve_contact(
         &mut self,
-        contact: &constraints::Contact,
+        contact: &laws::Contact,
         parallel: bool,
         duo: Option<&Duo>,
     ) {
@@ -71,7 +72,7 @@ pub(super) struct ContactRows<'a, E> {
     /// stepped, to the particles not near the sphere
     /// ([`ContactRows::ground_friction_row`]), and `resolve` the rest.
     pub(super) friction_in_rows: bool,
-    pub(super) contact: &'a constraints::Contact,
+    pub(super) contact: &'a laws::Contact,
     /// How the positions are stored.
     pub(super) frame: Frame,
     pub(super) verlet: bool,
@@ -86,7 +87,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// it is resolved in the step (`in_step`, [`super::Kernel::contact_in_step`]),
     /// where the ground's friction goes to each row as soon as it is stepped.
     pub(super) fn new(
-        contact: &'a constraints::Contact,
+        contact: &'a laws::Contact,
         (grid, inv_mass): (Grid, &'a [E]),
         frame: Frame,
         simd: SimdLevel,
@@ -99,7 +100,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// [`ContactRows::new`] for rows of `width` particles every `stride` array
     /// indices (a grid's, or a lattice's).
     pub(super) fn of_rows(
-        contact: &'a constraints::Contact,
+        contact: &'a laws::Contact,
         (width, stride, inv_mass): (usize, usize, &'a [E]),
         frame: Frame,
         simd: SimdLevel,
@@ -107,7 +108,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
     ) -> Self {
         let friction_in_rows = in_step && contact.ground.is_some_and(|g| g.friction > 0.0);
         let resolved = if friction_in_rows {
-            constraints::Contact {
+            laws::Contact {
                 ground: None,
                 ..*contact
             }
@@ -135,7 +136,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// a particle out of reach would leave `resolve` unchanged, so skipping it
     /// changes nothing); in the others, in blocks of [`CONTACT_LANES`] columns,
     /// those that may touch are resolved together
-    /// ([`constraints::Contact::resolve_lanes`], which gives each exactly what
+    /// ([`laws::Contact::resolve_lanes`], which gives each exactly what
     /// `resolve` gives it alone): in float64 where a lane is near the sphere (bit
     /// for bit the f64 engine's contact); where none is, the ground's friction in
     /// the kernel's own float, that of its velocities (in a float32 kernel, rounded
@@ -284,7 +285,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// gives after the row (with the ground's friction after it, as the f64 engine
     /// does). Each particle's friction is its own, so these are the numbers the
     /// contact's pass after the step gives in the kernel's float
-    /// ([`constraints::Contact::ground_friction_lanes`], the same rule): without
+    /// ([`laws::Contact::ground_friction_lanes`], the same rule): without
     /// that pass's loads, per-lane tests and stores, and with the row still in the
     /// first cache. (After the row's blocks, not in them: in them, the row's code
     /// came out slower.)
@@ -388,7 +389,7 @@ impl<'a, E: Real> ContactRows<'a, E> {
 
     /// The contact of the block of lanes at array index `j` (particle index `i`)
     /// with a lane near the sphere, in float64 as the f64 engine resolves it
-    /// ([`constraints::Contact::resolve_lanes`]): moves the `touch` lanes by
+    /// ([`laws::Contact::resolve_lanes`]): moves the `touch` lanes by
     /// their push (rounded to a whole unit in fixed point) and returns the
     /// changes of their velocities (which take the push as computed). `colliders`:
     /// the sphere's centre and the ground's height, as stored and in metres.
@@ -485,7 +486,7 @@ pub(super) struct Reach<E> {
 }
 
 impl<E: Real> Reach<E> {
-    pub(super) fn of(contact: &constraints::Contact, frame: &Frame) -> Self {
+    pub(super) fn of(contact: &laws::Contact, frame: &Frame) -> Self {
         // No ground: below every particle.
         let ground = frame.ground_height(contact.ground.map_or(f64::NEG_INFINITY, |g| g.height));
         match contact.sphere {
@@ -590,7 +591,7 @@ mod tests {
             center: DVec3::new(0.0, -0.6, 0.0),
             radius: 0.4,
         };
-        let contact = constraints::Contact {
+        let contact = laws::Contact {
             sphere: Some(sphere),
             ground: Some(ground),
             friction: 0.3,
@@ -704,7 +705,7 @@ mod tests {
             center: DVec3::new(0.0, 0.3, 0.0),
             radius,
         };
-        let contact = constraints::Contact {
+        let contact = laws::Contact {
             sphere: Some(sphere),
             ground: Some(ground),
             friction: 0.5,

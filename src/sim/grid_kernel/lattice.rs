@@ -66,8 +66,9 @@ use super::{
     SimdLevel, SpringCoefficients, SpringNoise, State, StepLanes, frame, ground_constants,
     integrate, project_out_of_sphere, runaway_scan, spring, xpbd_step,
 };
-use crate::sim::constraints::{Contact, xpbd_sweeps_back};
+use crate::sim::constraints::xpbd_sweeps_back;
 use crate::sim::duo::{Duo, run_in_pool};
+use crate::sim::laws::Contact;
 use crate::sim::{Ground, Integrator, Sphere};
 
 /// Lattices with fewer particles than this run on the calling thread. Measured on

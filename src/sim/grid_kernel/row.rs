@@ -6,9 +6,10 @@
 use std::ops::Range;
 
 use super::contact::ContactRows;
-use super::simd::align_frame;
+use super::simd::{Vector, align_frame};
 use super::spring_passes::SpringPass;
 use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, SimdLevel};
+use crate::sim::laws::{self, Method, SpringCoefficients, V3};
 
 /// Read-only inputs of a step.
 pub(super) struct Ctx<'a, E> {
@@ -245,7 +246,7 @@ pub(super) fn moved<S: Simd, const FIXED: bool>(s: S, x: S::V, scale: S::V, t: S
     if FIXED {
         s.fixed_add(x, s.mul(scale, t))
     } else {
-        s.mul_add(scale, t, x)
+        laws::advanced(Vector(s, x), Vector(s, scale), Vector(s, t)).1
     }
 }
 
@@ -267,7 +268,8 @@ pub(super) fn spring<S: Simd, const FIXED: bool>(
     spring_of(s, d, (vi, vj), kind, mask)
 }
 
-/// [`spring`] of the vector `d = x_i - x_j` as already computed.
+/// [`spring`] of the vector `d = x_i - x_j` as already computed
+/// ([`laws::spring_factor`]).
 #[inline(always)]
 fn spring_of<S: Simd>(
     s: S,
@@ -276,15 +278,13 @@ fn spring_of<S: Simd>(
     [nk, kl, nb]: [S::V; 3],
     mask: Option<S::V>,
 ) -> ([S::V; 3], [S::V; 3]) {
-    let u = [
-        s.sub(vi[0], vj[0]),
-        s.sub(vi[1], vj[1]),
-        s.sub(vi[2], vj[2]),
-    ];
-    let l2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
-    let dd = s.mul_add(d[2], u[2], s.mul_add(d[1], u[1], s.mul(d[0], u[0])));
-    let inv = s.rsqrt_or_zero(l2, S::E::EPS2);
-    let a = s.mul_add(s.mul_add(s.mul(nb, dd), inv, kl), inv, nk);
+    let dv = lanes3(s, std::array::from_fn(|a| s.sub(vi[a], vj[a])));
+    let c = SpringCoefficients {
+        neg_k: Vector(s, nk),
+        k_rest: Vector(s, kl),
+        neg_b: Vector(s, nb),
+    };
+    let a = laws::spring_factor(lanes3(s, d), dv, c).1;
     let a = match mask {
         Some(m) => s.mul(a, m),
         None => a,
@@ -292,40 +292,42 @@ fn spring_of<S: Simd>(
     ([s.mul(a, d[0]), s.mul(a, d[1]), s.mul(a, d[2])], d)
 }
 
+/// Three vectors as the laws' [`V3`] of [`Vector`]s.
+#[inline(always)]
+pub(super) fn lanes3<S: Simd>(s: S, v: [S::V; 3]) -> V3<Vector<S>> {
+    V3 {
+        x: Vector(s, v[0]),
+        y: Vector(s, v[1]),
+        z: Vector(s, v[2]),
+    }
+}
+
+/// The components of a [`V3`] of [`Vector`]s.
+#[inline(always)]
+fn unlanes3<S: Simd>(v: V3<Vector<S>>) -> [S::V; 3] {
+    [v.x.1, v.y.1, v.z.1]
+}
+
 /// Drag on each vertex of a triangle with edges `e1 = q - p` and `e2 = d - p` (or
-/// both negated) and relative air velocity `vr`, times `mask`: `-(ρ C_d / 12)
-/// |v_rel| (v_rel·m) m / |m|` with `m = e1 × e2`, `|m| = 2A`; `|v_rel| / |m|` is
-/// computed as `|v_rel|² / sqrt(|v_rel|² |m|² + TINY)`. The `TINY` keeps a
-/// triangle with no area or no relative wind at a drag of 0 (then `v_rel·m` or
-/// `|v_rel|²` is 0) without a test; elsewhere it moves the drag by the relative
-/// `TINY / (2 |v_rel|² |m|²)`, under f32's rounding wherever `|v_rel|² |m|²`
-/// is over 1e-23 (in the kernel's units). The edges
-/// are the springs' `d` (or their difference), accurate to their own size as
-/// those are. Returns the drag as `a m`: `a` and `m`, for the sums that take it
-/// to fuse its product.
+/// both negated) and relative air velocity `vr`, times `mask`
+/// ([`laws::drag_factor`] of `m = e1 × e2`). The edges are the springs' `d` (or
+/// their difference), accurate to their own size as those are. Returns the drag
+/// as `a m`: `a` and `m`, for the sums that take it to fuse its product.
 #[inline(always)]
 fn triangle<S: Simd>(
     s: S,
     [e1, e2]: [[S::V; 3]; 2],
-    vr: &[S::V; 3],
+    vr: V3<Vector<S>>,
     neg_drag: S::V,
     mask: Option<S::V>,
 ) -> (S::V, [S::V; 3]) {
-    let m = [
-        s.mul_sub(e1[1], e2[2], s.mul(e1[2], e2[1])),
-        s.mul_sub(e1[2], e2[0], s.mul(e1[0], e2[2])),
-        s.mul_sub(e1[0], e2[1], s.mul(e1[1], e2[0])),
-    ];
-    let m2 = s.mul_add(m[2], m[2], s.mul_add(m[1], m[1], s.mul(m[0], m[0])));
-    let vr2 = s.mul_add(vr[2], vr[2], s.mul_add(vr[1], vr[1], s.mul(vr[0], vr[0])));
-    let vm = s.mul_add(vr[2], m[2], s.mul_add(vr[1], m[1], s.mul(vr[0], m[0])));
-    let ratio = s.mul(vr2, s.rsqrt(s.mul_add(vr2, m2, s.splat(S::E::TINY))));
-    let a = s.mul(s.mul(neg_drag, vm), ratio);
+    let m = lanes3(s, e1).cross(lanes3(s, e2));
+    let a = laws::drag_factor(m, vr, Vector(s, neg_drag)).1;
     let a = match mask {
         Some(m) => s.mul(a, m),
         None => a,
     };
-    (a, m)
+    (a, unlanes3(m))
 }
 
 /// Splatted constants and raw pointers of one row, shared by its blocks.
@@ -334,7 +336,8 @@ struct RowKernel<S: Simd> {
     /// What integrating a particle needs.
     step: StepLanes<S>,
     kinds: [[S::V; 3]; 3],
-    neg_wind: [S::V; 3],
+    /// The wind and a third, both scaled as the kernel's velocities are.
+    wind: V3<Vector<S>>,
     third: S::V,
     neg_drag: S::V,
     down: S::V,
@@ -517,7 +520,7 @@ pub(super) fn row_step<
         s,
         step: StepLanes::new(s, p, ctx.u, ctx.v, out),
         kinds: [kind(0), kind(1), kind(2)],
-        neg_wind: p.wind.map(|w| s.splat(-w * p.air_scale)),
+        wind: lanes3(s, p.wind.map(|w| s.splat(w * p.air_scale))),
         third: s.splat(S::E::of(1.0 / 3.0) * p.air_scale),
         neg_drag: s.splat(-p.drag),
         down: s.splat(if row + 1 < g.h { S::E::ONE } else { S::E::ZERO }),
@@ -653,16 +656,14 @@ unsafe fn block<
     };
     let (d2, _) = spring::<S, FIXED>(s, p00, p20, bend, mask(5));
     let (t1, t2) = if DRAG {
-        // Relative air velocity of (a, b, d) and (b, e, d): mean velocity - wind.
-        let (va, vb, vd, ve) = (p00.1, p01.1, p10.1, p11.1);
-        // (`b + d` a third of the way, less the wind, shared by both.)
-        let bd: [S::V; 3] =
-            std::array::from_fn(|i| s.mul_add(s.add(vb[i], vd[i]), k.third, k.neg_wind[i]));
-        let vr1 = std::array::from_fn(|i| s.mul_add(va[i], k.third, bd[i]));
-        let vr2 = std::array::from_fn(|i| s.mul_add(ve[i], k.third, bd[i]));
+        // Relative air velocity of (a, b, d) and (b, e, d), which share `b + d`.
+        let [va, vb, vd, ve] = [p00.1, p01.1, p10.1, p11.1].map(|v| lanes3(s, *v));
+        let third = Vector(s, k.third);
+        let vr1 = laws::air_velocity([va, vb, vd], k.wind, third);
+        let vr2 = laws::air_velocity([ve, vb, vd], k.wind, third);
         (
             // (a, b, d): edges b - a and d - a, the springs right and down negated.
-            triangle(s, [e_right, e_down], &vr1, k.neg_drag, mask(6)),
+            triangle(s, [e_right, e_down], vr1, k.neg_drag, mask(6)),
             // (b, e, d): edges e - b and d - b negated, b - e = (a - e) - (a - b)
             // and the other diagonal.
             triangle(
@@ -671,7 +672,7 @@ unsafe fn block<
                     std::array::from_fn(|i| s.sub(e_diagonal[i], e_right[i])),
                     e_anti,
                 ],
-                &vr2,
+                vr2,
                 k.neg_drag,
                 mask(7),
             ),
@@ -791,50 +792,40 @@ pub(super) unsafe fn integrate<
 ) {
     let s = k.s;
     debug_assert!(METHOD == k.method && GROUND == k.ground_on);
-    if PLAIN {
-        let a = s.mul_add(force, w, k.gravity[i]);
-        let vn = s.keep_if_positive(w, s.mul_add(k.dt, a, v[i]));
-        // SAFETY: outputs hold `lo + nv` floats.
-        unsafe {
-            s.store(k.out[i].add(o), moved::<S, FIXED>(s, x[i], k.dt_units, vn));
-            s.store(k.out[3 + i].add(o), vn);
-        }
-        return;
-    }
+    let method = match METHOD {
+        _ if PLAIN => Method::SymplecticEuler,
+        EXPLICIT => Method::ExplicitEuler,
+        VERLET => Method::Verlet,
+        _ => Method::SymplecticEuler,
+    };
+    let l = |v: S::V| Vector(s, v);
     // SAFETY: inside the arrays (caller's contract).
-    let u = if METHOD == VERLET {
+    let u = if METHOD == VERLET && !PLAIN {
         unsafe { s.load(k.u[i].add(at)) }
     } else {
         v[i]
     };
-    // Air damping as arithmetic, with a 0 where the step has none: as a branch (a
-    // test of the flag per axis and block) the drape ran 96.4 instructions per
-    // particle-step, 89.8 so (valgrind, AVX2).
-    let mut force = s.mul_add(k.neg_air, v[i], force);
-    if i == 1 && GROUND {
-        // Ground penalty `k_c d - c_g v_y` at depth `d = height - y > 0`.
-        let [height, kc, cg] = k.ground;
-        let depth = difference::<S, FIXED>(s, height, x[1]);
-        let push = s.mul_sub(kc, depth, s.mul(cg, v[1]));
-        force = s.add(force, s.keep_if_positive(depth, push));
+    let mut force = l(force);
+    if !PLAIN {
+        // Air damping as arithmetic, with a 0 where the step has none: as a branch
+        // (a test of the flag per axis and block) the drape ran 96.4 instructions
+        // per particle-step, 89.8 so (valgrind, AVX2).
+        force = laws::air_damped(force, l(k.neg_air), l(v[i]));
+        if i == 1 && GROUND {
+            let [height, kc, cg] = k.ground;
+            let depth = difference::<S, FIXED>(s, height, x[1]);
+            force = force + laws::ground_support(l(depth), l(v[1]), l(kc), l(cg));
+        }
     }
-    let a = s.mul_add(force, w, k.gravity[i]);
-    let un = s.keep_if_positive(w, s.mul_add(k.dt, a, u));
-    // Explicit Euler moves with the old velocity, the others with the new one.
-    let moving = if METHOD == EXPLICIT { u } else { un };
-    let xn = moved::<S, FIXED>(s, x[i], k.dt_units, moving);
-    // Verlet's velocity estimate `u + h/2 a`; the others' velocity is `u`.
-    let vn = if METHOD == VERLET {
-        s.keep_if_positive(w, s.mul_add(k.verlet_half_dt, a, un))
-    } else {
-        un
-    };
+    let a = laws::free_acceleration(force, l(w), l(k.gravity[i]));
+    let next = laws::update(method, l(u), a, l(w), l(k.dt), l(k.verlet_half_dt));
+    let xn = moved::<S, FIXED>(s, x[i], k.dt_units, next.moving.1);
     // SAFETY: outputs hold `lo + nv` floats (Verlet's `u` only with Verlet).
     unsafe {
         s.store(k.out[i].add(o), xn);
-        s.store(k.out[3 + i].add(o), vn);
-        if METHOD == VERLET {
-            s.store(k.out[6 + i].add(o), un);
+        s.store(k.out[3 + i].add(o), next.v.1);
+        if method == Method::Verlet {
+            s.store(k.out[6 + i].add(o), next.u.1);
         }
     }
 }
@@ -867,7 +858,10 @@ pub(super) unsafe fn project_out_of_sphere<S: Simd, const FIXED: bool>(
     if !s.any_positive(inside) {
         return;
     }
-    let scale = s.mul(radius, s.rsqrt_or_zero(d2, S::E::EPS2));
+    let scale = s.mul(
+        radius,
+        s.rsqrt_or_zero(d2, S::E::of(laws::DEGENERATE_LENGTH2)),
+    );
     for i in 0..3 {
         // The move onto the surface, `d scale - d`.
         let dx = s.mul(inside, s.mul_sub(d[i], scale, d[i]));

@@ -210,10 +210,10 @@ impl<E: Real> Simd for Portable<E> {
     }
 }
 
-/// A kernel's vector as [`Lanes`] (with its SIMD level's token), for the physics
-/// that every engine shares ([`super::super::constraints::Contact`]) to run on the
-/// kernel's own registers: the same IEEE operations as on [`Lanes`]' other
-/// kinds, none fused.
+/// A kernel's vector as [`Lanes`] (with its SIMD level's token), for the laws
+/// that every engine shares ([`crate::sim::laws`]) to run on the kernel's own
+/// registers: the same IEEE operations as on [`Lanes`]' other kinds, with
+/// [`Lanes::mul_add`] fused and the reciprocal root the level's estimate.
 #[derive(Clone, Copy)]
 pub(super) struct Vector<S: Simd>(pub(super) S, pub(super) S::V);
 
@@ -270,6 +270,26 @@ impl<S: Simd> Lanes for Vector<S> {
     #[inline(always)]
     fn select(m: VectorMask<S>, a: Self, b: Self) -> Self {
         Vector(m.0, m.0.select(m.1, a.1, b.1))
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        Vector(self.0, self.0.mul_add(self.1, b.1, c.1))
+    }
+    #[inline(always)]
+    fn mul_sub(self, b: Self, c: Self) -> Self {
+        Vector(self.0, self.0.mul_sub(self.1, b.1, c.1))
+    }
+    #[inline(always)]
+    fn rsqrt_or_zero(self, eps2: f64) -> Self {
+        Vector(self.0, self.0.rsqrt_or_zero(self.1, S::E::of(eps2)))
+    }
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        Vector(self.0, self.0.rsqrt(self.1))
+    }
+    #[inline(always)]
+    fn keep_if_positive(self, a: Self) -> Self {
+        Vector(self.0, self.0.keep_if_positive(self.1, a.1))
     }
 }
 

@@ -11,9 +11,9 @@
 
 use std::ops::Range;
 
-use super::super::constraints::XpbdSpring;
 use super::super::duo::Duo;
 use super::super::forces::EPSILON_LENGTH;
+use super::super::laws::XpbdSpring;
 use super::row::{difference, moved};
 use super::simd::align_frame;
 use super::{
@@ -25,10 +25,10 @@ use super::{
 #[derive(Clone, Copy, Debug)]
 pub(super) enum SpringRule {
     /// Provot's stretch limit `tau`: a spring longer than `(1 + tau) L` is shortened
-    /// to that, as [`crate::sim::constraints::length_correction`] does.
+    /// to that, as [`crate::sim::laws::length_correction`] does.
     StretchLimit(f64),
     /// XPBD's springs: each corrected by
-    /// [`crate::sim::constraints::xpbd_correction`] against the positions at the
+    /// [`crate::sim::laws::xpbd_correction`] against the positions at the
     /// start of the step (the kernel's other state buffer, after the swap), once
     /// on a grid, twice on a lattice (forward and back, [`Multipliers`]).
     Xpbd,
@@ -1151,7 +1151,7 @@ impl<S: Simd> LineKernel<S> {
     /// The stretch limit's scale of springs of squared lengths `l2` and summed
     /// inverse masses `w`, where `over` is positive, else 0: `(l - longest) / (l
     /// w)`, with `1 / l` from the lanes' reciprocal square root, as
-    /// [`crate::sim::constraints::length_correction`] corrects a spring. An end
+    /// [`crate::sim::laws::length_correction`] corrects a spring. An end
     /// moves by `∓` its inverse mass times the scale times the spring's vector.
     #[inline(always)]
     fn limit_scale(&self, l2: S::V, w: S::V, over: S::V) -> S::V {
@@ -1294,8 +1294,8 @@ fn limit2_of<E: Real>(longest2: E, kept: bool) -> E {
 /// only where a spring is over the limit.
 ///
 /// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
-///   as [`crate::sim::constraints::length_correction`] does.
-/// * XPBD corrects every spring as [`crate::sim::constraints::xpbd_correction`]
+///   as [`crate::sim::laws::length_correction`] does.
+/// * XPBD corrects every spring as [`crate::sim::laws::xpbd_correction`]
 ///   does, from the positions at the start of the step in `lines.start`.
 ///
 /// Each particle has at most one spring in a class, so the moves do not interact:

@@ -871,3 +871,18 @@ mod tests {
         assert!(y[5..].iter().all(|&y| y > 0.0 && y.is_finite()));
     }
 }
+
+/// The four vector tokens, where this CPU has their instructions, for the
+/// conformance suite that runs every law on every lane width
+/// (`super::conformance`). Outside the entry points the intrinsics are called,
+/// not inlined: slower, the same results.
+#[cfg(test)]
+pub(super) fn tokens() -> (Option<(Avx2, Avx2F64)>, Option<(Avx512, Avx512F64)>) {
+    let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+    let avx512 =
+        avx2 && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
+    (
+        avx2.then_some((Avx2(()), Avx2F64(()))),
+        avx512.then_some((Avx512(()), Avx512F64(()))),
+    )
+}

@@ -1,0 +1,39 @@
+//! The physical laws, each written once over [`Lanes`]: `f64` for one particle
+//! (the f64 reference engine and the mesh engine), a kernel's vectors for a block
+//! of particles (the grid and lattice engines). An engine chooses the order in
+//! which particles and springs are visited and how its state is stored; the
+//! arithmetic of a law is here and nowhere else.
+//!
+//! | law | function |
+//! |---|---|
+//! | damped spring `f_a = ((-b (d·dv)/l + k L)/l - k) d` | [`spring_force`] ([`spring_factor`]) |
+//! | aero drag on a triangle, a third to each vertex | [`triangle_drag`] ([`drag_factor`], [`air_velocity`]) |
+//! | viscous air damping `-c v` | [`air_damped`] |
+//! | ground penalty `k_c d - c_g v_y` at depth `d > 0` | [`ground_support`] |
+//! | `a = F w + g` (0 when pinned, `w = 0`) | [`acceleration`], [`free_acceleration`] |
+//! | symplectic Euler, explicit Euler, position Verlet | [`update`] |
+//! | `x' = x + h v` on float positions | [`advanced`] |
+//! | sphere and ground contact with Coulomb friction | [`Contact::resolve_lanes`] |
+//! | a length restored (stretch limit `(1 + tau) L`, a bar) | [`length_correction`] |
+//! | XPBD's correction of a spring of compliance `1/k` | [`xpbd_correction`] |
+//! | the speed limit | [`speed_limit`] |
+//! | the tear test `l > (1 + tau) L` | [`overstretched`] |
+//!
+//! Units are SI: m, m/s, N, kg. `Lanes::mul_add` is fused in the vector kernels
+//! and rounded twice in `f64`, so the reference keeps plain IEEE arithmetic.
+
+mod constraints;
+mod contact;
+mod forces;
+mod motion;
+
+pub(crate) use crate::sim::lanes::{Lanes, V3};
+pub(crate) use constraints::{XpbdSpring, length_correction, xpbd_correction};
+pub use constraints::{overstretched, speed_limit};
+pub(crate) use contact::{Contact, Near, out_of_sphere};
+pub use forces::EPSILON_LENGTH;
+pub(crate) use forces::{
+    DEGENERATE_LENGTH2, SpringCoefficients, acceleration, air_damped, air_velocity, drag_factor,
+    free_acceleration, ground_support, spring_factor, spring_force, triangle_drag,
+};
+pub(crate) use motion::{Method, advanced, step_particle, update};
