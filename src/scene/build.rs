@@ -11,7 +11,7 @@ use super::mesh::{self, Mesh};
 use super::values::{PinPreset, Pins};
 use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
 use crate::limits::number as shown;
-use crate::sim::constraints::out_of_sphere;
+use crate::sim::laws::out_of_sphere;
 use crate::sim::{Bar, Ground, Integrator, Params, Sphere, Spring, SpringKind, System, Topology};
 use crate::sim::{GridShape, LatticeShape};
 
