@@ -1,5 +1,6 @@
 //! Running the `cloth` binary as a user does, for the tests of the command line
-//! (each such test needs `required-features = ["app"]`).
+//! (only with the `app` feature: a group that includes this module declares it
+//! `#[cfg(feature = "app")]` or has `required-features = ["app"]`).
 
 #![allow(dead_code)]
 
