@@ -97,7 +97,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
 /// of kinetic energy in 250 steps; swept back as well, it kept its 9 J (9.00 after
 /// 1,000 steps). Round-off starts such a spin in any falling jelly: at the
 /// panel's k = 1e8 to 1e9 N/m and the scene's 2e-4 s steps the forward sweep ran
-/// it away, on every engine (`tests/xpbd.rs`). Both ways, the jelly also came
+/// it away, on every engine (`tests/physics/xpbd.rs`). Both ways, the jelly also came
 /// 1.1 to 1.4 times closer to symplectic Euler at a fifth of its critical step
 /// after 1.5 s (k = 2e3 and 2e4 N/m, steps of 0.2 to 2.5 ms). A cloth showed
 /// neither: a spinning flat cloth lost the same energy either way in the
@@ -122,7 +122,7 @@ pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
 /// both steps' error recurrences had a spectral radius of 1 on 3³ and 4³
 /// lattices in the reproduction: the spin that tells them apart is nonlinear).
 /// From `λ = 0` the second correction would count the compliance twice (a mass
-/// hanging on a spring would stop at half its stretch, `tests/xpbd.rs`). In exact
+/// hanging on a spring would stop at half its stretch, `tests/physics/xpbd.rs`). In exact
 /// arithmetic a spring's second correction straight after its first changes
 /// nothing, so the lattice kernel does not sweep its last class back; this pass
 /// does, to round-off. The f64 and mesh engines' pass.

@@ -6,19 +6,19 @@
 //! rest length per spring kind (rest `h`, `h√2`, `2h`), symplectic Euler, explicit
 //! Euler, Verlet or XPBD, and no bars. Every parameter is named in `grid_spec`,
 //! so a new one fails to compile until the kernel models it or refuses it. Results
-//! agree with the f64 general engine to round-off (`tests/fast_engine.rs`).
+//! agree with the f64 general engine to round-off (`tests/engines/fast_engine.rs`).
 //!
 //! A lattice block whose springs really are the 26-neighbour stencil (the jelly
 //! cube) goes to the lattice kernel of [`super::grid_kernel::lattice`] on the same
 //! terms (without bars, drag, self-collision, tearing or a speed limit), within a
-//! stated bound of the f64 engine (`tests/lattice_kernel.rs`).
+//! stated bound of the f64 engine (`tests/engines/lattice_kernel.rs`).
 //!
 //! Any other system stepped by symplectic
 //! Euler, explicit Euler, position Verlet or XPBD (chains, ropes, meshes, and the
 //! lattices the lattice kernel leaves) goes to the f64 mesh engine of
 //! [`super::mesh_kernel`], which does the
 //! general path's arithmetic in its order: bit for bit its results for the Euler
-//! methods and XPBD, f64 round-off for Verlet (`tests/mesh_engine.rs`).
+//! methods and XPBD, f64 round-off for Verlet (`tests/engines/mesh_engine.rs`).
 //!
 //! The f64 state stays the system's state: it is copied into the engine when
 //! something outside changed it, and back after every chunk of steps (or when a

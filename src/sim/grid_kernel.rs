@@ -46,7 +46,7 @@
 //! * The arithmetic is float32 when the noise of float32 spring lengths, about
 //!   `2^-23 L` per spring, and of the positions, times `k / m` summed over a
 //!   particle's springs, stays under 1% of gravity; otherwise the same code runs in
-//!   float64 ([`Precision::Double`]), at half the lanes. `tests/fast_engine.rs`
+//!   float64 ([`Precision::Double`]), at half the lanes. `tests/engines/fast_engine.rs`
 //!   shows both: float32 heats the stiff cloth, and the engine's choice follows
 //!   the f64 engine's kinetic energy to 1% from k = 1e3 to 1e9 N/m.
 //!

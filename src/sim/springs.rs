@@ -113,7 +113,7 @@ pub fn canonicalize(springs: &mut Vec<Spring>) {
 /// order, one stretch-limit pass on a heavily loaded cloth (the 48 x 48 `bench`
 /// cloth with a 10% limit) lets a checkerboard mode near the pins grow until it
 /// diverges, in this engine and in an independent NumPy reproduction; visited by
-/// colour, the same pass stays bounded (`tests/stretch_limit.rs`).
+/// colour, the same pass stays bounded (`tests/physics/stretch_limit.rs`).
 pub fn constraint_order(
     springs: &[Spring],
     grid: Option<GridShape>,

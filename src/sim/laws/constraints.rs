@@ -66,7 +66,7 @@ impl XpbdSpring {
 /// The grid and lattice engines do the same arithmetic in float32 lanes, a
 /// colour class at a time (`grid_kernel/spring_passes.rs`, as they do
 /// [`length_correction`]), the lattice's keeping `α̃ λ` rather than `λ`;
-/// `tests/fast_engine.rs`, `tests/grid_kernel.rs` and `tests/lattice_kernel.rs`
+/// `tests/engines/fast_engine.rs`, `tests/no_allocation/grid_kernel.rs` and `tests/engines/lattice_kernel.rs`
 /// hold them together.
 #[inline(always)]
 pub(crate) fn xpbd_correction(
