@@ -728,6 +728,25 @@ fn by_lanes<V: Copy, const N: usize>(a: V, b: V, f: impl Fn(f64, f64) -> f64) ->
     }
 }
 
+/// The AVX2 tokens (float32, float64) and the AVX-512 ones, where available.
+#[cfg(test)]
+pub(super) type Tokens = (Option<(Avx2, Avx2F64)>, Option<(Avx512, Avx512F64)>);
+
+/// The four vector tokens, where this CPU has their instructions, for the
+/// conformance suite that runs every law on every lane width
+/// (`super::conformance`). Outside the entry points the intrinsics are called,
+/// not inlined: slower, the same results.
+#[cfg(test)]
+pub(super) fn tokens() -> Tokens {
+    let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
+    let avx512 =
+        avx2 && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
+    (
+        avx2.then_some((Avx2(()), Avx2F64(()))),
+        avx512.then_some((Avx512(()), Avx512F64(()))),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -870,19 +889,4 @@ mod tests {
         assert_eq!(y[6], 0.5);
         assert!(y[5..].iter().all(|&y| y > 0.0 && y.is_finite()));
     }
-}
-
-/// The four vector tokens, where this CPU has their instructions, for the
-/// conformance suite that runs every law on every lane width
-/// (`super::conformance`). Outside the entry points the intrinsics are called,
-/// not inlined: slower, the same results.
-#[cfg(test)]
-pub(super) fn tokens() -> (Option<(Avx2, Avx2F64)>, Option<(Avx512, Avx512F64)>) {
-    let avx2 = is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma");
-    let avx512 =
-        avx2 && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
-    (
-        avx2.then_some((Avx2(()), Avx2F64(()))),
-        avx512.then_some((Avx512(()), Avx512F64(()))),
-    )
 }
