@@ -202,14 +202,14 @@ impl Model {
 }
 
 /// Upward force (N) of the ground on a particle at `x` moving at `v`
-/// ([`laws::ground_support`] at depth `height - y`).
+/// (`laws::ground_support` at depth `height - y`).
 #[inline]
 pub fn ground_force(ground: &super::Ground, x: DVec3, v: DVec3) -> f64 {
     laws::ground_support(ground.height - x.y, v.y, ground.stiffness, ground.damping)
 }
 
 /// Force on end `a` of a damped spring, given `d = x_a - x_b` and `dv = v_a - v_b`
-/// ([`laws::spring_force`]). Zero for coincident endpoints.
+/// (`laws::spring_force`). Zero for coincident endpoints.
 #[inline]
 pub fn spring_force(d: DVec3, dv: DVec3, rest: f64, k: f64, b: f64) -> DVec3 {
     let c = SpringCoefficients::new(k, rest, b);
@@ -217,7 +217,7 @@ pub fn spring_force(d: DVec3, dv: DVec3, rest: f64, k: f64, b: f64) -> DVec3 {
 }
 
 /// The drag on each vertex of a triangle with corners `x` moving at `v` in a
-/// `wind` ([`laws::triangle_drag`]), with `half_rho_cd = ρ C_d / 2`.
+/// `wind` (`laws::triangle_drag`), with `half_rho_cd = ρ C_d / 2`.
 #[inline]
 pub fn triangle_drag(x: [DVec3; 3], v: [DVec3; 3], wind: DVec3, half_rho_cd: f64) -> DVec3 {
     laws::triangle_drag(

@@ -181,7 +181,7 @@ pub struct GridSpec {
     /// Tear strain `tau`, if springs tear ([`super::tearing`]): a spring longer
     /// than `(1 + tau) L` at the end of a step breaks.
     pub tear_strain: Option<f64>,
-    /// Speed limit in m/s, if any ([`laws::speed_limit`]).
+    /// Speed limit in m/s, if any (`laws::speed_limit`).
     pub max_speed: Option<f64>,
     /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`]).
     pub integrator: Integrator,

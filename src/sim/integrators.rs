@@ -131,7 +131,7 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
 }
 
 /// One Euler step of a particle at `x` moving at `v` with acceleration `a` (of the
-/// old state) and inverse mass `w`, [`update`](super::laws::update): symplectic
+/// old state) and inverse mass `w`, `laws::update`: symplectic
 /// Euler moves with the new velocity, explicit Euler with the old one. Returns the
 /// new position and velocity.
 #[inline]

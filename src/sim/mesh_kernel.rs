@@ -106,7 +106,7 @@ pub struct MeshParams {
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart
     /// ([`super::self_collision`]).
     pub self_collision: Option<f64>,
-    /// Speed limit in m/s, if any ([`super::laws::speed_limit`]).
+    /// Speed limit in m/s, if any (`super::laws::speed_limit`).
     pub max_speed: Option<f64>,
     /// Whether the springs are forces; under XPBD they are constraints instead,
     /// one Gauss-Seidel pass of `xpbd_pass` after the prediction.

@@ -3,7 +3,7 @@
 //! - [`model`]: parameters, colliders, topology: what stays fixed ([`Model`]);
 //! - [`state`]: positions and velocities, what advances ([`State`]), and [`Energy`];
 //! - [`system`]: [`System`], a model with its state and scratch space, and the step;
-//! - [`laws`]: every physical law, once, over lanes of any width;
+//! - `laws`: every physical law, once, over lanes of any width;
 //! - [`forces`], [`integrators`], [`implicit`], [`constraints`]: the physics of a step
 //!   (the f64 general engine, the reference);
 //! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook

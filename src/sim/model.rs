@@ -78,7 +78,7 @@ pub struct Params {
     /// longer than `(1 + tau) L` at the end of a step. `None`: springs never tear.
     pub tear_strain: Option<f64>,
     /// Speed limit in m/s (seed 000's `vLim`): after each step a particle faster
-    /// than this is slowed to it ([`super::laws::speed_limit`]). `None`: no limit.
+    /// than this is slowed to it (`super::laws::speed_limit`). `None`: no limit.
     pub max_speed: Option<f64>,
     /// Seed of the gusts.
     pub seed: u64,
