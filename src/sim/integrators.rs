@@ -175,10 +175,6 @@ fn verlet(model: &Model, state: &mut State, work: &mut Workspace, h: f64, t: f64
         ..
     } = state;
     for i in 0..positions.len() {
-        if model.inv_mass[i] == 0.0 {
-            prev_positions[i] = positions[i];
-            continue;
-        }
         let x = positions[i];
         let u = (x - prev_positions[i]) / h;
         let [next, _, v] = step_particle(Method::Verlet, x, u, a[i], model.inv_mass[i], h);

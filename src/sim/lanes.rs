@@ -34,16 +34,29 @@ pub(crate) trait Lanes:
     /// `a` in the lanes where `m` says yes, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
 
-    /// `self * b + c`: fused where an engine's lanes fuse it (the vector
-    /// kernels'), rounded twice in `f64` and [`Floats`] (the reference's rounding).
-    fn mul_add(self, b: Self, c: Self) -> Self;
-    /// `self * b - c`, fused as [`Lanes::mul_add`] is.
-    fn mul_sub(self, b: Self, c: Self) -> Self;
-    /// `1 / sqrt(self)` where `self > eps2`, else 0 (a degenerate length has no
-    /// direction). The vector kernels take an estimate refined by a Newton step.
-    fn rsqrt_or_zero(self, eps2: f64) -> Self;
-    /// `1 / sqrt(self)`, for `self` positive and finite.
-    fn rsqrt(self) -> Self;
+    /// `self * b + c`: rounded twice here, as the reference rounds; the vector
+    /// kernels' lanes fuse it.
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        self * b + c
+    }
+    /// `self * b - c`, fused where [`Lanes::mul_add`] is.
+    #[inline(always)]
+    fn mul_sub(self, b: Self, c: Self) -> Self {
+        self * b - c
+    }
+    /// `1 / sqrt(self)`, for `self` positive and finite; the vector kernels take
+    /// an estimate refined by a Newton step.
+    #[inline(always)]
+    fn rsqrt(self) -> Self {
+        self.splat(1.0) / self.sqrt()
+    }
+    /// [`Lanes::rsqrt`] where `self > eps2`, else 0 (a degenerate length has no
+    /// direction).
+    #[inline(always)]
+    fn rsqrt_or_zero(self, eps2: f64) -> Self {
+        Self::select(self.gt(self.splat(eps2)), self.rsqrt(), self.splat(0.0))
+    }
     /// `a` where `self > 0`, else 0.
     #[inline(always)]
     fn keep_if_positive(self, a: Self) -> Self {
@@ -85,22 +98,6 @@ impl Lanes for f64 {
     #[inline(always)]
     fn select(m: bool, a: Self, b: Self) -> Self {
         if m { a } else { b }
-    }
-    #[inline(always)]
-    fn mul_add(self, b: Self, c: Self) -> Self {
-        self * b + c
-    }
-    #[inline(always)]
-    fn mul_sub(self, b: Self, c: Self) -> Self {
-        self * b - c
-    }
-    #[inline(always)]
-    fn rsqrt_or_zero(self, eps2: f64) -> Self {
-        if self > eps2 { 1.0 / self.sqrt() } else { 0.0 }
-    }
-    #[inline(always)]
-    fn rsqrt(self) -> Self {
-        1.0 / self.sqrt()
     }
 }
 
@@ -252,27 +249,6 @@ impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
     #[inline(always)]
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
         Floats(std::array::from_fn(|i| F::pick(m[i], a.0[i], b.0[i])))
-    }
-    #[inline(always)]
-    fn mul_add(self, b: Self, c: Self) -> Self {
-        self * b + c
-    }
-    #[inline(always)]
-    fn mul_sub(self, b: Self, c: Self) -> Self {
-        self * b - c
-    }
-    #[inline(always)]
-    fn rsqrt_or_zero(self, eps2: f64) -> Self {
-        let (one, zero, eps2) = (F::of_f64(1.0), F::of_f64(0.0), F::of_f64(eps2));
-        Floats(std::array::from_fn(|i| {
-            let x = self.0[i];
-            if x > eps2 { one / x.root() } else { zero }
-        }))
-    }
-    #[inline(always)]
-    fn rsqrt(self) -> Self {
-        let one = F::of_f64(1.0);
-        Floats(std::array::from_fn(|i| one / self.0[i].root()))
     }
 }
 

@@ -638,16 +638,10 @@ fn advance(ctx: &Ctx, mut out: Out) {
         let (x_new, v_new) = match p.integrator {
             Integrator::ExplicitEuler => euler_update(false, xi, vi, a, w, h),
             Integrator::Verlet if verlet => {
-                if w == 0.0 {
-                    // Held in place: the f64 engine sets `x_prev = x` and keeps `v`.
-                    store(&mut out.u, local, DVec3::ZERO);
-                    (xi, vi)
-                } else {
-                    let u = load(out.u.each_ref().map(|s| &**s), local);
-                    let [x, u, v] = step_particle(Method::Verlet, xi, u, a, w, h);
-                    store(&mut out.u, local, u);
-                    (x, v)
-                }
+                let u = load(out.u.each_ref().map(|s| &**s), local);
+                let [x, u, v] = step_particle(Method::Verlet, xi, u, a, w, h);
+                store(&mut out.u, local, u);
+                (x, v)
             }
             _ => euler_update(true, xi, vi, a, w, h),
         };

@@ -359,32 +359,23 @@ fn every_law_agrees_with_the_f64_reference_on_every_lane_width() {
     {
         let (avx2, avx512) = super::x86::tokens();
         if let Some((f32s, f64s)) = avx2 {
-            conforms(
-                Vector(f32s, f32s.splat(0.0)),
-                "AVX2 float32 kernel",
-                false,
-                2e-6,
-            );
-            conforms(
-                Vector(f64s, f64s.splat(0.0)),
-                "AVX2 float64 kernel",
-                false,
-                1e-13,
-            );
+            kernel_conforms(f32s, "AVX2");
+            kernel_conforms(f64s, "AVX2");
         }
         if let Some((f32s, f64s)) = avx512 {
-            conforms(
-                Vector(f32s, f32s.splat(0.0)),
-                "AVX-512 float32 kernel",
-                false,
-                2e-6,
-            );
-            conforms(
-                Vector(f64s, f64s.splat(0.0)),
-                "AVX-512 float64 kernel",
-                false,
-                1e-13,
-            );
+            kernel_conforms(f32s, "AVX-512");
+            kernel_conforms(f64s, "AVX-512");
         }
     }
+}
+
+/// [`conforms`] for a vector kernel's lanes, within its precision's tolerance.
+#[cfg(target_arch = "x86_64")]
+fn kernel_conforms<S: Simd>(s: S, level: &str) {
+    let (bits, tol) = match std::mem::size_of::<S::E>() {
+        4 => (32, 2e-6),
+        _ => (64, 1e-13),
+    };
+    let name = format!("{level} float{bits} kernel");
+    conforms(Vector(s, s.splat(S::E::ZERO)), &name, false, tol);
 }
