@@ -13,7 +13,7 @@ use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::grid_kernel::{Precision, SimdLevel};
 use cloth_sandbox::sim::safe::{
-    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas, safe_step,
+    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas, safe_step_below,
 };
 use cloth_sandbox::sim::{
     Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
@@ -327,7 +327,12 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     };
     let mut substeps = 1;
     if args.safe {
-        let choice = safe_step(system.model(), dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
+        let choice = safe_step_below(
+            system.stability().dt_critical,
+            dt,
+            DEFAULT_SAFETY,
+            DEFAULT_MAX_SUBSTEPS,
+        );
         let mut params = *system.params();
         params.dt = choice.dt;
         let added_limit = added_stretch_limit(system.model(), params.stretch_limit);
@@ -846,7 +851,8 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         },
         "extent": 2.0 * extent,
         "stability": {
-            "omega_max_bound": stability.omega_max,
+            "omega_max": stability.omega_max,
+            "omega_max_bound": stability.omega_bound,
             "damping_ratio": stability.zeta,
             "dt_critical": stability.dt_critical.map(|c| if c.is_finite() { json!(c) } else { json!("unlimited") }),
             "dt_over_dt_critical": if stability.margin.is_finite() { json!(stability.margin) } else { json!("unstable at any dt") },

@@ -35,6 +35,7 @@ pub mod mesh_kernel;
 pub mod model;
 pub mod safe;
 pub mod self_collision;
+pub mod spectrum;
 pub mod springs;
 pub mod stability;
 pub mod state;
