@@ -247,7 +247,7 @@ fn run_checked(
         return Ok(system.run(steps.min(until.saturating_sub(system.steps_taken()))));
     };
     let end = system.time() + steps as f64 * system.params().dt;
-    let particles = system.particle_count();
+    let work = limits::StepWork::of(system.model());
     let mut watch = StepWatch::default();
     loop {
         let dt = system.params().dt;
@@ -262,7 +262,7 @@ fn run_checked(
         }
         if let Some(choice) = follow_areas(system, &mut watch, scene_dt) {
             let left = ((end - system.time()) / choice.dt).round().max(0.0) as u64;
-            limits::total_steps(system.steps_taken() + left, 1, particles).map_err(|e| {
+            limits::total_steps(system.steps_taken() + left, 1, work).map_err(|e| {
                 format!("run too long after safe stepping chose a smaller step: {e}")
             })?;
             eprintln!(
@@ -358,12 +358,12 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     }
     // The whole run is checked before any of it starts: nothing the user asks for
     // may run for ever, and the results must have somewhere to go.
-    let particles = system.particle_count();
-    let steps = limits::total_steps(steps, substeps, particles)
+    let work = limits::StepWork::of(system.model());
+    let steps = limits::total_steps(steps, substeps, work)
         .map_err(|e| format!("run too long: {e}"))?;
-    limits::total_steps(args.warmup, 1, particles).map_err(|e| format!("--warmup: {e}"))?;
+    limits::total_steps(args.warmup, 1, work).map_err(|e| format!("--warmup: {e}"))?;
     let mut dump = match &args.dump {
-        Some(path) => Some(prepare_dump(path, &args.scene.scene)?),
+        Some(path) => Some(prepare_dump(path, &inputs)?),
         None => None,
     };
     let mut obj = match &args.obj {

@@ -44,10 +44,78 @@ pub fn steps_for_duration(duration: f64, dt: f64) -> Result<u64, String> {
     Ok(steps as u64)
 }
 
-/// Total steps of a run of `steps` steps of `substeps` substeps each over
-/// `particles` particles, or an error giving the limit when it passes
-/// [`MAX_STEPS`] steps or [`MAX_PARTICLE_STEPS`] particle-steps (or overflows).
-pub fn total_steps(steps: u64, substeps: u64, particles: usize) -> Result<u64, String> {
+/// What one step costs, counted in particle-steps: every pass of the step, not
+/// only the one over the particles. A rope of 100,000 points with 10,000 bar
+/// passes a step does 10⁹ bar corrections a step for its 10⁵ particles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepWork {
+    /// Particles: the force pass and the integration.
+    pub particles: usize,
+    /// Bar corrections a step: bars times `bar_iterations`.
+    pub bar_visits: u64,
+    /// Spring visits of the passes after integration: XPBD's and the stretch
+    /// limit's, one each over the springs.
+    pub spring_visits: u64,
+}
+
+/// A bar correction's cost in particle-steps: one bar pass of the 100,000-point
+/// rope took 72 ns a bar (`cloth run --scene rope --set width=100000 --set
+/// bar_iterations=100 --steps 20`: 14.5 s), a step of the 1024 x 1024 bench
+/// cloth 12.6 ns a particle (`--steps 20`: 0.26 s), on the same machine.
+pub const BAR_VISIT_COST: f64 = 6.0;
+
+impl StepWork {
+    /// The work of a step of `model`.
+    pub fn of(model: &crate::sim::Model) -> Self {
+        let p = &model.params;
+        let springs = model.springs.len() as u64;
+        let xpbd = p.integrator == crate::sim::Integrator::Xpbd;
+        let passes = u64::from(xpbd) + u64::from(p.stretch_limit.is_some());
+        Self {
+            particles: model.mass.len(),
+            bar_visits: (model.bars.len() as u64).saturating_mul(u64::from(p.bar_iterations)),
+            spring_visits: springs.saturating_mul(passes),
+        }
+    }
+
+    /// A step of `particles` particles and nothing else.
+    pub fn particles(particles: usize) -> Self {
+        Self {
+            particles,
+            bar_visits: 0,
+            spring_visits: 0,
+        }
+    }
+
+    /// The step's cost in particle-steps.
+    pub fn cost(&self) -> f64 {
+        self.particles as f64 + BAR_VISIT_COST * self.bar_visits as f64 + self.spring_visits as f64
+    }
+
+    /// What the step holds, for a message: "24 particles" or "100000 particles
+    /// and 999990000 bar corrections".
+    fn describe(&self) -> String {
+        let mut parts = vec![format!("{} particles", self.particles)];
+        if self.bar_visits > 0 {
+            parts.push(format!(
+                "{} bar corrections (bars × bar_iterations, {BAR_VISIT_COST} particle-steps each)",
+                self.bar_visits
+            ));
+        }
+        if self.spring_visits > 0 {
+            parts.push(format!(
+                "{} spring corrections (XPBD, stretch limit)",
+                self.spring_visits
+            ));
+        }
+        parts.join(" and ")
+    }
+}
+
+/// Total steps of a run of `steps` steps of `substeps` substeps each, each step
+/// costing `work`, or an error giving the limit when it passes [`MAX_STEPS`]
+/// steps or [`MAX_PARTICLE_STEPS`] particle-steps of work (or overflows).
+pub fn total_steps(steps: u64, substeps: u64, work: StepWork) -> Result<u64, String> {
     let total = steps.checked_mul(substeps).filter(|&t| t <= MAX_STEPS);
     let Some(total) = total else {
         let shown = (steps as f64) * (substeps as f64);

@@ -327,7 +327,7 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
             limits::MAX_STEPS
         ));
     }
-    limits::total_steps(last as u64, 1, system.particle_count()).map(|_| ())
+    limits::total_steps(last as u64, 1, limits::StepWork::of(system.model())).map(|_| ())
 }
 
 /// Steps `system` from its state and renders `frames` frames at `fps` (frame i

@@ -92,9 +92,13 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let (width, height) = args.size;
     let mut session =
         Session::load_with(&args.scene, &args.set).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let particles = session.system().particle_count();
-    limits::total_steps(args.steps, 1, particles).map_err(|e| anyhow::anyhow!("--steps: {e}"))?;
-    // The output file is checked before the steps, which may take long.
+    let work = limits::StepWork::of(session.system().model());
+    limits::total_steps(args.steps, 1, work).map_err(|e| anyhow::anyhow!("--steps: {e}"))?;
+    // The output file is checked before the steps, which may take long: none of
+    // the inputs, and writable.
+    (session.scene().inputs(&args.scene))
+        .check("--out", &args.out)
+        .map_err(|e| anyhow::anyhow!(e))?;
     let out = PendingFile::create(&args.out)
         .map_err(|e| anyhow::anyhow!("--out {}: {e}", args.out.display()))?;
     for _ in 0..args.steps {

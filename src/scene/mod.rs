@@ -20,6 +20,7 @@ use build::{
     side_ranges,
 };
 pub use edit::Edit;
+pub(crate) use edit::EDIT_ORIGIN;
 pub use values::{PinPreset, Pins, Vector};
 
 use crate::limits::echo;
@@ -707,8 +708,58 @@ impl Scene {
 
     /// Builds the system.
     pub fn build(&self) -> Result<System, SceneError> {
-        Ok(self.resolve()?.build())
+        let system = self.resolve()?.build();
+        let p = system.params();
+        check_self_collision(&self.origin, &system, p.self_collision, p.thickness)?;
+        Ok(system)
     }
+}
+
+/// Refuses self-collision at a thickness `h_c` (m) that would list more candidate
+/// pairs at `system`'s positions than the pass has room for
+/// ([`crate::sim::self_collision::MAX_PAIRS_PER_PARTICLE`] a particle): a
+/// thickness many times the particles' spacing, at which every particle keeps
+/// apart from many it is not joined to and the pairs grow as the square of the
+/// particles. `origin` says where the setting came from; `on`: whether
+/// self-collision is on.
+pub fn check_self_collision(
+    origin: &str,
+    system: &System,
+    on: bool,
+    h_c: f64,
+) -> Result<(), SceneError> {
+    use crate::sim::self_collision::{MAX_PAIRS_PER_PARTICLE, SelfCollision};
+    if !(on && h_c > 0.0) {
+        return Ok(());
+    }
+    let model = system.model();
+    if !SelfCollision::would_overfill(system.positions(), h_c, |i, j| model.joins(i, j)) {
+        return Ok(());
+    }
+    let n = system.particle_count();
+    let spacing = (system.springs().iter().map(|s| s.rest))
+        .chain(system.bars().iter().map(|b| b.length))
+        .filter(|l| *l > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let pairs = n as f64 * (n as f64 - 1.0) / 2.0;
+    let gb = pairs * 16.0 / 1e9;
+    let spacing = if spacing.is_finite() {
+        format!(" (the nearest {} m apart)", crate::limits::number(spacing))
+    } else {
+        String::new()
+    };
+    Err(SceneError::Invalid {
+        origin: origin.to_string(),
+        field: "thickness".to_string(),
+        message: format!(
+            "of {} m with self_collision keeps each of the {n} particles{spacing} away from \
+             more than {MAX_PAIRS_PER_PARTICLE} others at the start: the pairs to check grow as \
+             the square of the particles (up to {pairs:.1e} of them, {gb:.1} GB), past the \
+             memory set aside for them; keep the thickness to about a spacing, or set \
+             self_collision = false",
+            crate::limits::number(h_c),
+        ),
+    })
 }
 
 pub use build::Resolved;

@@ -548,7 +548,7 @@ impl System {
     }
 
     /// Runs `n` steps on the fastest engine that models the system.
-    fn run_on_an_engine(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
+    pub(super) fn run_on_an_engine(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
         self.budget();
         if let Some(result) = self.run_on_grid(n, settle) {
             return result;
