@@ -440,6 +440,11 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     } else {
         summary.print();
     }
+    if outcome.is_ok()
+        && let Some(warning) = summary.limiters.and_then(|a| a.warning())
+    {
+        eprintln!("warning: {warning}");
+    }
     match outcome {
         Ok(()) => Ok(ExitCode::SUCCESS),
         Err(divergence) => {
@@ -617,6 +622,8 @@ struct Summary {
     dt: f64,
     /// Conjugate-gradient iterations of the last step, for implicit Euler.
     solver_iterations: Option<usize>,
+    /// What the limiters hold at the end, where the scene has any.
+    limiters: Option<cloth_sandbox::sim::limiters::Activity>,
 }
 
 impl Summary {
@@ -652,6 +659,11 @@ impl Summary {
             dt: system.params().dt,
             solver_iterations: (system.params().integrator == Integrator::ImplicitEuler)
                 .then(|| system.solver_iterations()),
+            limiters: {
+                let p = system.params();
+                (p.max_speed.is_some() || p.stretch_limit.is_some() || p.tear_strain.is_some())
+                    .then(|| system.limiter_activity())
+            },
         }
     }
 
@@ -689,6 +701,15 @@ impl Summary {
             "integrator": self.integrator.name(),
             "dt": self.dt,
             "cg_iterations_last_step": self.solver_iterations,
+            "limiters": self.limiters.map(|a| {
+                let pair = |(n, of): (usize, usize)| json!({ "holding": n, "of": of });
+                json!({
+                    "torn_springs": pair(a.torn),
+                    "particles_at_speed_cap": pair(a.at_speed_cap),
+                    "springs_at_stretch_limit": pair(a.at_stretch_limit),
+                    "warning": a.warning(),
+                })
+            }),
         })
     }
 
@@ -721,6 +742,12 @@ impl Summary {
         }
         if self.broken_springs > 0 {
             println!("broken springs  {}", self.broken_springs);
+        }
+        if let Some(a) = &self.limiters {
+            let held: Vec<String> = a.working().map(|(l, n, of)| l.holding(n, of)).collect();
+            if !held.is_empty() {
+                println!("limiters        hold {}", held.join(", "));
+            }
         }
     }
 }

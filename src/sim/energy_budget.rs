@@ -70,6 +70,13 @@ pub struct EnergyBudget {
     /// How far (J) the energy may rise above `base`: `(SLACK + swing(r)) ×
     /// scale`, or infinite for a system in which nothing oscillates.
     pub allowed: f64,
+    /// `dt / dt_crit` of the stability estimate the budget was set with
+    /// (infinite: no step is stable; 0: no limit), for [`super::limiters`].
+    pub margin: f64,
+    /// Springs broken (torn or cut) when the budget was set.
+    pub broken: usize,
+    /// Springs when the budget was set.
+    pub springs: usize,
 }
 
 impl EnergyBudget {
@@ -123,6 +130,9 @@ impl EnergyBudget {
             base: energy.total(),
             scale,
             allowed,
+            margin: stability.margin,
+            broken: model.broken_springs,
+            springs: model.springs.len(),
         }
     }
 

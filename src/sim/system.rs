@@ -597,7 +597,9 @@ impl System {
         self.checked_energy = None;
         let energy = self.energy();
         self.checked_energy = Some((self.state.steps, energy));
-        (self.budget()).check(energy, self.state.time, self.state.steps)
+        let budget = self.budget();
+        budget.check(energy, self.state.time, self.state.steps)?;
+        super::limiters::check(&self.model, &self.state, &budget)
     }
 
     /// The energy budget in effect; `None` after an edit until the next step sets
