@@ -315,6 +315,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         SimdLevel::cap(level).map_err(|e| format!("--simd {name}: {e}"))?;
     }
     let scene = load_scene(&args.scene, &args.step)?;
+    let inputs = scene.inputs(&args.scene.scene);
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;
     let steps = match (args.steps, args.duration) {
@@ -367,7 +368,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         None => None,
     };
     let mut obj = match &args.obj {
-        Some(path) => Some(prepare_obj(&system, path, &args)?),
+        Some(path) => Some(prepare_obj(&system, path, &args, &inputs)?),
         None => None,
     };
     system.set_fast_path(!args.exact);
@@ -473,37 +474,33 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
 }
 
 /// The `--dump` file made ready before the run, so that a path that cannot be
-/// written is found before the work rather than after it: not the scene file being
-/// run, not a folder, not a device or pipe (`/dev/stdout` would mix the CSV into
-/// the summary), in a folder that can be written.
-fn prepare_dump(path: &Path, scene: &str) -> Result<PendingFile, String> {
-    let shown = path.display();
-    if Path::new(scene).is_file() && limits::same_file(path, Path::new(scene)) {
-        return Err(format!(
-            "--dump {shown} is the scene file being run: refusing to overwrite it; give another file name"
-        ));
-    }
-    PendingFile::create(path).map_err(|e| format!("--dump {shown}: {e}"))
+/// written is found before the work rather than after it: none of the run's
+/// inputs (the scene file, its mesh, however spelled), not a folder, not a device
+/// or pipe (`/dev/stdout` would mix the CSV into the summary), in a folder that
+/// can be written.
+fn prepare_dump(path: &Path, inputs: &limits::Inputs) -> Result<PendingFile, String> {
+    inputs.check("--dump", path)?;
+    PendingFile::create(path).map_err(|e| format!("--dump {}: {e}", path.display()))
 }
 
 /// The `--obj` file made ready before the run, as `--dump` is: the scene must have
-/// a surface, and the path must be writable and neither the scene file nor the
+/// a surface, and the path must be writable, none of the run's inputs and not the
 /// `--dump` file.
-fn prepare_obj(system: &System, path: &Path, args: &RunArgs) -> Result<PendingFile, String> {
+fn prepare_obj(
+    system: &System,
+    path: &Path,
+    args: &RunArgs,
+    inputs: &limits::Inputs,
+) -> Result<PendingFile, String> {
     let shown = path.display();
+    inputs.check("--obj", path)?;
     cloth_sandbox::export::check_surface(system, &args.scene.scene)
         .map_err(|e| format!("--obj {shown}: {e}"))?;
-    let scene = Path::new(&args.scene.scene);
-    if scene.is_file() && limits::same_file(path, scene) {
-        return Err(format!(
-            "--obj {shown} is the scene file being run: refusing to overwrite it; give another file name"
-        ));
-    }
-    if args
-        .dump
-        .as_deref()
-        .is_some_and(|dump| dump == path || limits::same_file(dump, path))
-    {
+    let same = |dump: &Path| {
+        dump == path
+            || limits::output_target(dump).is_some_and(|d| Some(d) == limits::output_target(path))
+    };
+    if args.dump.as_deref().is_some_and(same) {
         return Err(format!(
             "--obj {shown} is also the --dump file: give them different names"
         ));

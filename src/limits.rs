@@ -124,12 +124,14 @@ pub fn total_steps(steps: u64, substeps: u64, work: StepWork) -> Result<u64, Str
             number(shown)
         ));
     };
-    let work = total.checked_mul(particles as u64);
-    if work.is_none_or(|w| w > MAX_PARTICLE_STEPS) {
+    let cost = total as f64 * work.cost();
+    if !(cost <= MAX_PARTICLE_STEPS as f64) {
         return Err(format!(
-            "{total} steps of {particles} particles is {} particle-steps: a run may take at most {} \
-             particle-steps (steps × particles); give fewer steps or a smaller scene",
-            number(total as f64 * particles as f64),
+            "{total} steps of {} is {} particle-steps of work: a run may take at most {} \
+             particle-steps (steps × particles, each pass counted); give fewer steps, fewer \
+             passes or a smaller scene",
+            work.describe(),
+            number(cost),
             number(MAX_PARTICLE_STEPS as f64)
         ));
     }
@@ -215,6 +217,15 @@ pub struct PendingFile {
 impl PendingFile {
     /// Prepares to write `target`; the error says why it cannot be written.
     pub fn create(target: &Path) -> Result<Self, String> {
+        let text = target.as_os_str().to_string_lossy();
+        if text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
+            return Err(match std::fs::metadata(target.components().as_path()) {
+                Ok(meta) if !meta.is_dir() => {
+                    "ends with / (a folder), but is a file: give a file name".to_string()
+                }
+                _ => "ends with / (a folder): give a file name".to_string(),
+            });
+        }
         let mut target = target.to_path_buf();
         if std::fs::symlink_metadata(&target).is_ok() {
             let meta = std::fs::metadata(&target)
@@ -246,7 +257,11 @@ impl PendingFile {
             _ => Path::new("."),
         };
         if !folder.is_dir() {
-            return Err(format!("the folder {} does not exist", folder.display()));
+            return Err(if folder.exists() {
+                format!("{} is a file, not a folder", folder.display())
+            } else {
+                format!("the folder {} does not exist", folder.display())
+            });
         }
         let mut temporary_name = std::ffi::OsString::from(".");
         temporary_name.push(name);
@@ -299,6 +314,53 @@ fn is_standard_output(meta: &std::fs::Metadata) -> bool {
         let _ = meta;
         false
     }
+}
+
+/// The files a command reads, which none of its outputs may replace, each with
+/// what it is ("the scene file", "the scene's mesh"), kept by their canonical
+/// paths so that any spelling of an output (`./x`, `../dir/x`, a link to it)
+/// meets them.
+#[derive(Clone, Debug, Default)]
+pub struct Inputs(Vec<(String, PathBuf)>);
+
+impl Inputs {
+    /// Adds `path`, read as `what`, if it exists.
+    pub fn add(&mut self, what: &str, path: &Path) {
+        if let Ok(canonical) = std::fs::canonicalize(path) {
+            self.0.push((what.to_string(), canonical));
+        }
+    }
+
+    /// Refuses `out`, given to `flag`, when it is one of the inputs, however it
+    /// is spelled: "--obj scene.toml is the scene file being run: refusing to
+    /// overwrite it; give another file name".
+    pub fn check(&self, flag: &str, out: &Path) -> Result<(), String> {
+        let Some(target) = output_target(out) else {
+            return Ok(());
+        };
+        match self.0.iter().find(|(_, input)| *input == target) {
+            Some((what, _)) => Err(format!(
+                "{flag} {} is {what}: refusing to overwrite it; give another file name",
+                out.display()
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The file an output path would write, canonical: through a link at the name to
+/// what it names, and the folder canonical when the file does not exist yet
+/// (`None` where the folder does not exist either: nothing can be overwritten).
+pub fn output_target(out: &Path) -> Option<PathBuf> {
+    if let Ok(canonical) = std::fs::canonicalize(out) {
+        return Some(canonical);
+    }
+    let name = out.file_name()?;
+    let folder = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(std::fs::canonicalize(folder).ok()?.join(name))
 }
 
 /// Whether `a` and `b` name the same existing file (through links or `..`).

@@ -701,6 +701,20 @@ impl Scene {
         Ok(())
     }
 
+    /// The files this scene, loaded from `name_or_path` ([`Self::load`]), reads:
+    /// its scene file (not a built-in's) and its mesh, for the outputs of the
+    /// same command to keep off ([`crate::limits::Inputs`]).
+    pub fn inputs(&self, name_or_path: &str) -> crate::limits::Inputs {
+        let mut inputs = crate::limits::Inputs::default();
+        if !BUILTINS.iter().any(|b| b.name == name_or_path) {
+            inputs.add("the scene file being run", Path::new(name_or_path));
+        }
+        if let Some(mesh) = &self.spec.mesh {
+            inputs.add("the scene's mesh", Path::new(mesh));
+        }
+        inputs
+    }
+
     /// Every parameter in effect, with defaults filled in and ranges checked.
     pub fn resolve(&self) -> Result<build::Resolved, SceneError> {
         build::resolve(&self.spec, &self.origin)
