@@ -135,7 +135,7 @@ pub struct RunArgs {
     #[arg(long, value_name = "FILE.obj")]
     obj: Option<std::path::PathBuf>,
     /// Safe stepping: split each step of dt into the fewest substeps that keep the
-    /// step below half the integrator's critical step (Gershgorin estimate).
+    /// step below half the integrator's critical step (the stability estimate).
     #[arg(long)]
     safe: bool,
     /// Always use the general f64 engine, the reference (by default every scene runs
@@ -145,7 +145,7 @@ pub struct RunArgs {
     exact: bool,
     /// Untimed steps before the timed run, after which the start state is restored
     /// (as the peers' benchmarks warm up).
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(long, default_value_t = 0, value_name = "N", allow_hyphen_values = true)]
     warmup: u64,
     /// Run the fast engines' loops at this SIMD level at most, to compare levels on
     /// one machine: avx512, avx2 or baseline (default: the best this CPU has; a

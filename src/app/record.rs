@@ -57,7 +57,12 @@ pub struct RecordArgs {
     pub seconds: f64,
     /// Frames per simulated second, which is also the playback rate: 1 to 50 (GIF
     /// players do not go faster).
-    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=50))]
+    #[arg(
+        long,
+        default_value_t = 25,
+        value_parser = clap::value_parser!(u32).range(1..=50),
+        allow_hyphen_values = true
+    )]
     pub fps: u32,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x400", value_parser = parse_size)]

@@ -18,7 +18,7 @@ pub struct ScreenshotArgs {
     #[arg(long, default_value = "cloth")]
     pub scene: String,
     /// Simulation steps to run before rendering.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
     pub steps: u64,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "960x640", value_parser = parse_size)]

@@ -255,6 +255,15 @@ const OFF_WHEN_ABSENT: &[&str] = &[
     "max_speed",
 ];
 
+/// The keys that belong to a part that `--set KEY=none` turns off, and go with it.
+const PART_KEYS: &[(&str, &[&str])] = &[
+    (
+        "ground_height",
+        &["ground_stiffness", "ground_friction", "ground_damping"],
+    ),
+    ("sphere_center", &["sphere_radius"]),
+];
+
 /// A scene error: always names where the input came from, and the field when there is one.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -477,12 +486,38 @@ pub fn builtin_scenes() -> &'static [BuiltinScene] {
 }
 
 /// A scene ready to build: the spec and where it came from (for error messages).
-#[derive(Clone, Debug, PartialEq)]
+/// Two scenes are equal when their specs and origins are (where each value was
+/// written is for messages only).
+#[derive(Clone, Debug)]
 pub struct Scene {
     /// The spec, with overrides applied.
     pub spec: SceneSpec,
     /// "built-in scene `cloth`" or "scene file path/to.toml".
     pub origin: String,
+    /// The line of each top-level `key = value` of the text it was parsed from,
+    /// for messages that name where a value came from.
+    lines: Vec<(String, u32)>,
+    /// The keys given since by `--set` ([`Self::set`]), which replace the text's.
+    overridden: Vec<String>,
+}
+
+impl PartialEq for Scene {
+    fn eq(&self, other: &Self) -> bool {
+        self.spec == other.spec && self.origin == other.origin
+    }
+}
+
+/// Each top-level `key = value` line of a scene text, with its number.
+fn key_lines(text: &str) -> Vec<(String, u32)> {
+    (text.lines().enumerate())
+        .filter_map(|(i, line)| {
+            let (key, _) = line.split_once('=')?;
+            let key = key.trim();
+            let plain = !key.is_empty()
+                && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            plain.then(|| (key.to_string(), u32::try_from(i + 1).unwrap_or(u32::MAX)))
+        })
+        .collect()
 }
 
 impl Scene {
@@ -506,6 +541,8 @@ impl Scene {
         let scene = Self {
             spec,
             origin: origin.to_string(),
+            lines: key_lines(text),
+            overridden: Vec::new(),
         };
         scene.resolve()?;
         Ok(scene)
@@ -579,6 +616,14 @@ impl Scene {
         }
         if value.trim().eq_ignore_ascii_case("none") && OFF_WHEN_ABSENT.contains(&key) {
             table.remove(key);
+            // A part turned off takes its own keys with it.
+            for (part, keys) in PART_KEYS {
+                if key == *part {
+                    for k in *keys {
+                        table.remove(*k);
+                    }
+                }
+            }
         } else {
             table.insert(key.to_string(), parsed);
         }
@@ -596,8 +641,27 @@ impl Scene {
         let candidate = Self {
             spec,
             origin: self.origin.clone(),
+            lines: self.lines.clone(),
+            overridden: self.overridden.clone(),
         };
         candidate.resolve().map_err(|e| match e {
+            // Another key's value, valid before, is out of range with this one:
+            // both are named, the other with where it came from.
+            SceneError::Invalid { field, message, .. } if field != key => {
+                let line = self.lines.iter().find(|(k, _)| *k == field);
+                let origin = if self.overridden.iter().any(|k| *k == field) {
+                    format!("{origin}: with it, --set {field} given before")
+                } else if let Some((_, line)) = line {
+                    format!("{origin}: with it, {} line {line}", self.origin)
+                } else {
+                    format!("{origin}: with it")
+                };
+                SceneError::Invalid {
+                    origin,
+                    field,
+                    message,
+                }
+            }
             SceneError::Invalid { field, message, .. } => SceneError::Invalid {
                 origin,
                 field,
@@ -606,6 +670,9 @@ impl Scene {
             other => other,
         })?;
         *self = candidate;
+        if !self.overridden.iter().any(|k| k == key) {
+            self.overridden.push(key.to_string());
+        }
         Ok(())
     }
 
