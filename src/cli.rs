@@ -13,7 +13,8 @@ use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::grid_kernel::{Precision, SimdLevel};
 use cloth_sandbox::sim::safe::{
-    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas, safe_step_below,
+    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas,
+    safe_step_below,
 };
 use cloth_sandbox::sim::{
     Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
@@ -145,7 +146,12 @@ pub struct RunArgs {
     exact: bool,
     /// Untimed steps before the timed run, after which the start state is restored
     /// (as the peers' benchmarks warm up).
-    #[arg(long, default_value_t = 0, value_name = "N", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
     warmup: u64,
     /// Run the fast engines' loops at this SIMD level at most, to compare levels on
     /// one machine: avx512, avx2 or baseline (default: the best this CPU has; a
@@ -360,8 +366,8 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     // The whole run is checked before any of it starts: nothing the user asks for
     // may run for ever, and the results must have somewhere to go.
     let work = limits::StepWork::of(system.model());
-    let steps = limits::total_steps(steps, substeps, work)
-        .map_err(|e| format!("run too long: {e}"))?;
+    let steps =
+        limits::total_steps(steps, substeps, work).map_err(|e| format!("run too long: {e}"))?;
     limits::total_steps(args.warmup, 1, work).map_err(|e| format!("--warmup: {e}"))?;
     let mut dump = match &args.dump {
         Some(path) => Some(prepare_dump(path, &inputs)?),

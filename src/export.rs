@@ -30,9 +30,7 @@ use crate::sim::System;
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// The scene has no triangles (a chain, a spring, a rope, a jelly lattice).
-    #[error(
-        "the scene `{scene}` has no surface to export: {why}"
-    )]
+    #[error("the scene `{scene}` has no surface to export: {why}")]
     NoSurface {
         /// The scene's name, as loaded.
         scene: String,

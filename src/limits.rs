@@ -125,7 +125,7 @@ pub fn total_steps(steps: u64, substeps: u64, work: StepWork) -> Result<u64, Str
         ));
     };
     let cost = total as f64 * work.cost();
-    if !(cost <= MAX_PARTICLE_STEPS as f64) {
+    if cost.is_nan() || cost > MAX_PARTICLE_STEPS as f64 {
         return Err(format!(
             "{total} steps of {} is {} particle-steps of work: a run may take at most {} \
              particle-steps (steps × particles, each pass counted); give fewer steps, fewer \

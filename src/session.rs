@@ -644,7 +644,12 @@ impl Session {
         if matches!(edit, Edit::Thickness(_) | Edit::SelfCollision(true)) && !edit.rebuilds() {
             let p = &settings.params;
             let origin = crate::scene::EDIT_ORIGIN;
-            crate::scene::check_self_collision(origin, &self.system, p.self_collision, p.thickness)?;
+            crate::scene::check_self_collision(
+                origin,
+                &self.system,
+                p.self_collision,
+                p.thickness,
+            )?;
         }
         self.commit(scene, settings, edit.rebuilds());
         Ok(())

@@ -37,12 +37,7 @@ const CHAIN: &[&str] = &[
 ];
 
 /// The hanging 32 x 32 cloth, undamped, in still air.
-const CLOTH: &[&str] = &[
-    "damping=0",
-    "wind=0,0,0",
-    "gust=0",
-    "drag_coefficient=0",
-];
+const CLOTH: &[&str] = &["damping=0", "wind=0,0,0", "gust=0", "drag_coefficient=0"];
 
 fn resolved(name: &str, overrides: &[&str]) -> Resolved {
     let mut scene = Scene::load(name).unwrap();
@@ -97,16 +92,30 @@ fn the_textbook_springs_critical_step_is_two_over_omega() {
     let s = system.stability();
     let theory = 2.0 / omega;
     let dt = s.dt_critical.unwrap();
-    assert!((dt - theory).abs() < 1e-9 * theory, "{dt} s against {theory} s");
-    assert!((s.omega_max - omega).abs() < 1e-9 * omega, "{}", s.omega_max);
-    assert!((s.omega_bound - omega).abs() < 1e-9 * omega, "{}", s.omega_bound);
+    assert!(
+        (dt - theory).abs() < 1e-9 * theory,
+        "{dt} s against {theory} s"
+    );
+    assert!(
+        (s.omega_max - omega).abs() < 1e-9 * omega,
+        "{}",
+        s.omega_max
+    );
+    assert!(
+        (s.omega_bound - omega).abs() < 1e-9 * omega,
+        "{}",
+        s.omega_bound
+    );
     // RK4: 2 sqrt 2 / omega.
     let mut p = *system.params();
     p.integrator = Integrator::Rk4;
     system.set_params(p);
     let rk4 = system.stability().dt_critical.unwrap();
     let theory = 2.0 * 2f64.sqrt() / omega;
-    assert!((rk4 - theory).abs() < 1e-6 * theory, "{rk4} s against {theory} s");
+    assert!(
+        (rk4 - theory).abs() < 1e-6 * theory,
+        "{rk4} s against {theory} s"
+    );
     // The command line says the same.
     let o = cloth(&[
         "info",
@@ -151,8 +160,14 @@ fn the_gershgorin_bound_counts_no_pinned_neighbour() {
 #[test]
 fn the_estimate_holds_to_the_power_iteration_on_the_reports_cases() {
     let mut cases: Vec<(String, Resolved)> = vec![
-        ("spring".into(), resolved("spring", &["damping=0", "air_damping=0"])),
-        ("chain".into(), resolved("chain", &["damping=0", "air_damping=0"])),
+        (
+            "spring".into(),
+            resolved("spring", &["damping=0", "air_damping=0"]),
+        ),
+        (
+            "chain".into(),
+            resolved("chain", &["damping=0", "air_damping=0"]),
+        ),
         ("chain along".into(), resolved("chain", CHAIN)),
     ];
     for side in [12, 32] {
@@ -229,7 +244,9 @@ fn the_energy_check_is_silent_below_each_limit_and_catches_past_it() {
             }
             let (code, err) = run_at(scene, overrides, integrator, past / omega);
             if code != 3 {
-                missed.push(format!("{scene} {integrator} omega h = {past}: {code} {err}"));
+                missed.push(format!(
+                    "{scene} {integrator} omega h = {past}: {code} {err}"
+                ));
             }
         }
     }
@@ -276,6 +293,8 @@ fn the_report_gives_undamped_rk2_no_largest_stable_step() {
             row.measured
         );
         assert_eq!(row.measured.value(), None);
-        assert!(row.measured.text().starts_with("none") || row.measured.text().contains("none found"));
+        assert!(
+            row.measured.text().starts_with("none") || row.measured.text().contains("none found")
+        );
     }
 }

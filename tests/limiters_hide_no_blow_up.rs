@@ -47,17 +47,46 @@ fn explicit_euler_on_tear_is_a_divergence_that_names_tearing() {
 #[test]
 fn each_limiter_holding_a_blow_up_is_named_and_a_stable_run_is_not() {
     for (set, limiter, holds) in [
-        ("max_speed=1", "the speed limit", "free particles at the speed cap (max_speed)"),
-        ("stretch_limit=0.1", "the stretch limit", "springs at the stretch limit (stretch_limit)"),
+        (
+            "max_speed=1",
+            "the speed limit",
+            "free particles at the speed cap (max_speed)",
+        ),
+        (
+            "stretch_limit=0.1",
+            "the stretch limit",
+            "springs at the stretch limit (stretch_limit)",
+        ),
         ("tear_strain=0.5", "tearing", "springs torn (tear_strain)"),
     ] {
-        let blown = ["--scene", "cloth", "--set", set, "--integrator", "explicit-euler", "--duration", "2"];
+        let blown = [
+            "--scene",
+            "cloth",
+            "--set",
+            set,
+            "--integrator",
+            "explicit-euler",
+            "--duration",
+            "2",
+        ];
         let (code, json, err) = run(&blown);
         assert_eq!(code, 3, "{set}: {err}");
         let message = json["diverged"]["message"].as_str().unwrap();
-        assert!(message.starts_with(&format!("{limiter} held back a blow-up")), "{set}: {message}");
+        assert!(
+            message.starts_with(&format!("{limiter} held back a blow-up")),
+            "{set}: {message}"
+        );
         assert!(message.contains(holds), "{set}: {message}");
-        let stable = ["--scene", "cloth", "--set", set, "--integrator", "symplectic-euler", "--duration", "2"];
+        let stable = [
+            "--scene",
+            "cloth",
+            "--set",
+            set,
+            "--integrator",
+            "symplectic-euler",
+            "--duration",
+            "2",
+        ];
         let (code, json, err) = run(&stable);
         assert_eq!(code, 0, "{set}: {err}");
         assert!(json["limiters"].is_object(), "{set}: {json}");
@@ -93,9 +122,22 @@ fn no_built_in_scene_at_its_defaults_is_flagged() {
 /// everywhere (0.01 m/s).
 #[test]
 fn a_limiter_doing_much_of_the_work_within_the_limit_is_a_warning() {
-    let (code, json, err) = run(&["--scene", "cloth", "--set", "max_speed=0.01", "--duration", "1"]);
+    let (code, json, err) = run(&[
+        "--scene",
+        "cloth",
+        "--set",
+        "max_speed=0.01",
+        "--duration",
+        "1",
+    ]);
     assert_eq!(code, 0, "{err}");
     let warning = json["limiters"]["warning"].as_str().unwrap();
-    assert!(warning.contains("at the speed cap (max_speed)"), "{warning}");
-    assert!(err.contains("warning: limiters hold much of the motion"), "{err}");
+    assert!(
+        warning.contains("at the speed cap (max_speed)"),
+        "{warning}"
+    );
+    assert!(
+        err.contains("warning: limiters hold much of the motion"),
+        "{err}"
+    );
 }

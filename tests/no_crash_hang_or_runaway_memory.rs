@@ -67,18 +67,41 @@ fn refused_at_once(args: &[&str], words: &[&str]) {
 #[test]
 fn the_work_limit_counts_every_bar_pass() {
     refused_at_once(
-        &["run", "--scene", "rope", "--set", "width=100000", "--set", "bar_iterations=10000"],
+        &[
+            "run",
+            "--scene",
+            "rope",
+            "--set",
+            "width=100000",
+            "--set",
+            "bar_iterations=10000",
+        ],
         &["bar corrections", "particle-steps of work"],
     );
     refused_at_once(
         &[
-            "run", "--scene", "bars", "--set", "width=1024", "--set", "height=1024", "--set",
+            "run",
+            "--scene",
+            "bars",
+            "--set",
+            "width=1024",
+            "--set",
+            "height=1024",
+            "--set",
             "bar_iterations=10000",
         ],
         &["bar corrections", "particle-steps of work"],
     );
     // The same rope with its 8 passes runs.
-    let o = cloth(&["run", "--scene", "rope", "--set", "width=1000", "--steps", "10"]);
+    let o = cloth(&[
+        "run",
+        "--scene",
+        "rope",
+        "--set",
+        "width=1000",
+        "--steps",
+        "10",
+    ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
 
@@ -92,8 +115,19 @@ fn a_thickness_far_past_the_spacing_is_refused_within_a_memory_cap() {
         .args(["--as=3000000000", "--"])
         .arg(env!("CARGO_BIN_EXE_cloth"))
         .args([
-            "run", "--scene", "cloth", "--set", "width=256", "--set", "height=256", "--set",
-            "self_collision=true", "--set", "thickness=10", "--steps", "3",
+            "run",
+            "--scene",
+            "cloth",
+            "--set",
+            "width=256",
+            "--set",
+            "height=256",
+            "--set",
+            "self_collision=true",
+            "--set",
+            "thickness=10",
+            "--steps",
+            "3",
         ])
         .output();
     let Ok(o) = o else {
@@ -102,15 +136,28 @@ fn a_thickness_far_past_the_spacing_is_refused_within_a_memory_cap() {
     };
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("`thickness` of 10 m with self_collision"), "{err}");
-    assert!(err.contains(&format!("more than {MAX_PAIRS_PER_PARTICLE} others")), "{err}");
+    assert!(
+        err.contains("`thickness` of 10 m with self_collision"),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("more than {MAX_PAIRS_PER_PARTICLE} others")),
+        "{err}"
+    );
     assert!(err.contains("GB"), "{err}");
     // A thickness of about a spacing still runs under the same cap.
     let o = std::process::Command::new("prlimit")
         .args(["--as=3000000000", "--"])
         .arg(env!("CARGO_BIN_EXE_cloth"))
         .args([
-            "run", "--scene", "drape", "--set", "width=128", "--set", "height=128", "--steps",
+            "run",
+            "--scene",
+            "drape",
+            "--set",
+            "width=128",
+            "--set",
+            "height=128",
+            "--steps",
             "200",
         ])
         .output()
@@ -129,7 +176,11 @@ fn the_pass_lists_at_most_its_bound_and_says_when_it_left_pairs_out() {
     let mut x: Vec<DVec3> = (0..n)
         .map(|i| {
             let f = i as f64;
-            DVec3::new((f * 0.618).fract(), (f * 0.414).fract(), (f * 0.732).fract()) * 0.01
+            DVec3::new(
+                (f * 0.618).fract(),
+                (f * 0.414).fract(),
+                (f * 0.732).fract(),
+            ) * 0.01
         })
         .collect();
     assert!(SelfCollision::would_overfill(&x, 1.0, |_, _| false));

@@ -17,7 +17,10 @@ use binary::stderr;
 
 /// A fresh folder for one test, with a mesh scene: `scene.toml` naming `m.obj`.
 fn workspace(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("cloth-never-overwrite-{name}-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "cloth-never-overwrite-{name}-{}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(dir.join("sub")).unwrap();
     std::fs::write(
@@ -63,10 +66,34 @@ fn spellings(dir: &Path, file: &str) -> Vec<String> {
 fn commands(out: &str) -> Vec<Vec<String>> {
     let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
     vec![
-        s(&["run", "--scene", "scene.toml", "--steps", "10", "--dump", out]),
-        s(&["run", "--scene", "scene.toml", "--steps", "10", "--obj", out]),
+        s(&[
+            "run",
+            "--scene",
+            "scene.toml",
+            "--steps",
+            "10",
+            "--dump",
+            out,
+        ]),
+        s(&[
+            "run",
+            "--scene",
+            "scene.toml",
+            "--steps",
+            "10",
+            "--obj",
+            out,
+        ]),
         s(&["screenshot", "--scene", "scene.toml", "--out", out]),
-        s(&["record", "--scene", "scene.toml", "--seconds", "0.1", "--out", out]),
+        s(&[
+            "record",
+            "--scene",
+            "scene.toml",
+            "--seconds",
+            "0.1",
+            "--out",
+            out,
+        ]),
     ]
 }
 
@@ -76,7 +103,18 @@ fn commands(out: &str) -> Vec<Vec<String>> {
 fn no_output_flag_overwrites_the_scene_file_or_its_mesh_in_any_spelling() {
     let dir = workspace("matrix");
     // The scene runs and writes where nothing is read.
-    let o = cloth_in(&dir, &["run", "--scene", "scene.toml", "--steps", "10", "--obj", "out.obj"]);
+    let o = cloth_in(
+        &dir,
+        &[
+            "run",
+            "--scene",
+            "scene.toml",
+            "--steps",
+            "10",
+            "--obj",
+            "out.obj",
+        ],
+    );
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(dir.join("out.obj").exists());
     let mut failures = Vec::new();
@@ -118,16 +156,43 @@ fn every_form_of_record_out_keeps_off_the_inputs() {
     let mesh_scene = "layout = \"mesh\"\nmesh = \"m-0.png\"\npins = \"none\"\n";
     std::fs::write(dir.join("png-mesh.toml"), mesh_scene).unwrap();
     let cases: [(&[&str], &str); 3] = [
-        (&["record", "--scene", "scene.gif", "--out", "scene.gif"], "scene.gif"),
-        (&["record", "--scene", "png-mesh.toml", "--out", "m-%d.png", "--force"], "m-0.png"),
-        (&["record", "--scene", "sub/frame-0000.png", "--out", "sub/", "--force"], "sub/frame-0000.png"),
+        (
+            &["record", "--scene", "scene.gif", "--out", "scene.gif"],
+            "scene.gif",
+        ),
+        (
+            &[
+                "record",
+                "--scene",
+                "png-mesh.toml",
+                "--out",
+                "m-%d.png",
+                "--force",
+            ],
+            "m-0.png",
+        ),
+        (
+            &[
+                "record",
+                "--scene",
+                "sub/frame-0000.png",
+                "--out",
+                "sub/",
+                "--force",
+            ],
+            "sub/frame-0000.png",
+        ),
     ];
     for (args, input) in cases {
         let before = std::fs::read(dir.join(input)).unwrap();
         let o = cloth_in(&dir, args);
         let err = stderr(&o);
         assert!(!o.status.success(), "{args:?}: {err}");
-        assert_eq!(std::fs::read(dir.join(input)).unwrap(), before, "{args:?}: {err}");
+        assert_eq!(
+            std::fs::read(dir.join(input)).unwrap(),
+            before,
+            "{args:?}: {err}"
+        );
     }
 }
 
@@ -137,11 +202,25 @@ fn every_form_of_record_out_keeps_off_the_inputs() {
 fn a_png_pattern_does_not_replace_an_earlier_recordings_frames() {
     let dir = workspace("frames");
     std::fs::write(dir.join("shot-0003.png"), b"earlier").unwrap();
-    let o = cloth_in(&dir, &["record", "--scene", "cloth", "--seconds", "0.2", "--out", "shot-%04d.png"]);
+    let o = cloth_in(
+        &dir,
+        &[
+            "record",
+            "--scene",
+            "cloth",
+            "--seconds",
+            "0.2",
+            "--out",
+            "shot-%04d.png",
+        ],
+    );
     let err = stderr(&o);
     assert!(!o.status.success(), "{err}");
     assert!(err.contains("shot-0003.png exists"), "{err}");
-    assert_eq!(std::fs::read(dir.join("shot-0003.png")).unwrap(), b"earlier");
+    assert_eq!(
+        std::fs::read(dir.join("shot-0003.png")).unwrap(),
+        b"earlier"
+    );
 }
 
 /// Every output path is checked before the run: `--dump newdir/` where `newdir`
@@ -151,10 +230,54 @@ fn an_output_path_that_cannot_be_written_fails_before_the_run() {
     let dir = workspace("before");
     std::fs::write(dir.join("newdir"), b"a file").unwrap();
     for args in [
-        &["run", "--scene", "cloth", "--set", "width=128", "--set", "height=128", "--steps", "4000", "--dump", "newdir/"][..],
-        &["run", "--scene", "cloth", "--set", "width=128", "--set", "height=128", "--steps", "4000", "--obj", "newdir/"],
-        &["run", "--scene", "cloth", "--set", "width=128", "--set", "height=128", "--steps", "4000", "--dump", "newdir/x.csv"],
-        &["screenshot", "--scene", "cloth", "--steps", "4000", "--out", "newdir/"],
+        &[
+            "run",
+            "--scene",
+            "cloth",
+            "--set",
+            "width=128",
+            "--set",
+            "height=128",
+            "--steps",
+            "4000",
+            "--dump",
+            "newdir/",
+        ][..],
+        &[
+            "run",
+            "--scene",
+            "cloth",
+            "--set",
+            "width=128",
+            "--set",
+            "height=128",
+            "--steps",
+            "4000",
+            "--obj",
+            "newdir/",
+        ],
+        &[
+            "run",
+            "--scene",
+            "cloth",
+            "--set",
+            "width=128",
+            "--set",
+            "height=128",
+            "--steps",
+            "4000",
+            "--dump",
+            "newdir/x.csv",
+        ],
+        &[
+            "screenshot",
+            "--scene",
+            "cloth",
+            "--steps",
+            "4000",
+            "--out",
+            "newdir/",
+        ],
     ] {
         let start = std::time::Instant::now();
         let o = cloth_in(&dir, args);
@@ -181,15 +304,40 @@ fn texture_coordinates_and_normals_are_checked_like_vertices() {
     let dir = workspace("obj");
     let base = "v 0 0 0\nv 1 0 0\nv 1 1 0\n";
     for (extra, face, what) in [
-        ("vt nan nan\nvt 1 0\nvt 1 1\n", "f 1/1 2/2 3/3\n", "texture coordinate 1 (`vt`)"),
-        ("vt 0 0\nvt inf 0\nvt 1 1\n", "f 1/1 2/2 3/3\n", "texture coordinate 2 (`vt`)"),
-        ("vt 0 0\nvt 1e300 0\nvt 1 1\n", "f 1/1 2/2 3/3\n", "texture coordinate 2 (`vt`)"),
+        (
+            "vt nan nan\nvt 1 0\nvt 1 1\n",
+            "f 1/1 2/2 3/3\n",
+            "texture coordinate 1 (`vt`)",
+        ),
+        (
+            "vt 0 0\nvt inf 0\nvt 1 1\n",
+            "f 1/1 2/2 3/3\n",
+            "texture coordinate 2 (`vt`)",
+        ),
+        (
+            "vt 0 0\nvt 1e300 0\nvt 1 1\n",
+            "f 1/1 2/2 3/3\n",
+            "texture coordinate 2 (`vt`)",
+        ),
         ("vn 0 0 nan\n", "f 1//1 2//1 3//1\n", "normal 1 (`vn`)"),
-        ("vn 0 0 1\nvn -inf 0 0\n", "f 1//1 2//2 3//1\n", "normal 2 (`vn`)"),
+        (
+            "vn 0 0 1\nvn -inf 0 0\n",
+            "f 1//1 2//2 3//1\n",
+            "normal 2 (`vn`)",
+        ),
     ] {
         std::fs::write(dir.join("bad.obj"), format!("{base}{extra}{face}")).unwrap();
-        std::fs::write(dir.join("bad.toml"), "layout = \"mesh\"\nmesh = \"bad.obj\"\npins = \"none\"\n").unwrap();
-        let o = cloth_in(&dir, &["run", "--scene", "bad.toml", "--steps", "1", "--obj", "out.obj"]);
+        std::fs::write(
+            dir.join("bad.toml"),
+            "layout = \"mesh\"\nmesh = \"bad.obj\"\npins = \"none\"\n",
+        )
+        .unwrap();
+        let o = cloth_in(
+            &dir,
+            &[
+                "run", "--scene", "bad.toml", "--steps", "1", "--obj", "out.obj",
+            ],
+        );
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{extra}: {err}");
         assert!(err.contains(what), "{extra}: {err}");

@@ -383,6 +383,8 @@ pub(crate) fn write_file(dir: &Path, name: &str, text: &str) -> Result<(), Strin
     let path = dir.join(name);
     let cannot = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
     let mut file = crate::limits::PendingFile::create(&path).map_err(|e| cannot(&e))?;
-    file.writer().write_all(text.as_bytes()).map_err(|e| cannot(&e))?;
+    file.writer()
+        .write_all(text.as_bytes())
+        .map_err(|e| cannot(&e))?;
     file.commit().map_err(|e| cannot(&e))
 }

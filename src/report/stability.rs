@@ -68,7 +68,9 @@ impl Measured {
             Self::AtLeast(x) => format!(">= {x:.3e} (cap)"),
             Self::Below(x) => format!("< {x:.3e} (none found)"),
             Self::Transient { lo, .. } => {
-                format!("none (grows at every dt; stays within the bound over the horizon up to {lo:.3e})")
+                format!(
+                    "none (grows at every dt; stays within the bound over the horizon up to {lo:.3e})"
+                )
             }
         }
     }

@@ -109,9 +109,11 @@ fn csvs(r: &Report, out: &Path) -> Result<(), String> {
                 Measured::Between { lo, hi } => ("bracketed", format!("{lo:e}"), format!("{hi:e}")),
                 Measured::AtLeast(x) => ("stable-up-to-cap", format!("{x:e}"), String::new()),
                 Measured::Below(x) => ("unstable-down-to-floor", String::new(), format!("{x:e}")),
-                Measured::Transient { lo, hi } => {
-                    ("none-in-theory-horizon-bracket", format!("{lo:e}"), format!("{hi:e}"))
-                }
+                Measured::Transient { lo, hi } => (
+                    "none-in-theory-horizon-bracket",
+                    format!("{lo:e}"),
+                    format!("{hi:e}"),
+                ),
             };
             let t = &row.theory;
             let _ = writeln!(

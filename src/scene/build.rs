@@ -141,7 +141,9 @@ fn layout_mesh(spec: &SceneSpec, o: &str) -> Result<Option<Arc<Mesh>>, SceneErro
         return Err(invalid(
             o,
             "mesh",
-            format!("is missing: a mesh layout needs the OBJ file of its cloth, `mesh = \"path/to/file.obj\"`{also}"),
+            format!(
+                "is missing: a mesh layout needs the OBJ file of its cloth, `mesh = \"path/to/file.obj\"`{also}"
+            ),
         ));
     };
     if let Some((key, _, why)) = not_here.iter().find(|(_, given, _)| *given) {

@@ -217,7 +217,9 @@ fn scan(text: &str) -> Result<Scan, String> {
                     };
                     return Err(at(
                         number,
-                        format!("{what} {count} (`{kind}`) has a value that is not a finite number{range}"),
+                        format!(
+                            "{what} {count} (`{kind}`) has a value that is not a finite number{range}"
+                        ),
                     ));
                 }
             }

@@ -19,8 +19,8 @@ use build::{
     PARTICLE_MASS, REST_LENGTH, STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND,
     side_ranges,
 };
-pub use edit::Edit;
 pub(crate) use edit::EDIT_ORIGIN;
+pub use edit::Edit;
 pub use values::{PinPreset, Pins, Vector};
 
 use crate::limits::echo;
@@ -513,8 +513,8 @@ fn key_lines(text: &str) -> Vec<(String, u32)> {
         .filter_map(|(i, line)| {
             let (key, _) = line.split_once('=')?;
             let key = key.trim();
-            let plain = !key.is_empty()
-                && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            let plain =
+                !key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
             plain.then(|| (key.to_string(), u32::try_from(i + 1).unwrap_or(u32::MAX)))
         })
         .collect()
@@ -649,7 +649,7 @@ impl Scene {
             // both are named, the other with where it came from.
             SceneError::Invalid { field, message, .. } if field != key => {
                 let line = self.lines.iter().find(|(k, _)| *k == field);
-                let origin = if self.overridden.iter().any(|k| *k == field) {
+                let origin = if self.overridden.contains(&field) {
                     format!("{origin}: with it, --set {field} given before")
                 } else if let Some((_, line)) = line {
                     format!("{origin}: with it, {} line {line}", self.origin)

@@ -135,8 +135,7 @@ impl Activity {
     /// The limiter holding the largest share, if any is at work.
     pub fn strongest(&self) -> Option<(Limiter, usize, usize)> {
         let share = |&(_, n, of): &(Limiter, usize, usize)| n as f64 / of.max(1) as f64;
-        self.working()
-            .max_by(|a, b| share(a).total_cmp(&share(b)))
+        self.working().max_by(|a, b| share(a).total_cmp(&share(b)))
     }
 
     /// A warning where a limiter holds more than [`WARN_SHARE`] of what it acts
@@ -160,7 +159,8 @@ impl Activity {
 /// The divergence of a run whose step is past the stability limit
 /// (`budget.margin >= 1`) while a limiter holds something (see the module doc).
 pub fn check(model: &Model, state: &State, budget: &EnergyBudget) -> Result<(), Divergence> {
-    if !(budget.margin >= 1.0) {
+    // NaN (no estimate) is no limit passed.
+    if budget.margin.is_nan() || budget.margin < 1.0 {
         return Ok(());
     }
     let p = &model.params;

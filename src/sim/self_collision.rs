@@ -200,7 +200,12 @@ impl SelfCollision {
             return false;
         }
         let mut probe = Self::default();
-        probe.rebuild(x, h_c * (1.0 + 2.0 * MARGIN), joined, x.len() >= PARALLEL_MIN_PARTICLES);
+        probe.rebuild(
+            x,
+            h_c * (1.0 + 2.0 * MARGIN),
+            joined,
+            x.len() >= PARALLEL_MIN_PARTICLES,
+        );
         probe.overfull()
     }
 

@@ -132,7 +132,11 @@ fn top_eigenvalue(alpha: &[f64], beta: &[f64]) -> f64 {
         let mut count = 0;
         let mut d = 1.0;
         for i in 0..n {
-            let off = if i > 0 { beta[i - 1] * beta[i - 1] } else { 0.0 };
+            let off = if i > 0 {
+                beta[i - 1] * beta[i - 1]
+            } else {
+                0.0
+            };
             d = alpha[i] - x - if i > 0 { off / d } else { 0.0 };
             if d == 0.0 {
                 d = -f64::EPSILON * (x.abs() + 1.0);
@@ -213,7 +217,7 @@ pub fn omega_max(model: &Model, positions: &[DVec3]) -> Spectrum {
         let settled = j >= SETTLED_OVER && top - ritz[j - SETTLED_OVER] <= TOLERANCE * top;
         // An invariant subspace (the spring's one direction, a chain's few):
         // the Ritz values are its eigenvalues.
-        if settled || !(b > 1e-12 * top.max(f64::MIN_POSITIVE)) || !b.is_finite() {
+        if settled || !b.is_finite() || b <= 1e-12 * top.max(f64::MIN_POSITIVE) {
             return Spectrum {
                 omega_max: top.sqrt(),
                 iterations: j + 1,
