@@ -13,7 +13,8 @@ use cloth_sandbox::limits::{self, PendingFile};
 use cloth_sandbox::scene::{Scene, SceneError, builtin_scenes};
 use cloth_sandbox::sim::grid_kernel::{Precision, SimdLevel};
 use cloth_sandbox::sim::safe::{
-    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas, safe_step,
+    DEFAULT_MAX_SUBSTEPS, DEFAULT_SAFETY, StepWatch, added_stretch_limit, follow_areas,
+    safe_step_below,
 };
 use cloth_sandbox::sim::{
     Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
@@ -135,7 +136,7 @@ pub struct RunArgs {
     #[arg(long, value_name = "FILE.obj")]
     obj: Option<std::path::PathBuf>,
     /// Safe stepping: split each step of dt into the fewest substeps that keep the
-    /// step below half the integrator's critical step (Gershgorin estimate).
+    /// step below half the integrator's critical step (the stability estimate).
     #[arg(long)]
     safe: bool,
     /// Always use the general f64 engine, the reference (by default every scene runs
@@ -145,7 +146,12 @@ pub struct RunArgs {
     exact: bool,
     /// Untimed steps before the timed run, after which the start state is restored
     /// (as the peers' benchmarks warm up).
-    #[arg(long, default_value_t = 0, value_name = "N")]
+    #[arg(
+        long,
+        default_value_t = 0,
+        value_name = "N",
+        allow_hyphen_values = true
+    )]
     warmup: u64,
     /// Run the fast engines' loops at this SIMD level at most, to compare levels on
     /// one machine: avx512, avx2 or baseline (default: the best this CPU has; a
@@ -247,7 +253,7 @@ fn run_checked(
         return Ok(system.run(steps.min(until.saturating_sub(system.steps_taken()))));
     };
     let end = system.time() + steps as f64 * system.params().dt;
-    let particles = system.particle_count();
+    let work = limits::StepWork::of(system.model());
     let mut watch = StepWatch::default();
     loop {
         let dt = system.params().dt;
@@ -262,7 +268,7 @@ fn run_checked(
         }
         if let Some(choice) = follow_areas(system, &mut watch, scene_dt) {
             let left = ((end - system.time()) / choice.dt).round().max(0.0) as u64;
-            limits::total_steps(system.steps_taken() + left, 1, particles).map_err(|e| {
+            limits::total_steps(system.steps_taken() + left, 1, work).map_err(|e| {
                 format!("run too long after safe stepping chose a smaller step: {e}")
             })?;
             eprintln!(
@@ -315,6 +321,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         SimdLevel::cap(level).map_err(|e| format!("--simd {name}: {e}"))?;
     }
     let scene = load_scene(&args.scene, &args.step)?;
+    let inputs = scene.inputs(&args.scene.scene);
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;
     let steps = match (args.steps, args.duration) {
@@ -327,7 +334,12 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     };
     let mut substeps = 1;
     if args.safe {
-        let choice = safe_step(system.model(), dt, DEFAULT_SAFETY, DEFAULT_MAX_SUBSTEPS);
+        let choice = safe_step_below(
+            system.stability().dt_critical,
+            dt,
+            DEFAULT_SAFETY,
+            DEFAULT_MAX_SUBSTEPS,
+        );
         let mut params = *system.params();
         params.dt = choice.dt;
         let added_limit = added_stretch_limit(system.model(), params.stretch_limit);
@@ -353,16 +365,16 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     }
     // The whole run is checked before any of it starts: nothing the user asks for
     // may run for ever, and the results must have somewhere to go.
-    let particles = system.particle_count();
-    let steps = limits::total_steps(steps, substeps, particles)
-        .map_err(|e| format!("run too long: {e}"))?;
-    limits::total_steps(args.warmup, 1, particles).map_err(|e| format!("--warmup: {e}"))?;
+    let work = limits::StepWork::of(system.model());
+    let steps =
+        limits::total_steps(steps, substeps, work).map_err(|e| format!("run too long: {e}"))?;
+    limits::total_steps(args.warmup, 1, work).map_err(|e| format!("--warmup: {e}"))?;
     let mut dump = match &args.dump {
-        Some(path) => Some(prepare_dump(path, &args.scene.scene)?),
+        Some(path) => Some(prepare_dump(path, &inputs)?),
         None => None,
     };
     let mut obj = match &args.obj {
-        Some(path) => Some(prepare_obj(&system, path, &args)?),
+        Some(path) => Some(prepare_obj(&system, path, &args, &inputs)?),
         None => None,
     };
     system.set_fast_path(!args.exact);
@@ -435,6 +447,11 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     } else {
         summary.print();
     }
+    if outcome.is_ok()
+        && let Some(warning) = summary.limiters.and_then(|a| a.warning())
+    {
+        eprintln!("warning: {warning}");
+    }
     match outcome {
         Ok(()) => Ok(ExitCode::SUCCESS),
         Err(divergence) => {
@@ -463,37 +480,33 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
 }
 
 /// The `--dump` file made ready before the run, so that a path that cannot be
-/// written is found before the work rather than after it: not the scene file being
-/// run, not a folder, not a device or pipe (`/dev/stdout` would mix the CSV into
-/// the summary), in a folder that can be written.
-fn prepare_dump(path: &Path, scene: &str) -> Result<PendingFile, String> {
-    let shown = path.display();
-    if Path::new(scene).is_file() && limits::same_file(path, Path::new(scene)) {
-        return Err(format!(
-            "--dump {shown} is the scene file being run: refusing to overwrite it; give another file name"
-        ));
-    }
-    PendingFile::create(path).map_err(|e| format!("--dump {shown}: {e}"))
+/// written is found before the work rather than after it: none of the run's
+/// inputs (the scene file, its mesh, however spelled), not a folder, not a device
+/// or pipe (`/dev/stdout` would mix the CSV into the summary), in a folder that
+/// can be written.
+fn prepare_dump(path: &Path, inputs: &limits::Inputs) -> Result<PendingFile, String> {
+    inputs.check("--dump", path)?;
+    PendingFile::create(path).map_err(|e| format!("--dump {}: {e}", path.display()))
 }
 
 /// The `--obj` file made ready before the run, as `--dump` is: the scene must have
-/// a surface, and the path must be writable and neither the scene file nor the
+/// a surface, and the path must be writable, none of the run's inputs and not the
 /// `--dump` file.
-fn prepare_obj(system: &System, path: &Path, args: &RunArgs) -> Result<PendingFile, String> {
+fn prepare_obj(
+    system: &System,
+    path: &Path,
+    args: &RunArgs,
+    inputs: &limits::Inputs,
+) -> Result<PendingFile, String> {
     let shown = path.display();
+    inputs.check("--obj", path)?;
     cloth_sandbox::export::check_surface(system, &args.scene.scene)
         .map_err(|e| format!("--obj {shown}: {e}"))?;
-    let scene = Path::new(&args.scene.scene);
-    if scene.is_file() && limits::same_file(path, scene) {
-        return Err(format!(
-            "--obj {shown} is the scene file being run: refusing to overwrite it; give another file name"
-        ));
-    }
-    if args
-        .dump
-        .as_deref()
-        .is_some_and(|dump| dump == path || limits::same_file(dump, path))
-    {
+    let same = |dump: &Path| {
+        dump == path
+            || limits::output_target(dump).is_some_and(|d| Some(d) == limits::output_target(path))
+    };
+    if args.dump.as_deref().is_some_and(same) {
         return Err(format!(
             "--obj {shown} is also the --dump file: give them different names"
         ));
@@ -612,6 +625,8 @@ struct Summary {
     dt: f64,
     /// Conjugate-gradient iterations of the last step, for implicit Euler.
     solver_iterations: Option<usize>,
+    /// What the limiters hold at the end, where the scene has any.
+    limiters: Option<cloth_sandbox::sim::limiters::Activity>,
 }
 
 impl Summary {
@@ -647,6 +662,11 @@ impl Summary {
             dt: system.params().dt,
             solver_iterations: (system.params().integrator == Integrator::ImplicitEuler)
                 .then(|| system.solver_iterations()),
+            limiters: {
+                let p = system.params();
+                (p.max_speed.is_some() || p.stretch_limit.is_some() || p.tear_strain.is_some())
+                    .then(|| system.limiter_activity())
+            },
         }
     }
 
@@ -684,6 +704,15 @@ impl Summary {
             "integrator": self.integrator.name(),
             "dt": self.dt,
             "cg_iterations_last_step": self.solver_iterations,
+            "limiters": self.limiters.map(|a| {
+                let pair = |(n, of): (usize, usize)| json!({ "holding": n, "of": of });
+                json!({
+                    "torn_springs": pair(a.torn),
+                    "particles_at_speed_cap": pair(a.at_speed_cap),
+                    "springs_at_stretch_limit": pair(a.at_stretch_limit),
+                    "warning": a.warning(),
+                })
+            }),
         })
     }
 
@@ -716,6 +745,12 @@ impl Summary {
         }
         if self.broken_springs > 0 {
             println!("broken springs  {}", self.broken_springs);
+        }
+        if let Some(a) = &self.limiters {
+            let held: Vec<String> = a.working().map(|(l, n, of)| l.holding(n, of)).collect();
+            if !held.is_empty() {
+                println!("limiters        hold {}", held.join(", "));
+            }
         }
     }
 }
@@ -846,7 +881,8 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         },
         "extent": 2.0 * extent,
         "stability": {
-            "omega_max_bound": stability.omega_max,
+            "omega_max": stability.omega_max,
+            "omega_max_bound": stability.omega_bound,
             "damping_ratio": stability.zeta,
             "dt_critical": stability.dt_critical.map(|c| if c.is_finite() { json!(c) } else { json!("unlimited") }),
             "dt_over_dt_critical": if stability.margin.is_finite() { json!(stability.margin) } else { json!("unstable at any dt") },

@@ -30,15 +30,15 @@ use crate::sim::System;
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// The scene has no triangles (a chain, a spring, a rope, a jelly lattice).
-    #[error(
-        "the scene `{scene}` has no surface to export: it is {particles} particles joined by springs or bars, \
-         with no triangles; OBJ export needs a cloth scene such as `cloth` or `flag`"
-    )]
+    #[error("the scene `{scene}` has no surface to export: {why}")]
     NoSurface {
         /// The scene's name, as loaded.
         scene: String,
         /// Its particle count.
         particles: usize,
+        /// Why there is none: a cloth of one row, a cloth torn apart, or a
+        /// layout of particles joined by springs or bars.
+        why: String,
     },
     /// A position is not finite (the simulation diverged).
     #[error(
@@ -57,9 +57,27 @@ pub enum ExportError {
 /// done: `scene` names it in the error.
 pub fn check_surface(system: &System, scene: &str) -> Result<(), ExportError> {
     if system.triangles().is_empty() {
+        let particles = system.particle_count();
+        let broken = system.broken_springs();
+        let why = match system.model().grid {
+            Some(g) if g.width < 2 || g.height < 2 => format!(
+                "the cloth is {} x {} particles, a single row, and a triangle needs two rows \
+                 and two columns: give width and height of at least 2",
+                g.width, g.height
+            ),
+            _ if broken > 0 => format!(
+                "tearing or cutting broke {broken} springs, and with them every triangle of the \
+                 cloth (a triangle goes with any spring along its edges)"
+            ),
+            _ => format!(
+                "it is {particles} particles joined by springs or bars, with no triangles; OBJ \
+                 export needs a cloth scene such as `cloth` or `flag`"
+            ),
+        };
         return Err(ExportError::NoSurface {
             scene: scene.to_string(),
-            particles: system.particle_count(),
+            particles,
+            why,
         });
     }
     Ok(())

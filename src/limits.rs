@@ -44,10 +44,78 @@ pub fn steps_for_duration(duration: f64, dt: f64) -> Result<u64, String> {
     Ok(steps as u64)
 }
 
-/// Total steps of a run of `steps` steps of `substeps` substeps each over
-/// `particles` particles, or an error giving the limit when it passes
-/// [`MAX_STEPS`] steps or [`MAX_PARTICLE_STEPS`] particle-steps (or overflows).
-pub fn total_steps(steps: u64, substeps: u64, particles: usize) -> Result<u64, String> {
+/// What one step costs, counted in particle-steps: every pass of the step, not
+/// only the one over the particles. A rope of 100,000 points with 10,000 bar
+/// passes a step does 10⁹ bar corrections a step for its 10⁵ particles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepWork {
+    /// Particles: the force pass and the integration.
+    pub particles: usize,
+    /// Bar corrections a step: bars times `bar_iterations`.
+    pub bar_visits: u64,
+    /// Spring visits of the passes after integration: XPBD's and the stretch
+    /// limit's, one each over the springs.
+    pub spring_visits: u64,
+}
+
+/// A bar correction's cost in particle-steps: one bar pass of the 100,000-point
+/// rope took 72 ns a bar (`cloth run --scene rope --set width=100000 --set
+/// bar_iterations=100 --steps 20`: 14.5 s), a step of the 1024 x 1024 bench
+/// cloth 12.6 ns a particle (`--steps 20`: 0.26 s), on the same machine.
+pub const BAR_VISIT_COST: f64 = 6.0;
+
+impl StepWork {
+    /// The work of a step of `model`.
+    pub fn of(model: &crate::sim::Model) -> Self {
+        let p = &model.params;
+        let springs = model.springs.len() as u64;
+        let xpbd = p.integrator == crate::sim::Integrator::Xpbd;
+        let passes = u64::from(xpbd) + u64::from(p.stretch_limit.is_some());
+        Self {
+            particles: model.mass.len(),
+            bar_visits: (model.bars.len() as u64).saturating_mul(u64::from(p.bar_iterations)),
+            spring_visits: springs.saturating_mul(passes),
+        }
+    }
+
+    /// A step of `particles` particles and nothing else.
+    pub fn particles(particles: usize) -> Self {
+        Self {
+            particles,
+            bar_visits: 0,
+            spring_visits: 0,
+        }
+    }
+
+    /// The step's cost in particle-steps.
+    pub fn cost(&self) -> f64 {
+        self.particles as f64 + BAR_VISIT_COST * self.bar_visits as f64 + self.spring_visits as f64
+    }
+
+    /// What the step holds, for a message: "24 particles" or "100000 particles
+    /// and 999990000 bar corrections".
+    fn describe(&self) -> String {
+        let mut parts = vec![format!("{} particles", self.particles)];
+        if self.bar_visits > 0 {
+            parts.push(format!(
+                "{} bar corrections (bars × bar_iterations, {BAR_VISIT_COST} particle-steps each)",
+                self.bar_visits
+            ));
+        }
+        if self.spring_visits > 0 {
+            parts.push(format!(
+                "{} spring corrections (XPBD, stretch limit)",
+                self.spring_visits
+            ));
+        }
+        parts.join(" and ")
+    }
+}
+
+/// Total steps of a run of `steps` steps of `substeps` substeps each, each step
+/// costing `work`, or an error giving the limit when it passes [`MAX_STEPS`]
+/// steps or [`MAX_PARTICLE_STEPS`] particle-steps of work (or overflows).
+pub fn total_steps(steps: u64, substeps: u64, work: StepWork) -> Result<u64, String> {
     let total = steps.checked_mul(substeps).filter(|&t| t <= MAX_STEPS);
     let Some(total) = total else {
         let shown = (steps as f64) * (substeps as f64);
@@ -56,12 +124,14 @@ pub fn total_steps(steps: u64, substeps: u64, particles: usize) -> Result<u64, S
             number(shown)
         ));
     };
-    let work = total.checked_mul(particles as u64);
-    if work.is_none_or(|w| w > MAX_PARTICLE_STEPS) {
+    let cost = total as f64 * work.cost();
+    if cost.is_nan() || cost > MAX_PARTICLE_STEPS as f64 {
         return Err(format!(
-            "{total} steps of {particles} particles is {} particle-steps: a run may take at most {} \
-             particle-steps (steps × particles); give fewer steps or a smaller scene",
-            number(total as f64 * particles as f64),
+            "{total} steps of {} is {} particle-steps of work: a run may take at most {} \
+             particle-steps (steps × particles, each pass counted); give fewer steps, fewer \
+             passes or a smaller scene",
+            work.describe(),
+            number(cost),
             number(MAX_PARTICLE_STEPS as f64)
         ));
     }
@@ -147,6 +217,15 @@ pub struct PendingFile {
 impl PendingFile {
     /// Prepares to write `target`; the error says why it cannot be written.
     pub fn create(target: &Path) -> Result<Self, String> {
+        let text = target.as_os_str().to_string_lossy();
+        if text.ends_with('/') || text.ends_with(std::path::MAIN_SEPARATOR) {
+            return Err(match std::fs::metadata(target.components().as_path()) {
+                Ok(meta) if !meta.is_dir() => {
+                    "ends with / (a folder), but is a file: give a file name".to_string()
+                }
+                _ => "ends with / (a folder): give a file name".to_string(),
+            });
+        }
         let mut target = target.to_path_buf();
         if std::fs::symlink_metadata(&target).is_ok() {
             let meta = std::fs::metadata(&target)
@@ -178,7 +257,11 @@ impl PendingFile {
             _ => Path::new("."),
         };
         if !folder.is_dir() {
-            return Err(format!("the folder {} does not exist", folder.display()));
+            return Err(if folder.exists() {
+                format!("{} is a file, not a folder", folder.display())
+            } else {
+                format!("the folder {} does not exist", folder.display())
+            });
         }
         let mut temporary_name = std::ffi::OsString::from(".");
         temporary_name.push(name);
@@ -231,6 +314,53 @@ fn is_standard_output(meta: &std::fs::Metadata) -> bool {
         let _ = meta;
         false
     }
+}
+
+/// The files a command reads, which none of its outputs may replace, each with
+/// what it is ("the scene file", "the scene's mesh"), kept by their canonical
+/// paths so that any spelling of an output (`./x`, `../dir/x`, a link to it)
+/// meets them.
+#[derive(Clone, Debug, Default)]
+pub struct Inputs(Vec<(String, PathBuf)>);
+
+impl Inputs {
+    /// Adds `path`, read as `what`, if it exists.
+    pub fn add(&mut self, what: &str, path: &Path) {
+        if let Ok(canonical) = std::fs::canonicalize(path) {
+            self.0.push((what.to_string(), canonical));
+        }
+    }
+
+    /// Refuses `out`, given to `flag`, when it is one of the inputs, however it
+    /// is spelled: "--obj scene.toml is the scene file being run: refusing to
+    /// overwrite it; give another file name".
+    pub fn check(&self, flag: &str, out: &Path) -> Result<(), String> {
+        let Some(target) = output_target(out) else {
+            return Ok(());
+        };
+        match self.0.iter().find(|(_, input)| *input == target) {
+            Some((what, _)) => Err(format!(
+                "{flag} {} is {what}: refusing to overwrite it; give another file name",
+                out.display()
+            )),
+            None => Ok(()),
+        }
+    }
+}
+
+/// The file an output path would write, canonical: through a link at the name to
+/// what it names, and the folder canonical when the file does not exist yet
+/// (`None` where the folder does not exist either: nothing can be overwritten).
+pub fn output_target(out: &Path) -> Option<PathBuf> {
+    if let Ok(canonical) = std::fs::canonicalize(out) {
+        return Some(canonical);
+    }
+    let name = out.file_name()?;
+    let folder = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(std::fs::canonicalize(folder).ok()?.join(name))
 }
 
 /// Whether `a` and `b` name the same existing file (through links or `..`).

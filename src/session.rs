@@ -230,6 +230,9 @@ impl Session {
     /// Starts `scene`, named `name` in the UI.
     pub fn new(scene: Scene, name: &str) -> Result<Self, SceneError> {
         let settings = scene.resolve()?;
+        let system = settings.build();
+        let p = &settings.params;
+        crate::scene::check_self_collision(&scene.origin, &system, p.self_collision, p.thickness)?;
         let mut session = Self {
             defaults: scene.clone(),
             undo: Vec::new(),
@@ -238,7 +241,7 @@ impl Session {
             dt_drag_frame_time: None,
             scene,
             name: name.to_string(),
-            system: settings.build(),
+            system,
             settings,
             spring_kinds: Vec::new(),
             clock: Clock::default(),
@@ -638,6 +641,16 @@ impl Session {
         scene.apply(edit)?;
         let mut settings = self.settings.clone();
         settings.follow(edit, &scene)?;
+        if matches!(edit, Edit::Thickness(_) | Edit::SelfCollision(true)) && !edit.rebuilds() {
+            let p = &settings.params;
+            let origin = crate::scene::EDIT_ORIGIN;
+            crate::scene::check_self_collision(
+                origin,
+                &self.system,
+                p.self_collision,
+                p.thickness,
+            )?;
+        }
         self.commit(scene, settings, edit.rebuilds());
         Ok(())
     }

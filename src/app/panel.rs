@@ -884,6 +884,18 @@ fn contents(
             if system.broken_springs() > 0 {
                 ui.label(format!("broken springs {}", system.broken_springs()));
             }
+            if p.max_speed.is_some() || p.stretch_limit.is_some() || p.tear_strain.is_some() {
+                let activity = system.limiter_activity();
+                let held: Vec<String> = (activity.working())
+                    .map(|(l, n, of)| l.holding(n, of))
+                    .collect();
+                if !held.is_empty() {
+                    ui.label(format!("limiters hold {}", held.join(", ")));
+                }
+                if let Some(warning) = activity.warning() {
+                    ui.colored_label(Color32::from_rgb(255, 200, 60), warning);
+                }
+            }
             if p.self_collision {
                 ui.label(format!(
                     "self-collision contacts {}",

@@ -57,7 +57,12 @@ pub struct RecordArgs {
     pub seconds: f64,
     /// Frames per simulated second, which is also the playback rate: 1 to 50 (GIF
     /// players do not go faster).
-    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=50))]
+    #[arg(
+        long,
+        default_value_t = 25,
+        value_parser = clap::value_parser!(u32).range(1..=50),
+        allow_hyphen_values = true
+    )]
     pub fps: u32,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "640x400", value_parser = parse_size)]
@@ -202,7 +207,11 @@ enum Sink {
         encoder: Option<gif::Encoder<std::io::BufWriter<std::fs::File>>>,
         fps: u32,
     },
-    Pngs(Sequence),
+    Pngs {
+        sequence: Sequence,
+        /// The frames written so far.
+        written: Vec<PathBuf>,
+    },
 }
 
 impl Sink {
@@ -232,24 +241,71 @@ impl Sink {
         })
     }
 
-    /// Checks the output and makes it ready, before any work.
-    fn open(out: &Output, args: &RecordArgs) -> anyhow::Result<Self> {
+    /// Checks the output and makes it ready, before any work: no file it will
+    /// write (the GIF, each of the `frames` frames) is one of the `inputs`, and
+    /// without `--force` a PNG sequence replaces no frame that exists (an earlier
+    /// recording's), as a folder must be empty.
+    fn open(
+        out: &Output,
+        args: &RecordArgs,
+        frames: u64,
+        inputs: &limits::Inputs,
+    ) -> anyhow::Result<Self> {
         let shown = args.out.display();
+        let frames_of = |sequence: &Sequence| -> anyhow::Result<()> {
+            for i in 0..frames {
+                let path = sequence.path(i);
+                inputs
+                    .check(&format!("--out {shown} (frame {i})"), &path)
+                    .map_err(|e| anyhow!(e))?;
+            }
+            Ok(())
+        };
         match out {
             Output::Gif(path) => {
+                inputs.check("--out", path).map_err(|e| anyhow!(e))?;
                 Sink::gif(path, args.size, args.fps).map_err(|e| anyhow!("--out {e:#}"))
             }
             Output::Folder(sequence) => {
                 limits::prepare_output_folder(&sequence.folder, args.force)
                     .map_err(|e| anyhow!("--out: {e}"))?;
-                Ok(Sink::Pngs(sequence.clone()))
+                frames_of(sequence)?;
+                Ok(Sink::pngs(sequence))
             }
             Output::Pattern(sequence) => {
+                frames_of(sequence)?;
+                if !args.force
+                    && let Some(i) = (0..frames).find(|&i| sequence.path(i).exists())
+                {
+                    return Err(anyhow!(
+                        "--out {shown}: {} exists (an earlier recording's frame?): give another \
+                         name, or --force to replace the frames of the same names",
+                        sequence.path(i).display()
+                    ));
+                }
                 // The first frame's file, made and dropped: the folder exists and
                 // can be written.
                 PendingFile::create(&sequence.path(0))
                     .map_err(|e| anyhow!("--out {shown}: {e}"))?;
-                Ok(Sink::Pngs(sequence.clone()))
+                Ok(Sink::pngs(sequence))
+            }
+        }
+    }
+
+    /// A PNG sequence that has written nothing yet.
+    fn pngs(sequence: &Sequence) -> Self {
+        Sink::Pngs {
+            sequence: sequence.clone(),
+            written: Vec::new(),
+        }
+    }
+
+    /// After a failed write: removes the frames this recording wrote, so that no
+    /// part of it is left (a GIF is written whole or not at all).
+    fn abandon(self) {
+        if let Sink::Pngs { written, .. } = self {
+            for path in written {
+                let _ = std::fs::remove_file(path);
             }
         }
     }
@@ -269,12 +325,13 @@ impl Sink {
                 frame.delay = gif_delay(i, *fps);
                 encoder.write_frame(&frame).context("writing a GIF frame")?;
             }
-            Sink::Pngs(sequence) => {
+            Sink::Pngs { sequence, written } => {
                 let path = sequence.path(i);
                 let file = PendingFile::create(&path)
                     .map_err(|e| anyhow!("frame {i}, {}: {e}", path.display()))?;
                 write_png(file, width, height, &rgba)
                     .with_context(|| format!("writing frame {i} to {}", path.display()))?;
+                written.push(path);
             }
         }
         Ok(())
@@ -327,7 +384,7 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
             limits::MAX_STEPS
         ));
     }
-    limits::total_steps(last as u64, 1, system.particle_count()).map(|_| ())
+    limits::total_steps(last as u64, 1, limits::StepWork::of(system.model())).map(|_| ())
 }
 
 /// Steps `system` from its state and renders `frames` frames at `fps` (frame i
@@ -566,7 +623,8 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     check_steps(session.system(), args.fps, frames).map_err(|e| anyhow!("--seconds: {e}"))?;
     // The output and the adapter before the simulation: whatever is missing is
     // said before any work.
-    let mut sink = Sink::open(&output, args)?;
+    let inputs = session.scene().inputs(&args.scene);
+    let mut sink = Sink::open(&output, args, frames, &inputs)?;
     let mut offscreen = Offscreen::new(width, height)?;
 
     let surfaceless = session.surface().is_empty();
@@ -594,7 +652,9 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     );
     if let Err(e) = outcome {
         let Some(diverged) = e.downcast_ref::<Diverged>() else {
-            return Err(e);
+            // A failed write (a full disk): no part of the recording is left.
+            sink.abandon();
+            return Err(e.context("the frames written before it were removed"));
         };
         let frame = diverged.frame;
         // What a user finds of the recording: a GIF is all or nothing.

@@ -18,7 +18,7 @@ pub struct ScreenshotArgs {
     #[arg(long, default_value = "cloth")]
     pub scene: String,
     /// Simulation steps to run before rendering.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
     pub steps: u64,
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "960x640", value_parser = parse_size)]
@@ -92,9 +92,13 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let (width, height) = args.size;
     let mut session =
         Session::load_with(&args.scene, &args.set).map_err(|e| anyhow::anyhow!("{e}"))?;
-    let particles = session.system().particle_count();
-    limits::total_steps(args.steps, 1, particles).map_err(|e| anyhow::anyhow!("--steps: {e}"))?;
-    // The output file is checked before the steps, which may take long.
+    let work = limits::StepWork::of(session.system().model());
+    limits::total_steps(args.steps, 1, work).map_err(|e| anyhow::anyhow!("--steps: {e}"))?;
+    // The output file is checked before the steps, which may take long: none of
+    // the inputs, and writable.
+    (session.scene().inputs(&args.scene))
+        .check("--out", &args.out)
+        .map_err(|e| anyhow::anyhow!(e))?;
     let out = PendingFile::create(&args.out)
         .map_err(|e| anyhow::anyhow!("--out {}: {e}", args.out.display()))?;
     for _ in 0..args.steps {

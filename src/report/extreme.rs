@@ -3,7 +3,7 @@
 //! message (the scene is rejected), or diverged and caught by the divergence check.
 
 use crate::scene::Scene;
-use crate::sim::{System, safe::safe_step};
+use crate::sim::{System, safe::safe_step_below};
 
 /// How one run of an extreme case ended.
 #[derive(Clone, Debug, PartialEq)]
@@ -180,8 +180,8 @@ pub fn run_case(case: &Case, safety: f64) -> Result {
     let outer = case
         .steps
         .unwrap_or_else(|| (case.duration / dt).round().max(1.0) as u64);
-    let choice = safe_step(
-        system.model(),
+    let choice = safe_step_below(
+        system.stability().dt_critical,
         dt,
         safety,
         crate::sim::safe::DEFAULT_MAX_SUBSTEPS,

@@ -375,8 +375,16 @@ fn damped_rows(quick: bool, progress: &mut dyn FnMut(&str)) -> Result<Vec<stabil
     Ok(rows)
 }
 
-/// Writes `text` into `dir/name`.
+/// Writes `text` into `dir/name`, whole or not at all: into a file beside it,
+/// renamed over it once written ([`crate::limits::PendingFile`]), so that a full
+/// disk leaves the old file or none, never a truncated one.
 pub(crate) fn write_file(dir: &Path, name: &str, text: &str) -> Result<(), String> {
+    use std::io::Write as _;
     let path = dir.join(name);
-    std::fs::write(&path, text).map_err(|e| format!("cannot write {}: {e}", path.display()))
+    let cannot = |e: &dyn std::fmt::Display| format!("cannot write {}: {e}", path.display());
+    let mut file = crate::limits::PendingFile::create(&path).map_err(|e| cannot(&e))?;
+    file.writer()
+        .write_all(text.as_bytes())
+        .map_err(|e| cannot(&e))?;
+    file.commit().map_err(|e| cannot(&e))
 }

@@ -83,7 +83,9 @@ pub fn loglog(
     };
     let (x0, x1) = log_range(points().map(|p| p.0));
     let (y0, y1) = log_range(points().map(|p| p.1));
-    let root = SVGBackend::new(path, (900, 620)).into_drawing_area();
+    // Drawn into memory, then written whole (never half a file on a full disk).
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, (900, 620)).into_drawing_area();
     let err = |e: &dyn std::fmt::Display| format!("plot {}: {e}", path.display());
     root.fill(&WHITE).map_err(|e| err(&e))?;
     let mut chart = ChartBuilder::on(&root)
@@ -159,5 +161,9 @@ pub fn loglog(
         .draw()
         .map_err(|e| err(&e))?;
     root.present().map_err(|e| err(&e))?;
-    Ok(())
+    drop(chart);
+    drop(root);
+    let folder = path.parent().unwrap_or(Path::new("."));
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned());
+    super::write_file(folder, &name.unwrap_or_default(), &svg)
 }

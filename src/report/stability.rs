@@ -1,7 +1,8 @@
 //! Measured critical steps: the largest `dt` at which a run stays stable, found by
 //! bisection, beside the theoretical limit from the exact highest eigenfrequency
-//! ([`super::eigen`], then [`critical_step`]) and the Gershgorin estimate the app
-//! uses ([`crate::sim::stability::estimate`]).
+//! ([`super::eigen`], then [`critical_step`]), the estimate the app uses
+//! ([`crate::sim::System::stability`]) and the Gershgorin bound
+//! ([`crate::sim::stability::estimate`]).
 //!
 //! Stable means: over a fixed simulated time (at least [`MIN_STEPS`] steps) no value
 //! becomes non-finite, the divergence check does not fire, and the mechanical energy
@@ -38,6 +39,17 @@ pub enum Measured {
     AtLeast(f64),
     /// Unstable at every step tried, down to this one (the search's floor).
     Below(f64),
+    /// No step is stable in theory (explicit Euler and RK2 undamped: their
+    /// amplitude grows at every step, RK2's by about `(omega h)⁴ / 8`), yet the
+    /// criterion passed over the horizon up to `lo` and failed at `hi`: what the
+    /// criterion measures there is how slowly the growth fills [`ENERGY_FACTOR`]
+    /// within the horizon, not a stable step.
+    Transient {
+        /// Largest step whose growth stayed within the criterion over the horizon, s.
+        lo: f64,
+        /// Smallest step whose growth did not, s.
+        hi: f64,
+    },
 }
 
 impl Measured {
@@ -55,6 +67,11 @@ impl Measured {
             Self::Between { lo, .. } => format!("{lo:.4e}"),
             Self::AtLeast(x) => format!(">= {x:.3e} (cap)"),
             Self::Below(x) => format!("< {x:.3e} (none found)"),
+            Self::Transient { lo, .. } => {
+                format!(
+                    "none (grows at every dt; stays within the bound over the horizon up to {lo:.3e})"
+                )
+            }
         }
     }
 }
@@ -159,33 +176,42 @@ pub fn critical_dt(
     Measured::Between { lo, hi }
 }
 
-/// Theory for a scene: its exact highest frequency and the Gershgorin bound.
+/// Theory for a scene: its exact highest frequency, the estimate the app uses and
+/// the Gershgorin bound.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Theory {
     /// Highest angular frequency by power iteration, rad/s.
     pub omega_exact: f64,
     /// Power iterations taken.
     pub iterations: usize,
+    /// The app's estimate of it ([`crate::sim::System::stability`]: Lanczos at the
+    /// initial state), rad/s.
+    pub omega_estimate: f64,
     /// Gershgorin bound, rad/s.
     pub omega_gershgorin: f64,
     /// Damping ratio of the exact highest mode.
     pub zeta_exact: f64,
-    /// Damping ratio the app assumes (at the Gershgorin frequency).
+    /// Damping ratio the app assumes (at its estimate).
+    pub zeta_estimate: f64,
+    /// Damping ratio at the Gershgorin frequency.
     pub zeta_gershgorin: f64,
 }
 
 impl Theory {
-    /// Computes both at the scene's initial state.
+    /// Computes all three at the scene's initial state.
     pub fn of(scene: &Resolved) -> Self {
         let system = scene.build();
         let power = eigen::omega_max(system.model(), system.positions(), POWER_ITERATIONS, 1e-10);
-        let stability = estimate(system.model());
+        let stability = system.stability();
+        let bound = estimate(system.model());
         Self {
             omega_exact: power.omega_max,
             iterations: power.iterations,
-            omega_gershgorin: stability.omega_max,
+            omega_estimate: stability.omega_max,
+            omega_gershgorin: bound.omega_max,
             zeta_exact: damping_ratio(system.model(), power.omega_max),
-            zeta_gershgorin: stability.zeta,
+            zeta_estimate: stability.zeta,
+            zeta_gershgorin: bound.zeta,
         }
     }
 
@@ -195,6 +221,11 @@ impl Theory {
     }
 
     /// Critical step the app's estimate gives.
+    pub fn estimate(&self, integrator: Integrator) -> Option<f64> {
+        critical_step(integrator, self.omega_estimate, self.zeta_estimate)
+    }
+
+    /// Critical step on the Gershgorin bound.
     pub fn gershgorin(&self, integrator: Integrator) -> Option<f64> {
         critical_step(integrator, self.omega_gershgorin, self.zeta_gershgorin)
     }
@@ -242,14 +273,21 @@ pub fn measure_case(
                 Some(c) if c.is_finite() => c,
                 _ => reference,
             };
+            let measured = critical_dt(
+                scene, integrator, guess, horizon, energy, search, iterations,
+            );
+            // Where theory has no stable step, a bracket is the horizon's, not a
+            // limit.
+            let measured = match (measured, theory.exact(integrator)) {
+                (Measured::Between { lo, hi }, None) => Measured::Transient { lo, hi },
+                (measured, _) => measured,
+            };
             Row {
                 case: case.to_string(),
                 stiffness: scene.stiffness,
                 damping: scene.damping,
                 integrator,
-                measured: critical_dt(
-                    scene, integrator, guess, horizon, energy, search, iterations,
-                ),
+                measured,
                 theory,
                 horizon,
                 reference_energy: energy,

@@ -101,7 +101,7 @@ fn csvs(r: &Report, out: &Path) -> Result<(), String> {
     }
     write_file(out, "orders.csv", &s)?;
 
-    let header = "case,stiffness,damping,integrator,measured_kind,measured_lo_s,measured_hi_s,theory_exact_s,gershgorin_s,omega_exact,omega_gershgorin,zeta_exact,zeta_gershgorin,power_iterations,horizon_s\n";
+    let header = "case,stiffness,damping,integrator,measured_kind,measured_lo_s,measured_hi_s,theory_exact_s,estimate_s,gershgorin_s,omega_exact,omega_estimate,omega_gershgorin,zeta_exact,zeta_estimate,zeta_gershgorin,power_iterations,horizon_s\n";
     for (name, rows) in [("stability.csv", &r.stability), ("damping.csv", &r.damped)] {
         let mut s = String::from(header);
         for row in rows {
@@ -109,20 +109,28 @@ fn csvs(r: &Report, out: &Path) -> Result<(), String> {
                 Measured::Between { lo, hi } => ("bracketed", format!("{lo:e}"), format!("{hi:e}")),
                 Measured::AtLeast(x) => ("stable-up-to-cap", format!("{x:e}"), String::new()),
                 Measured::Below(x) => ("unstable-down-to-floor", String::new(), format!("{x:e}")),
+                Measured::Transient { lo, hi } => (
+                    "none-in-theory-horizon-bracket",
+                    format!("{lo:e}"),
+                    format!("{hi:e}"),
+                ),
             };
             let t = &row.theory;
             let _ = writeln!(
                 s,
-                "{},{:e},{:e},{},{kind},{lo},{hi},{},{},{:e},{:e},{:e},{:e},{},{:e}",
+                "{},{:e},{:e},{},{kind},{lo},{hi},{},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{},{:e}",
                 row.case,
                 row.stiffness,
                 row.damping,
                 row.integrator,
                 limit_text(t.exact(row.integrator)),
+                limit_text(t.estimate(row.integrator)),
                 limit_text(t.gershgorin(row.integrator)),
                 t.omega_exact,
+                t.omega_estimate,
                 t.omega_gershgorin,
                 t.zeta_exact,
+                t.zeta_estimate,
                 t.zeta_gershgorin,
                 t.iterations,
                 row.horizon
@@ -294,8 +302,8 @@ fn plots(r: &Report, out: &Path) -> Result<(), String> {
             style: Style::Line,
         });
         series.push(Series {
-            label: format!("{name}: Gershgorin (app)"),
-            points: pick(&|row| row.theory.gershgorin(i)),
+            label: format!("{name}: estimate (app)"),
+            points: pick(&|row| row.theory.estimate(i)),
             color: 7,
             style: Style::Dashed,
         });
@@ -508,7 +516,11 @@ fn markdown(r: &Report) -> String {
          elastic energy below {:e} times its largest value in an accurate run: RK4 at a quarter of \
          2/omega). Theory: the integrator's critical \
          step on the highest eigenfrequency of M^-1 K, the springs linearised at the initial state, \
-         by power iteration. Gershgorin: the bound `sim::stability::estimate` uses in the app. \
+         by power iteration. Estimate: the one the app, safe stepping and the energy check use \
+         (`System::stability`: Lanczos at the initial state, at most the exact value). Gershgorin: the \
+         bound `sim::stability::estimate` gives without positions. Where theory has no stable step \
+         (explicit Euler and RK2 undamped) the table says `none` and gives the largest step whose growth \
+         the criterion did not see within the horizon. \
          `none`: no step is stable in theory; `< x (none found)`: every step tried down to x was \
          unstable; `>= x (cap)`: stable at every step tried up to x.\n",
         super::stability::MIN_STEPS,
@@ -517,12 +529,13 @@ fn markdown(r: &Report) -> String {
     let _ = writeln!(m, "![critical dt against k](stability-k.svg)\n");
     let _ = writeln!(
         m,
-        "| case | k (N/m) | integrator | measured dt_crit (s) | theory (s) | measured / theory | Gershgorin (s) | Gershgorin / theory | omega_max exact (rad/s) | horizon (s) |"
+        "| case | k (N/m) | integrator | measured dt_crit (s) | theory (s) | measured / theory | estimate (s) | estimate / theory | Gershgorin (s) | Gershgorin / theory | omega_max exact (rad/s) | horizon (s) |"
     );
-    let _ = writeln!(m, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(m, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     for row in &r.stability {
         let exact = row.theory.exact(row.integrator);
         let gersh = row.theory.gershgorin(row.integrator);
+        let est = row.theory.estimate(row.integrator);
         let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
             (Some(a), Some(b)) if a.is_finite() && b.is_finite() && b > 0.0 => {
                 format!("{:.3}", a / b)
@@ -531,13 +544,15 @@ fn markdown(r: &Report) -> String {
         };
         let _ = writeln!(
             m,
-            "| {} | {:.0e} | {} | {} | {} | {} | {} | {} | {:.4e} | {:.3e} |",
+            "| {} | {:.0e} | {} | {} | {} | {} | {} | {} | {} | {} | {:.4e} | {:.3e} |",
             row.case,
             row.stiffness,
             row.integrator,
             row.measured.text(),
             limit_text(exact),
             ratio(row.measured.value(), exact),
+            limit_text(est),
+            ratio(est, exact),
             limit_text(gersh),
             ratio(gersh, exact),
             row.theory.omega_exact,
@@ -584,7 +599,7 @@ fn markdown(r: &Report) -> String {
         m,
         "Each on the built-in `cloth` scene (32x32, symplectic Euler, dt = 1/960 s unless set), run \
          as given and again with safe stepping (each step of dt split into substeps below {} of the \
-         Gershgorin critical step). Reproduce one with `cloth run --scene cloth <overrides> --duration <t>` \
+         estimated critical step). Reproduce one with `cloth run --scene cloth <overrides> --duration <t>` \
          (add `--safe` for the second column).\n",
         crate::sim::safe::DEFAULT_SAFETY
     );
@@ -693,18 +708,18 @@ fn conclusions(r: &Report) -> Vec<String> {
             ratios.len()
         ));
     }
-    let gersh: Vec<f64> = (r.stability.iter())
-        .filter(|row| row.integrator == Integrator::SymplecticEuler)
-        .map(|row| row.theory.omega_exact / row.theory.omega_gershgorin)
-        .collect();
-    if !gersh.is_empty() {
-        let (lo, hi) = gersh
-            .iter()
-            .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+    let span = |f: &dyn Fn(&Row) -> f64| {
+        (r.stability.iter())
+            .filter(|row| row.integrator == Integrator::SymplecticEuler)
+            .map(f)
+            .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(v), b.max(v)))
+    };
+    let (lo, hi) = span(&|row| row.theory.omega_exact / row.theory.omega_estimate);
+    let (glo, ghi) = span(&|row| row.theory.omega_exact / row.theory.omega_gershgorin);
+    if lo.is_finite() {
         c.push(format!(
-            "The Gershgorin estimate the app uses is conservative in every case: its critical step is \
-             {lo:.2} to {hi:.2} times the one from the exact highest frequency (undamped), so a step \
-             it calls safe is."
+            "The estimate the app uses gives a critical step {lo:.3} to {hi:.3} times the one from the \
+             exact highest frequency (undamped); Gershgorin's bound, without positions, {glo:.2} to {ghi:.2}."
         ));
     }
     for i in [Integrator::ExplicitEuler, Integrator::Rk2] {
@@ -719,7 +734,9 @@ fn conclusions(r: &Report) -> Vec<String> {
             .count();
         let finite: Vec<String> = (rows.iter())
             .filter_map(|row| {
-                let v = row.measured.value()?;
+                let Measured::Transient { lo: v, .. } = row.measured else {
+                    return None;
+                };
                 Some(format!(
                     "{} k={:.0e}: {:.3}× 2/omega",
                     row.case,

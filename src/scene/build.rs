@@ -122,16 +122,33 @@ fn layout_mesh(spec: &SceneSpec, o: &str) -> Result<Option<Arc<Mesh>>, SceneErro
             "does not apply to a mesh layout: only the spring layout starts stretched",
         ),
     ];
-    if let Some((key, _, why)) = not_here.iter().find(|(_, given, _)| *given) {
-        return Err(invalid(o, key, why.to_string()));
-    }
+    // The missing file first: a scene switched to the mesh layout (`--set
+    // layout=mesh`) has the keys of its old layout too, but the file is what it
+    // needs.
+    let given: Vec<&str> = (not_here.iter())
+        .filter(|(_, given, _)| *given)
+        .map(|(key, _, _)| *key)
+        .collect();
     let Some(path) = &spec.mesh else {
+        let also = if given.is_empty() {
+            String::new()
+        } else {
+            format!(
+                "; the scene's {} then go, as a mesh gives its own shape",
+                given.join(", ")
+            )
+        };
         return Err(invalid(
             o,
             "mesh",
-            "is missing: a mesh layout needs the OBJ file of its cloth, `mesh = \"path/to/file.obj\"`".to_string(),
+            format!(
+                "is missing: a mesh layout needs the OBJ file of its cloth, `mesh = \"path/to/file.obj\"`{also}"
+            ),
         ));
     };
+    if let Some((key, _, why)) = not_here.iter().find(|(_, given, _)| *given) {
+        return Err(invalid(o, key, why.to_string()));
+    }
     let mesh = mesh::load(path)
         .map_err(|why| invalid(o, "mesh", format!("file {}{why}", mesh::shown_path(path))))?;
     Ok(Some(mesh))
@@ -447,9 +464,30 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         (Layout::Mesh, None) => [0, 1, 1],
     };
     let given = [spec.width, spec.height, spec.depth];
-    for ((side, range), value) in sides.iter_mut().zip(side_ranges(layout)).zip(given) {
-        if let Some(range) = range {
-            *side = range.check(o, value.unwrap_or(*side))?;
+    let names = ["width", "height", "depth"];
+    for (((side, range), value), name) in
+        (sides.iter_mut().zip(side_ranges(layout)).zip(given)).zip(names)
+    {
+        match range {
+            Some(range) => *side = range.check(o, value.unwrap_or(*side))?,
+            // A side the layout does not have is refused, not ignored (the mesh
+            // layout says why above).
+            None if value.is_some() && layout != Layout::Mesh => {
+                let has: Vec<&str> = (side_ranges(layout).iter().flatten())
+                    .map(|r| r.field)
+                    .collect();
+                let has = if has.is_empty() {
+                    "its particles are fixed by the layout".to_string()
+                } else {
+                    format!("it has only {}", has.join(" and "))
+                };
+                return Err(invalid(
+                    o,
+                    name,
+                    format!("does not apply to a {} layout: {has}", layout.name()),
+                ));
+            }
+            None => {}
         }
     }
     let [width, height, depth] = sides;
@@ -570,6 +608,40 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
             )?,
         }),
     };
+    // The keys of a part that is off would be ignored: refused instead, saying
+    // how to turn the part on.
+    let off_parts = [
+        (
+            spec.ground_height.is_none(),
+            "ground_height",
+            [
+                ("ground_stiffness", spec.ground_stiffness.is_some()),
+                ("ground_friction", spec.ground_friction.is_some()),
+                ("ground_damping", spec.ground_damping.is_some()),
+            ],
+        ),
+        (
+            spec.sphere_center.is_none(),
+            "sphere_center",
+            [
+                ("sphere_radius", spec.sphere_radius.is_some()),
+                ("", false),
+                ("", false),
+            ],
+        ),
+    ];
+    for (off, switch, keys) in off_parts {
+        if let Some((key, _)) = keys.iter().find(|(_, given)| off && *given) {
+            return Err(invalid(
+                o,
+                key,
+                format!(
+                    "applies to a part the scene does not have: set `{switch}` to add it, or \
+                     leave `{key}` out"
+                ),
+            ));
+        }
+    }
     let sphere = match spec.sphere_center {
         None => None,
         Some(c) => Some(Sphere {
@@ -703,12 +775,25 @@ fn anchor(
         ),
         _ => DVec3::ZERO,
     };
-    vector(
-        o,
-        "origin",
-        spec.origin.map_or(default_origin, |v| v.0),
-        1e6,
-    )
+    match spec.origin {
+        Some(v) => vector(o, "origin", v.0, 1e6),
+        // No origin was given: the default anchor follows from the grid's size and
+        // spacing, so an anchor out of range is their doing, and they are named.
+        None => vector(o, "origin", default_origin, 1e6).map_err(|_| SceneError::Invalid {
+            origin: o.to_string(),
+            field: "rest_length".to_string(),
+            message: format!(
+                "= {} m with width = {width} and height = {height} makes a cloth {} m across, \
+                 whose default anchor (origin, not set) = ({}, {}, {}) is past 1e6 m: give a \
+                 smaller rest_length, width or height, or set origin",
+                crate::limits::number(rest_length),
+                crate::limits::number(f64::from(width.max(height).saturating_sub(1)) * rest_length),
+                crate::limits::number(default_origin.x),
+                crate::limits::number(default_origin.y),
+                crate::limits::number(default_origin.z),
+            ),
+        }),
+    }
 }
 
 /// The rotation of `degrees` about z, then x, then y.

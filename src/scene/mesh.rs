@@ -178,6 +178,9 @@ impl Scan {
 /// Scans the `v`, `f` and `l` lines as `tobj` reads them (one line each, words
 /// split on white space, negative indices counting back from the vertices so
 /// far), checking counts and vertex references.
+/// Largest texture coordinate a mesh may give (a texture repeated a million times).
+pub const MAX_TEXCOORD: f64 = 1e6;
+
 fn scan(text: &str) -> Result<Scan, String> {
     let mut scan = Scan {
         face_starts: vec![0],
@@ -186,11 +189,40 @@ fn scan(text: &str) -> Result<Scan, String> {
     // Vertex references as written (1-based or negative), checked once all
     // vertices are counted (a face may name a vertex given after it).
     let mut triangles = 0usize;
+    let (mut texcoords, mut normals) = (0usize, 0usize);
     for (i, line) in text.lines().enumerate() {
         let number = u32::try_from(i + 1).unwrap_or(u32::MAX);
         let mut words = line.split_whitespace();
         let keyword = words.next();
         match keyword {
+            // Texture coordinates and normals are checked as vertices are: a
+            // number that is not finite (`vt nan nan`) would reach the cloth's
+            // texture and `--obj`'s output.
+            Some(kind @ ("vt" | "vn")) => {
+                let (count, what, limit) = if kind == "vt" {
+                    texcoords += 1;
+                    (texcoords, "texture coordinate", MAX_TEXCOORD)
+                } else {
+                    normals += 1;
+                    (normals, "normal", f64::MAX)
+                };
+                let bad = words
+                    .filter_map(|w| w.parse::<f64>().ok())
+                    .any(|x| !(x.is_finite() && x.abs() <= limit));
+                if bad {
+                    let range = if kind == "vt" {
+                        format!(" of at most {MAX_TEXCOORD:e}")
+                    } else {
+                        String::new()
+                    };
+                    return Err(at(
+                        number,
+                        format!(
+                            "{what} {count} (`{kind}`) has a value that is not a finite number{range}"
+                        ),
+                    ));
+                }
+            }
             Some("v") => {
                 if scan.vertex_lines.len() == MESH_MAX_VERTICES {
                     return Err(format!(

@@ -19,6 +19,7 @@ use build::{
     PARTICLE_MASS, REST_LENGTH, STIFFNESS, STRETCH_LIMIT, SUBSTEPS, TEAR_STRAIN, THICKNESS, WIND,
     side_ranges,
 };
+pub(crate) use edit::EDIT_ORIGIN;
 pub use edit::Edit;
 pub use values::{PinPreset, Pins, Vector};
 
@@ -254,6 +255,15 @@ const OFF_WHEN_ABSENT: &[&str] = &[
     "max_speed",
 ];
 
+/// The keys that belong to a part that `--set KEY=none` turns off, and go with it.
+const PART_KEYS: &[(&str, &[&str])] = &[
+    (
+        "ground_height",
+        &["ground_stiffness", "ground_friction", "ground_damping"],
+    ),
+    ("sphere_center", &["sphere_radius"]),
+];
+
 /// A scene error: always names where the input came from, and the field when there is one.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -476,12 +486,38 @@ pub fn builtin_scenes() -> &'static [BuiltinScene] {
 }
 
 /// A scene ready to build: the spec and where it came from (for error messages).
-#[derive(Clone, Debug, PartialEq)]
+/// Two scenes are equal when their specs and origins are (where each value was
+/// written is for messages only).
+#[derive(Clone, Debug)]
 pub struct Scene {
     /// The spec, with overrides applied.
     pub spec: SceneSpec,
     /// "built-in scene `cloth`" or "scene file path/to.toml".
     pub origin: String,
+    /// The line of each top-level `key = value` of the text it was parsed from,
+    /// for messages that name where a value came from.
+    lines: Vec<(String, u32)>,
+    /// The keys given since by `--set` ([`Self::set`]), which replace the text's.
+    overridden: Vec<String>,
+}
+
+impl PartialEq for Scene {
+    fn eq(&self, other: &Self) -> bool {
+        self.spec == other.spec && self.origin == other.origin
+    }
+}
+
+/// Each top-level `key = value` line of a scene text, with its number.
+fn key_lines(text: &str) -> Vec<(String, u32)> {
+    (text.lines().enumerate())
+        .filter_map(|(i, line)| {
+            let (key, _) = line.split_once('=')?;
+            let key = key.trim();
+            let plain =
+                !key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+            plain.then(|| (key.to_string(), u32::try_from(i + 1).unwrap_or(u32::MAX)))
+        })
+        .collect()
 }
 
 impl Scene {
@@ -505,6 +541,8 @@ impl Scene {
         let scene = Self {
             spec,
             origin: origin.to_string(),
+            lines: key_lines(text),
+            overridden: Vec::new(),
         };
         scene.resolve()?;
         Ok(scene)
@@ -578,6 +616,14 @@ impl Scene {
         }
         if value.trim().eq_ignore_ascii_case("none") && OFF_WHEN_ABSENT.contains(&key) {
             table.remove(key);
+            // A part turned off takes its own keys with it.
+            for (part, keys) in PART_KEYS {
+                if key == *part {
+                    for k in *keys {
+                        table.remove(*k);
+                    }
+                }
+            }
         } else {
             table.insert(key.to_string(), parsed);
         }
@@ -595,8 +641,27 @@ impl Scene {
         let candidate = Self {
             spec,
             origin: self.origin.clone(),
+            lines: self.lines.clone(),
+            overridden: self.overridden.clone(),
         };
         candidate.resolve().map_err(|e| match e {
+            // Another key's value, valid before, is out of range with this one:
+            // both are named, the other with where it came from.
+            SceneError::Invalid { field, message, .. } if field != key => {
+                let line = self.lines.iter().find(|(k, _)| *k == field);
+                let origin = if self.overridden.contains(&field) {
+                    format!("{origin}: with it, --set {field} given before")
+                } else if let Some((_, line)) = line {
+                    format!("{origin}: with it, {} line {line}", self.origin)
+                } else {
+                    format!("{origin}: with it")
+                };
+                SceneError::Invalid {
+                    origin,
+                    field,
+                    message,
+                }
+            }
             SceneError::Invalid { field, message, .. } => SceneError::Invalid {
                 origin,
                 field,
@@ -605,6 +670,9 @@ impl Scene {
             other => other,
         })?;
         *self = candidate;
+        if !self.overridden.iter().any(|k| k == key) {
+            self.overridden.push(key.to_string());
+        }
         Ok(())
     }
 
@@ -700,6 +768,20 @@ impl Scene {
         Ok(())
     }
 
+    /// The files this scene, loaded from `name_or_path` ([`Self::load`]), reads:
+    /// its scene file (not a built-in's) and its mesh, for the outputs of the
+    /// same command to keep off ([`crate::limits::Inputs`]).
+    pub fn inputs(&self, name_or_path: &str) -> crate::limits::Inputs {
+        let mut inputs = crate::limits::Inputs::default();
+        if !BUILTINS.iter().any(|b| b.name == name_or_path) {
+            inputs.add("the scene file being run", Path::new(name_or_path));
+        }
+        if let Some(mesh) = &self.spec.mesh {
+            inputs.add("the scene's mesh", Path::new(mesh));
+        }
+        inputs
+    }
+
     /// Every parameter in effect, with defaults filled in and ranges checked.
     pub fn resolve(&self) -> Result<build::Resolved, SceneError> {
         build::resolve(&self.spec, &self.origin)
@@ -707,8 +789,58 @@ impl Scene {
 
     /// Builds the system.
     pub fn build(&self) -> Result<System, SceneError> {
-        Ok(self.resolve()?.build())
+        let system = self.resolve()?.build();
+        let p = system.params();
+        check_self_collision(&self.origin, &system, p.self_collision, p.thickness)?;
+        Ok(system)
     }
+}
+
+/// Refuses self-collision at a thickness `h_c` (m) that would list more candidate
+/// pairs at `system`'s positions than the pass has room for
+/// ([`crate::sim::self_collision::MAX_PAIRS_PER_PARTICLE`] a particle): a
+/// thickness many times the particles' spacing, at which every particle keeps
+/// apart from many it is not joined to and the pairs grow as the square of the
+/// particles. `origin` says where the setting came from; `on`: whether
+/// self-collision is on.
+pub fn check_self_collision(
+    origin: &str,
+    system: &System,
+    on: bool,
+    h_c: f64,
+) -> Result<(), SceneError> {
+    use crate::sim::self_collision::{MAX_PAIRS_PER_PARTICLE, SelfCollision};
+    if !(on && h_c > 0.0) {
+        return Ok(());
+    }
+    let model = system.model();
+    if !SelfCollision::would_overfill(system.positions(), h_c, |i, j| model.joins(i, j)) {
+        return Ok(());
+    }
+    let n = system.particle_count();
+    let spacing = (system.springs().iter().map(|s| s.rest))
+        .chain(system.bars().iter().map(|b| b.length))
+        .filter(|l| *l > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    let pairs = n as f64 * (n as f64 - 1.0) / 2.0;
+    let gb = pairs * 16.0 / 1e9;
+    let spacing = if spacing.is_finite() {
+        format!(" (the nearest {} m apart)", crate::limits::number(spacing))
+    } else {
+        String::new()
+    };
+    Err(SceneError::Invalid {
+        origin: origin.to_string(),
+        field: "thickness".to_string(),
+        message: format!(
+            "of {} m with self_collision keeps each of the {n} particles{spacing} away from \
+             more than {MAX_PAIRS_PER_PARTICLE} others at the start: the pairs to check grow as \
+             the square of the particles (up to {pairs:.1e} of them, {gb:.1} GB), past the \
+             memory set aside for them; keep the thickness to about a spacing, or set \
+             self_collision = false",
+            crate::limits::number(h_c),
+        ),
+    })
 }
 
 pub use build::Resolved;

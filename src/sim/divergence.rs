@@ -4,6 +4,7 @@
 use glam::DVec3;
 
 use super::State;
+use super::limiters::Limiter;
 
 /// Why a simulation was stopped.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -42,6 +43,46 @@ pub enum Divergence {
         /// How far it may rise, in J.
         allowed: f64,
     },
+    /// The step is past the stability limit and a limiter holds back the blow-up
+    /// ([`super::limiters`]).
+    #[error(
+        "{name} held back a blow-up at t = {time:.4} s (step {step}): the step is past the stability limit ({past}) and the limiter holds {held}",
+        name = limiter_name(*limiter),
+        past = past_limit(*margin),
+        held = limiter.holding(*count, *of)
+    )]
+    HeldBack {
+        /// Simulated time in s.
+        time: f64,
+        /// Step count.
+        step: u64,
+        /// The limiter holding the largest share.
+        limiter: Limiter,
+        /// What it holds: particles or springs.
+        count: usize,
+        /// Of how many.
+        of: usize,
+        /// `dt / dt_crit` (infinite: no step is stable).
+        margin: f64,
+    },
+}
+
+/// "tearing", "the speed limit", "the stretch limit".
+fn limiter_name(limiter: Limiter) -> &'static str {
+    match limiter {
+        Limiter::Tearing => "tearing",
+        Limiter::SpeedLimit => "the speed limit",
+        Limiter::StretchLimit => "the stretch limit",
+    }
+}
+
+/// "dt / dt_crit = 3.125", or that no step is stable.
+fn past_limit(margin: f64) -> String {
+    if margin.is_finite() {
+        format!("dt / dt_crit = {margin:.3}")
+    } else {
+        "no step of this integrator is stable here".to_string()
+    }
 }
 
 impl Divergence {
@@ -50,7 +91,8 @@ impl Divergence {
         match *self {
             Self::NonFinite { step, .. }
             | Self::Runaway { step, .. }
-            | Self::EnergyGrowth { step, .. } => step,
+            | Self::EnergyGrowth { step, .. }
+            | Self::HeldBack { step, .. } => step,
         }
     }
 
@@ -59,7 +101,8 @@ impl Divergence {
         match *self {
             Self::NonFinite { time, .. }
             | Self::Runaway { time, .. }
-            | Self::EnergyGrowth { time, .. } => time,
+            | Self::EnergyGrowth { time, .. }
+            | Self::HeldBack { time, .. } => time,
         }
     }
 }

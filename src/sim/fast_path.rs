@@ -568,7 +568,7 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        self.run_choosing(n, Self::lattice_spec, |system, spec, n| {
+        self.run_choosing(n, settle, Self::lattice_spec, |system, spec, n| {
             system.run_lattice_once(spec, n, settle)
         })
     }
@@ -582,6 +582,7 @@ impl System {
     fn run_choosing<S: SpringNoise>(
         &mut self,
         n: u64,
+        settle: bool,
         spec_of: impl Fn(&Self) -> Option<S>,
         mut run: impl FnMut(&mut Self, S, u64) -> Result<u64, Divergence>,
     ) -> Option<Result<(), Divergence>> {
@@ -594,10 +595,14 @@ impl System {
             match run(self, spec, left) {
                 Ok(done) if done < left => {
                     left -= done;
-                    // Only the precision the rule weighs has changed, never whether
-                    // the kernel models the system: a `None` here (`?`) would have
-                    // the caller run all `n` steps again on another engine.
-                    spec = spec_of(self).expect("the same system still has a spec");
+                    // The precision the rule weighs has changed, or tearing broke
+                    // what the kernel models (a grid that lost springs): the rest
+                    // of the steps go to the engine that models the system now
+                    // (returning `None` would have the caller run all `n` again).
+                    match spec_of(self) {
+                        Some(next) => spec = next,
+                        None => return Some(self.run_on_an_engine(left, settle)),
+                    }
                 }
                 result => return Some(result.map(|_| ())),
             }
@@ -850,7 +855,7 @@ impl System {
         if !self.engines.allowed {
             return None;
         }
-        self.run_choosing(n, Self::grid_spec, |system, spec, n| {
+        self.run_choosing(n, settle, Self::grid_spec, |system, spec, n| {
             system.run_grid_once(spec, n, settle)
         })
     }

@@ -12,9 +12,10 @@
 //!   particle and for a block of them;
 //! - [`self_collision`]: particles of a cloth kept a thickness apart, with friction;
 //! - [`tearing`]: springs that tear past a strain or are cut, and leave the model;
-//! - [`divergence`], [`energy_budget`], [`stability`], [`safe`]: when a run has
-//!   blown up (runaways, and energy past its budget), the stable step, and safe
-//!   stepping;
+//! - [`divergence`], [`energy_budget`], [`limiters`], [`stability`],
+//!   [`spectrum`], [`safe`]: when a run has blown up (runaways, energy past its
+//!   budget, a blow-up a limiter holds back), the stable step from the spring
+//!   network's highest frequency, and safe stepping;
 //! - [`springs`], [`wind`], [`clock`]: springs and their adjacency, gusts, the
 //!   fixed-step clock.
 //!
@@ -33,10 +34,12 @@ pub mod implicit;
 pub mod integrators;
 pub(crate) mod lanes;
 pub(crate) mod laws;
+pub mod limiters;
 pub mod mesh_kernel;
 pub mod model;
 pub mod safe;
 pub mod self_collision;
+pub mod spectrum;
 pub mod springs;
 pub mod stability;
 pub mod state;

@@ -100,6 +100,17 @@ const BLOCK: usize = 1024;
 /// rebuild on.
 const PAIRS_PER_PARTICLE: usize = 8;
 
+/// Most candidate pairs a block's search lists, per particle of the block: the
+/// memory bound of the list, 1 KiB a particle over its two copies (64 MiB for a
+/// 256 x 256 cloth). Particles kept `h_c` apart fit about 20 to a layer within
+/// the reach of `2.5 h_c` (a flat cloth at one spacing), so a pile of layers
+/// stays under it; a thickness many times the spacing does not (at 256 x 256 and
+/// `h_c` = 10 m every pair is within reach: 2·10⁹ pairs, 24 GB, where the kernel
+/// killed the run). Past it a block's search stops, its particles' remaining
+/// pairs are left out, and [`SelfCollision::overfull`] says so; a scene whose
+/// start overfills it is refused ([`SelfCollision::would_overfill`]).
+pub const MAX_PAIRS_PER_PARTICLE: usize = 64;
+
 /// The rows of cells ahead of a cell along the second and third axes, `(db, dc)`:
 /// with the cell `a + 1` of its own row, half of the 26 neighbours, one of each
 /// opposite pair, so that a pair of particles in neighbouring cells is found from
@@ -149,6 +160,8 @@ pub struct SelfCollision {
     contacts: usize,
     /// Rebuilds so far.
     rebuilds: u64,
+    /// Per block: whether its search stopped at [`MAX_PAIRS_PER_PARTICLE`].
+    overflowed: Vec<bool>,
 }
 
 impl SelfCollision {
@@ -166,6 +179,34 @@ impl SelfCollision {
     /// last rebuild).
     pub fn candidates(&self) -> usize {
         self.found.iter().map(Vec::len).sum()
+    }
+
+    /// Whether the last rebuild found more candidate pairs than the list has room
+    /// for ([`MAX_PAIRS_PER_PARTICLE`]) and left some out: the thickness is too
+    /// large for the particles' spacing.
+    pub fn overfull(&self) -> bool {
+        self.overflowed.iter().any(|&o| o)
+    }
+
+    /// Whether particles at `x` kept `h_c` apart (those `joined` excepted) would
+    /// list more candidate pairs than [`MAX_PAIRS_PER_PARTICLE`] allows: one
+    /// rebuild, within the memory bound and a time in proportion to it.
+    pub fn would_overfill(
+        x: &[DVec3],
+        h_c: f64,
+        joined: impl Fn(usize, usize) -> bool + Sync,
+    ) -> bool {
+        if h_c <= 0.0 || x.len() < 2 {
+            return false;
+        }
+        let mut probe = Self::default();
+        probe.rebuild(
+            x,
+            h_c * (1.0 + 2.0 * MARGIN),
+            joined,
+            x.len() >= PARALLEL_MIN_PARTICLES,
+        );
+        probe.overfull()
     }
 
     /// The particles the last pass moved (a superset: each once, in the order it
@@ -397,14 +438,20 @@ impl SelfCollision {
             let run = |(a, b): (usize, usize)| &sorted[starts[a] as usize..starts[b] as usize];
             [run(first), run(second)]
         };
-        let search = |(k, out): (usize, &mut Vec<[u32; 2]>)| {
+        let search = |(k, (out, overflowed)): (usize, (&mut Vec<[u32; 2]>, &mut bool))| {
             out.clear();
             let range = k * BLOCK..((k + 1) * BLOCK).min(n);
             // Room for 8 pairs a particle from the first rebuild on (a flat cloth
             // has none, a pile of layers a few): later rebuilds allocate only past
             // that.
             out.reserve(PAIRS_PER_PARTICLE * range.len());
+            let room = MAX_PAIRS_PER_PARTICLE * range.len();
+            *overflowed = false;
             for i in range {
+                if out.len() >= room {
+                    *overflowed = true;
+                    break;
+                }
                 let ([a, b, c], own) = cells[i];
                 let (p, me) = (x[i], i as u32);
                 let mut keep = |e: &Entry| {
@@ -445,13 +492,13 @@ impl SelfCollision {
             }
         };
         self.found_by_searcher.resize_with(blocks, Vec::new);
+        self.overflowed.resize(blocks, false);
         if parallel {
-            (self.found_by_searcher.par_iter_mut().enumerate()).for_each(search);
+            let lists = self.found_by_searcher.par_iter_mut();
+            (lists.zip(self.overflowed.par_iter_mut()).enumerate()).for_each(search);
         } else {
-            self.found_by_searcher
-                .iter_mut()
-                .enumerate()
-                .for_each(search);
+            let lists = self.found_by_searcher.iter_mut();
+            (lists.zip(self.overflowed.iter_mut()).enumerate()).for_each(search);
         }
         // Each pair to the block of its first particle, then each block's in order,
         // once (a pair is found twice where the hash puts two cells that a

@@ -19,13 +19,17 @@
 
 use glam::DVec3;
 
-use super::{Integrator, Model};
+use super::{Integrator, Model, spectrum};
 
 /// Stability numbers for a model and its step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stability {
-    /// Upper bound on the highest angular frequency, rad/s (0 if nothing oscillates).
+    /// The highest angular frequency, rad/s (0 if nothing oscillates): the
+    /// spectrum's at the positions where they were given ([`estimate_at`]), within
+    /// about 1% below the true one; the Gershgorin bound otherwise.
     pub omega_max: f64,
+    /// Gershgorin's upper bound on it, rad/s ([`omega_max_bound`]).
+    pub omega_bound: f64,
     /// Damping ratio of the highest mode.
     pub zeta: f64,
     /// Largest stable step for the integrator in s; `None` for "no stable step"
@@ -37,16 +41,19 @@ pub struct Stability {
 }
 
 /// What the estimate reads of the springs, in one pass over them: each particle's
-/// sum of spring stiffness (N/m), and the smallest `b/k` (s) over the springs; no
-/// springs where they are not a force (XPBD's are constraints the step does not
-/// integrate).
+/// sum of spring stiffness (N/m), the part of it whose other end is free (a
+/// pinned end is no degree of freedom, so it adds no off-diagonal term), and the
+/// smallest `b/k` (s) over the springs; no springs where they are not a force
+/// (XPBD's are constraints the step does not integrate).
 struct SpringSums {
     stiffness: Vec<f64>,
+    to_free: Vec<f64>,
     damping_per_stiffness: f64,
 }
 
 fn spring_sums(model: &Model) -> SpringSums {
     let mut stiffness = vec![0.0; model.mass.len()];
+    let mut to_free = vec![0.0; model.mass.len()];
     let mut damping_per_stiffness = f64::INFINITY;
     let springs = if model.terms.springs {
         &model.springs[..]
@@ -54,8 +61,15 @@ fn spring_sums(model: &Model) -> SpringSums {
         &[]
     };
     for s in springs {
-        stiffness[s.a as usize] += s.stiffness;
-        stiffness[s.b as usize] += s.stiffness;
+        let (a, b) = (s.a as usize, s.b as usize);
+        stiffness[a] += s.stiffness;
+        stiffness[b] += s.stiffness;
+        if model.inv_mass[b] > 0.0 {
+            to_free[a] += s.stiffness;
+        }
+        if model.inv_mass[a] > 0.0 {
+            to_free[b] += s.stiffness;
+        }
         // `b / k < r` as `b < r k` (k > 0): a division only for a new smallest.
         if s.stiffness > 0.0 && s.damping < damping_per_stiffness * s.stiffness {
             damping_per_stiffness = damping_per_stiffness.min(s.damping / s.stiffness);
@@ -63,12 +77,17 @@ fn spring_sums(model: &Model) -> SpringSums {
     }
     SpringSums {
         stiffness,
+        to_free,
         damping_per_stiffness,
     }
 }
 
 /// Gershgorin bound on the highest angular frequency (rad/s) of the model's springs
-/// and ground contact, over free particles.
+/// and ground contact, over free particles: `sqrt(max_i (sum_j k_j + sum_{j free}
+/// k_j + k_c) / m_i)`, the largest row sum of `M^-1 K` over the free degrees of
+/// freedom (one spring to a pinned end: `sqrt(k / m)`, exact). It needs no
+/// positions, so it is the estimate where there are none; [`estimate_at`] refines
+/// it with the network's own spectrum.
 pub fn omega_max_bound(model: &Model) -> f64 {
     omega_max_of(model, &spring_sums(model))
 }
@@ -76,9 +95,9 @@ pub fn omega_max_bound(model: &Model) -> f64 {
 fn omega_max_of(model: &Model, sums: &SpringSums) -> f64 {
     let ground = model.params.ground.map_or(0.0, |g| g.stiffness);
     let mut worst: f64 = 0.0;
-    for (i, &k) in sums.stiffness.iter().enumerate() {
+    for (i, (&k, &to_free)) in sums.stiffness.iter().zip(&sums.to_free).enumerate() {
         if model.inv_mass[i] > 0.0 {
-            worst = worst.max((2.0 * k + ground) * model.inv_mass[i]);
+            worst = worst.max((k + to_free + ground) * model.inv_mass[i]);
         }
     }
     worst.sqrt()
@@ -112,19 +131,40 @@ fn damping_ratio_of(model: &Model, sums: &SpringSums, omega: f64) -> f64 {
     spring_ratio * omega / 2.0 + air
 }
 
-/// Estimate for `model` at its step `dt` with its integrator.
+/// Estimate for `model` at its step `dt` with its integrator, on the Gershgorin
+/// bound alone ([`omega_max_bound`]): what can be said without positions. A
+/// system's own estimate, [`super::System::stability`], is [`estimate_at`] its
+/// positions.
 pub fn estimate(model: &Model) -> Stability {
     let areas = model.terms.aero.then(|| drag_areas(model));
-    estimate_with(model, areas.as_deref())
+    estimate_with(model, None, areas.as_deref())
 }
 
-/// [`estimate`] given each particle's drag area at rest ([`drag_areas`]; `None`
-/// where the model has no drag). Only the springs' rest lengths and the triangles
-/// decide those areas, so a running system keeps them across edits of its other
-/// coefficients: finding them is most of the estimate's work on a grid.
-pub(crate) fn estimate_with(model: &Model, drag_areas: Option<&[f64]>) -> Stability {
+/// Estimate for `model` linearised at `positions`: the highest frequency of its
+/// spring network found by Lanczos iteration ([`super::spectrum`]), never above
+/// the Gershgorin bound.
+pub fn estimate_at(model: &Model, positions: &[DVec3]) -> Stability {
+    let areas = model.terms.aero.then(|| drag_areas(model));
+    let spectrum = spectrum::Cache::default();
+    estimate_with(model, Some((positions, &spectrum)), areas.as_deref())
+}
+
+/// [`estimate`] (or [`estimate_at`] `positions`) given each particle's drag area
+/// at rest ([`drag_areas`]; `None` where the model has no drag). Only the springs'
+/// rest lengths and the triangles decide those areas, so a running system keeps
+/// them across edits of its other coefficients.
+/// `positions` come with the [`spectrum::Cache`] of the system they are of.
+pub(crate) fn estimate_with(
+    model: &Model,
+    positions: Option<(&[DVec3], &spectrum::Cache)>,
+    drag_areas: Option<&[f64]>,
+) -> Stability {
     let sums = spring_sums(model);
-    let omega_max = omega_max_of(model, &sums);
+    let omega_bound = omega_max_of(model, &sums);
+    let omega_max = match positions {
+        Some((x, cache)) if omega_bound > 0.0 => cache.omega_max(model, x).min(omega_bound),
+        _ => omega_bound,
+    };
     let zeta = damping_ratio_of(model, &sums, omega_max);
     let stepper = stepper(model.params.integrator);
     let decay = decay_limit(model, stepper, drag_areas.filter(|_| model.terms.aero));
@@ -136,6 +176,7 @@ pub(crate) fn estimate_with(model: &Model, drag_areas: Option<&[f64]>) -> Stabil
     };
     Stability {
         omega_max,
+        omega_bound,
         zeta,
         dt_critical,
         margin,

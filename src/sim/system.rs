@@ -62,6 +62,8 @@ pub struct System {
     /// rest lengths or the springs change: most of the estimate's work on a grid,
     /// kept across edits of the stiffness, damping, mass or wind.
     rest_drag_areas: OnceLock<Vec<f64>>,
+    /// The spectrum behind [`Self::stability`], scaled on a stiffness or mass edit.
+    spectrum: super::spectrum::Cache,
 }
 
 impl System {
@@ -131,6 +133,7 @@ impl System {
             checked_energy: None,
             stability: OnceLock::new(),
             rest_drag_areas: OnceLock::new(),
+            spectrum: Default::default(),
         };
         system.engines.stencil_springs = fast_path::StencilSprings::of(&system.model);
         system.prepare_integrator();
@@ -457,7 +460,8 @@ impl System {
                     .get_or_init(|| stability::drag_areas(&self.model))
                     .as_slice()
             });
-            stability::estimate_with(&self.model, areas)
+            let at = (&self.state.positions[..], &self.spectrum);
+            stability::estimate_with(&self.model, Some(at), areas)
         })
     }
 
@@ -544,7 +548,7 @@ impl System {
     }
 
     /// Runs `n` steps on the fastest engine that models the system.
-    fn run_on_an_engine(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
+    pub(super) fn run_on_an_engine(&mut self, n: u64, settle: bool) -> Result<(), Divergence> {
         self.budget();
         if let Some(result) = self.run_on_grid(n, settle) {
             return result;
@@ -593,7 +597,9 @@ impl System {
         self.checked_energy = None;
         let energy = self.energy();
         self.checked_energy = Some((self.state.steps, energy));
-        (self.budget()).check(energy, self.state.time, self.state.steps)
+        let budget = self.budget();
+        budget.check(energy, self.state.time, self.state.steps)?;
+        super::limiters::check(&self.model, &self.state, &budget)
     }
 
     /// The energy budget in effect; `None` after an edit until the next step sets
