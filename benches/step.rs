@@ -2,7 +2,7 @@
 //! (shared/peers/scene.py): N = 32 ... 512, with and without wind, 1 and 2 threads.
 //! One iteration is one 60 Hz frame of 16 steps (dt = 1/960 s); the reported
 //! throughput in elements/s is steps/s. And safe stepping's estimate on a large
-//! cloth.
+//! cloth, and the divergence checks' cost against the steps they watch.
 
 // criterion_group! and criterion_main! generate undocumented items.
 #![allow(missing_docs)]
@@ -49,5 +49,24 @@ fn safe_substeps(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, grid_step, safe_substeps);
+/// The checks a run makes every `ENERGY_CHECK_STEPS` steps (runaways, the energy
+/// budget, the limiters) against the steps between them, on the bench cloth at
+/// 256 x 256: their share of a step is `check / (ENERGY_CHECK_STEPS * step)`.
+fn checks(c: &mut Criterion) {
+    use cloth_sandbox::sim::energy_budget::ENERGY_CHECK_STEPS;
+    let mut scene = Scene::load("bench").unwrap();
+    scene.set_all(["width=256", "height=256"]).unwrap();
+    let mut system = scene.build().unwrap();
+    system.run(64).unwrap();
+    let mut group = c.benchmark_group("checks_256");
+    group.sample_size(20);
+    group.bench_function("check", |b| b.iter(|| system.check().unwrap()));
+    group.throughput(Throughput::Elements(ENERGY_CHECK_STEPS));
+    group.bench_function("steps_between_checks", |b| {
+        b.iter(|| system.run(ENERGY_CHECK_STEPS).unwrap())
+    });
+    group.finish();
+}
+
+criterion_group!(benches, grid_step, safe_substeps, checks);
 criterion_main!(benches);

@@ -384,11 +384,15 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     // steps sets the energy budget from it and copies it into the engine. (Timed,
     // those two took 5 to 9 ms of the 32³ jelly's run, the time of 20 to 35 of its
     // steps: a short run's rate said more about them than about the steps.)
-    let start_state = system.state().clone();
-    if system.run(args.warmup).is_err() {
-        system.set_state(start_state.clone());
+    // The start state is kept only where it is needed: on a big cloth it is
+    // tens of megabytes.
+    let replay = dump.is_some() || obj.is_some();
+    let start_state = (args.warmup > 0 || replay).then(|| system.state().clone());
+    if let Some(start) = start_state.as_ref().filter(|_| args.warmup > 0) {
+        // A warm-up that diverges has served its purpose: the run starts over.
+        let _ = system.run(args.warmup);
+        system.set_state(start.clone());
     }
-    system.set_state(start_state.clone());
     system.run(0).map_err(|e| e.to_string())?;
     let start_params = *system.params();
     // Safe stepping on a cloth in the air checks its step as the app does.
@@ -398,9 +402,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     let wall = start.elapsed().as_secs_f64();
     let summary = Summary::of(&system, wall, engine);
     let mut dumped = None;
-    if (dump.is_some() || obj.is_some())
-        && let Err(d) = &outcome
-    {
+    if let (Err(d), Some(start_state)) = (&outcome, start_state) {
         // The state at the divergence is not finite (or ran away): the CSV and
         // the OBJ hold the last state before it, which the run then replays to.
         system.set_params(start_params);

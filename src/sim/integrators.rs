@@ -96,6 +96,7 @@ pub fn step(model: &Model, state: &mut State, work: &mut Workspace) {
     let h = model.params.dt;
     let t = state.time;
     let p = &model.params;
+    work.fit_forces(model);
     if p.integrator == Integrator::Xpbd || p.self_collision {
         // XPBD's damping and self-collision's friction measure the step's moves.
         work.step_start.clone_from(&state.positions);

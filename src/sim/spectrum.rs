@@ -22,7 +22,7 @@ use std::sync::Mutex;
 
 use glam::DVec3;
 
-use super::{Model, forces::EPSILON_LENGTH};
+use super::{Model, forces::EPSILON_LENGTH, springs::Spring};
 
 /// Most Lanczos iterations (each one pass over the springs).
 pub const MAX_ITERATIONS: usize = 80;
@@ -45,64 +45,41 @@ pub struct Spectrum {
     pub iterations: usize,
 }
 
-/// One spring's block `K_s = k [(1 - t) u uᵀ + t I]` between particles `a` and
-/// `b` (`t = max(0, 1 - L/l)`, the transverse part), found once per estimate.
-#[derive(Clone, Copy)]
-struct Block {
-    a: u32,
-    b: u32,
-    k: f64,
-    t: f64,
-    u: DVec3,
+/// One spring's block `K_s = k [(1 - t) u uᵀ + t I]` at positions `at`, as
+/// `(t, u)` with `t = max(0, 1 - L/l)` the transverse part (`None` for coincident
+/// ends of a spring with a rest length: no direction, no stiffness). Found again
+/// in every product rather than stored: a stored block per spring was the largest
+/// allocation of a big cloth.
+fn block(s: &Spring, at: &[DVec3]) -> Option<(f64, DVec3)> {
+    let d = at[s.a as usize] - at[s.b as usize];
+    let l = d.length();
+    if l > EPSILON_LENGTH {
+        Some(((1.0 - s.rest / l).max(0.0), d / l))
+    } else {
+        // A zero-rest spring still pulls isotropically with k.
+        (s.rest <= EPSILON_LENGTH).then_some((1.0, DVec3::ZERO))
+    }
 }
 
-/// The blocks of `model`'s springs at positions `at` (none where the springs are
-/// constraints, not forces).
-fn blocks(model: &Model, at: &[DVec3]) -> Vec<Block> {
-    if !model.terms.springs {
-        return Vec::new();
+/// `y = S K S x` for `model`'s springs linearised at `at` (none where the springs
+/// are constraints, not forces), scattered onto both ends, plus the ground's `k_c`
+/// on the vertical of every free particle; `S` is the diagonal `scale`.
+fn apply(model: &Model, at: &[DVec3], scale: &[f64], x: &[DVec3], y: &mut [DVec3], ground: f64) {
+    for (yi, (xi, s)) in y.iter_mut().zip(x.iter().zip(scale)) {
+        *yi = DVec3::new(0.0, ground * s * xi.y, 0.0);
     }
-    (model.springs.iter())
-        .filter_map(|s| {
-            let d = at[s.a as usize] - at[s.b as usize];
-            let l = d.length();
-            let (t, u) = if l <= EPSILON_LENGTH {
-                // Coincident ends: no direction; a zero-rest spring still pulls
-                // isotropically with k.
-                if s.rest > EPSILON_LENGTH {
-                    return None;
-                }
-                (1.0, DVec3::ZERO)
-            } else {
-                ((1.0 - s.rest / l).max(0.0), d / l)
-            };
-            Some(Block {
-                a: s.a,
-                b: s.b,
-                k: s.stiffness,
-                t,
-                u,
-            })
-        })
-        .collect()
-}
-
-/// `y = K x` for the blocks, scattered onto both ends, plus the ground's `k_c`
-/// on the vertical of every free particle.
-fn apply(blocks: &[Block], free: &[f64], x: &[DVec3], y: &mut [DVec3], ground: f64) {
-    for (yi, (xi, w)) in y.iter_mut().zip(x.iter().zip(free)) {
-        *yi = if *w > 0.0 {
-            DVec3::new(0.0, ground * xi.y, 0.0)
-        } else {
-            DVec3::ZERO
-        };
+    if model.terms.springs {
+        for s in &model.springs {
+            let Some((t, u)) = block(s, at) else { continue };
+            let (a, b) = (s.a as usize, s.b as usize);
+            let dx = x[a] * scale[a] - x[b] * scale[b];
+            let f = s.stiffness * (t * dx + ((1.0 - t) * u.dot(dx)) * u);
+            y[a] += f;
+            y[b] -= f;
+        }
     }
-    for s in blocks {
-        let (a, b) = (s.a as usize, s.b as usize);
-        let dx = x[a] - x[b];
-        let f = s.k * (s.t * dx + ((1.0 - s.t) * s.u.dot(dx)) * s.u);
-        y[a] += f;
-        y[b] -= f;
+    for (yi, s) in y.iter_mut().zip(scale) {
+        *yi *= *s;
     }
 }
 
@@ -175,17 +152,6 @@ pub fn omega_max(model: &Model, positions: &[DVec3]) -> Spectrum {
     let ground = model.params.ground.map_or(0.0, |g| g.stiffness.max(0.0));
     let scale: Vec<f64> = (model.inv_mass.iter()).map(|w| w.max(0.0).sqrt()).collect();
     // `A = S K S` with `S = M^-1/2` (0 on pinned particles).
-    let blocks = blocks(model, positions);
-    let mut scaled = vec![DVec3::ZERO; n];
-    let a_times = |v: &[DVec3], scaled: &mut [DVec3], out: &mut [DVec3]| {
-        for ((s, x), w) in scaled.iter_mut().zip(v).zip(&scale) {
-            *s = *x * *w;
-        }
-        apply(&blocks, &scale, scaled, out, ground);
-        for (y, w) in out.iter_mut().zip(&scale) {
-            *y *= *w;
-        }
-    };
     let dot = |a: &[DVec3], b: &[DVec3]| a.iter().zip(b).map(|(x, y)| x.dot(*y)).sum::<f64>();
     let mut v: Vec<DVec3> = (0..n)
         .map(|i| {
@@ -204,7 +170,7 @@ pub fn omega_max(model: &Model, positions: &[DVec3]) -> Spectrum {
     let mut ritz = Vec::new();
     let mut top = 0.0;
     for j in 0..MAX_ITERATIONS {
-        a_times(&v, &mut scaled, &mut w);
+        apply(model, positions, &scale, &v, &mut w, ground);
         let a = dot(&v, &w);
         let b_prev = beta.last().copied().unwrap_or(0.0);
         for ((wi, vi), pi) in w.iter_mut().zip(&v).zip(&previous) {
@@ -265,11 +231,17 @@ impl Clone for Cache {
 
 /// The one factor `new = f old` for every pair (`None` where the factors differ
 /// or the zeros do not match), with relative tolerance `1e-9`.
-fn common_factor(new: impl Iterator<Item = f64>, old: &[f64]) -> Option<f64> {
+fn common_factor(
+    mut new: impl Iterator<Item = f64>,
+    mut old: impl Iterator<Item = f64>,
+) -> Option<f64> {
     let mut factor = None;
-    let mut count = 0;
-    for (n, &o) in new.zip(old) {
-        count += 1;
+    loop {
+        let (n, o) = match (new.next(), old.next()) {
+            (Some(n), Some(o)) => (n, o),
+            (None, None) => return Some(factor.unwrap_or(1.0)),
+            _ => return None,
+        };
         if o == 0.0 || n == 0.0 {
             if o != n {
                 return None;
@@ -281,7 +253,6 @@ fn common_factor(new: impl Iterator<Item = f64>, old: &[f64]) -> Option<f64> {
             return None;
         }
     }
-    (count == old.len()).then_some(factor.unwrap_or(1.0))
 }
 
 impl Cached {
@@ -296,10 +267,10 @@ impl Cached {
             return None;
         }
         let stiffness = (model.springs.iter().map(|s| s.stiffness)).chain([ground]);
-        let mut old = self.stiffness.clone();
-        old.push(self.ground);
-        let k = common_factor(stiffness, &old)?;
-        let w = common_factor(model.inv_mass.iter().map(|w| w.max(0.0)), &self.inv_mass)?;
+        let old = self.stiffness.iter().copied().chain([self.ground]);
+        let k = common_factor(stiffness, old)?;
+        let inv_mass = model.inv_mass.iter().map(|w| w.max(0.0));
+        let w = common_factor(inv_mass, self.inv_mass.iter().copied())?;
         Some(self.lambda * k * w)
     }
 }

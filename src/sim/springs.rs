@@ -105,9 +105,8 @@ pub fn canonicalize(springs: &mut Vec<Spring>) {
 /// on the stencil come last, in canonical order; without a grid or a lattice the
 /// order is the canonical one.
 ///
-/// Each spring's key is worked out once (`sort_by_cached_key`, stable as
-/// `sort_by_key` is): compared afresh, the keys' searches of the stencil made the
-/// 32³ jelly's `cloth run --steps 0` take 0.27-0.29 s, 0.065-0.067 s now.
+/// Each spring's key is worked out once, before a stable sort: compared afresh,
+/// the keys' searches of the stencil would dominate a big model's build.
 ///
 /// The colour order is also what keeps a single pass stable: visited in particle
 /// order, one stretch-limit pass on a heavily loaded cloth (the 48 x 48 `bench`
@@ -144,9 +143,11 @@ pub fn constraint_order(
             Some(run) => run % 2,
             None => (c / dc.unsigned_abs().max(1)) % 2,
         };
-        (direction, colour, a)
+        ((direction as u64) << 33) | ((colour as u64) << 32) | a as u64
     };
-    order.sort_by_cached_key(|&i| key(&springs[i as usize]));
+    // One packed key a spring (8 bytes), where a cached tuple key took 32.
+    let keys: Vec<u64> = springs.iter().map(key).collect();
+    order.sort_by_key(|&i| keys[i as usize]);
     order
 }
 

@@ -40,6 +40,16 @@ pub struct Workspace {
     pub(crate) implicit: implicit::ImplicitWorkspace,
 }
 
+impl Workspace {
+    /// Sizes the f64 force evaluation's scratch for `model`, on its first use: a
+    /// run on a fast engine never needs it, and on a big cloth a force per spring
+    /// is the largest scratch there is.
+    pub(crate) fn fit_forces(&mut self, model: &Model) {
+        self.spring_forces.resize(model.springs.len(), DVec3::ZERO);
+        self.accelerations.resize(model.mass.len(), DVec3::ZERO);
+    }
+}
+
 /// A simulated system: model, state and scratch space.
 #[derive(Clone, Debug)]
 pub struct System {
@@ -78,8 +88,8 @@ impl System {
     ) -> Self {
         let Topology {
             mut springs,
-            bars,
-            triangles,
+            mut bars,
+            mut triangles,
             uvs,
             grid,
             lattice,
@@ -87,6 +97,11 @@ impl System {
         let n = positions.len();
         assert_eq!(masses.len(), n, "one mass per particle");
         springs::canonicalize(&mut springs);
+        // A builder's pushes leave up to half its capacity spare; a system keeps
+        // its lists for its life.
+        springs.shrink_to_fit();
+        bars.shrink_to_fit();
+        triangles.shrink_to_fit();
         let mut pinned_flags = vec![false; n];
         for &i in pinned {
             if i < n {
@@ -653,8 +668,6 @@ impl System {
         let n = self.particle_count();
         let m = self.model.springs.len();
         let w = &mut self.work;
-        w.spring_forces.resize(m, DVec3::ZERO);
-        w.accelerations.resize(n, DVec3::ZERO);
         let multistage = matches!(
             self.model.params.integrator,
             Integrator::Rk2 | Integrator::Rk4

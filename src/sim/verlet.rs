@@ -39,8 +39,8 @@ impl VerletHistory {
         work: &mut Workspace,
     ) {
         let h = model.params.dt;
+        work.fit_forces(model);
         let a = &mut work.accelerations;
-        a.resize(x.len(), DVec3::ZERO);
         model.accelerations(x, v, t, &mut work.spring_forces, a);
         self.positions = (x.iter().zip(v).zip(a.iter()))
             .map(|((&x, &v), &a)| x - h * v + 0.5 * h * h * a)
