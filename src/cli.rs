@@ -838,48 +838,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         let n = system.springs().iter().filter(|s| s.kind == kind).count();
         per_kind.insert(kind.name().to_string(), json!(n));
     }
-    let mut constraints = Vec::new();
-    if p.integrator == Integrator::Xpbd && !system.springs().is_empty() {
-        constraints.push("springs as XPBD distance constraints (compliance 1/k)".to_string());
-    }
-    if !system.bars().is_empty() && p.bar_iterations > 0 {
-        constraints.push(format!("rigid bars ({} passes per step)", p.bar_iterations));
-    }
-    if let Some(tau) = p.stretch_limit {
-        constraints.push(format!("stretch limit ({:.0}%)", tau * 100.0));
-    }
-    if let Some(s) = p.sphere {
-        constraints.push(format!(
-            "sphere collider (centre {:?}, radius {} m, touched at {} m)",
-            s.center.to_array(),
-            s.radius - p.thickness,
-            s.radius
-        ));
-    }
-    if p.self_collides() {
-        constraints.push(format!(
-            "self-collision (particles {} m apart, friction {})",
-            p.thickness, p.friction
-        ));
-    }
-    if let Some(max_speed) = p.max_speed {
-        constraints.push(format!("speed limit ({max_speed} m/s)"));
-    }
-    if let Some(tau) = p.tear_strain {
-        constraints.push(format!(
-            "tearing (a spring breaks past {:.0}% stretch)",
-            tau * 100.0
-        ));
-    }
-    let surfaces = [
-        ("sphere", p.sphere.map(|_| p.friction)),
-        ("ground", p.ground.map(|g| g.friction)),
-    ];
-    for (surface, mu) in surfaces {
-        if let Some(mu) = mu.filter(|&mu| mu > 0.0) {
-            constraints.push(format!("Coulomb friction (mu = {mu}) on the {surface}"));
-        }
-    }
+    let constraints = constraints(&system);
     let stability = system.stability();
     let (_, extent) = bounding_sphere(system.positions());
     let value = json!({
@@ -942,6 +901,55 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         print_info(&value);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The constraints, limiters and contacts `system` applies after its forces, as
+/// `cloth info` lists them.
+fn constraints(system: &System) -> Vec<String> {
+    let p = system.params();
+    let mut constraints = Vec::new();
+    if p.integrator == Integrator::Xpbd && !system.springs().is_empty() {
+        constraints.push("springs as XPBD distance constraints (compliance 1/k)".to_string());
+    }
+    if !system.bars().is_empty() && p.bar_iterations > 0 {
+        constraints.push(format!("rigid bars ({} passes per step)", p.bar_iterations));
+    }
+    if let Some(tau) = p.stretch_limit {
+        constraints.push(format!("stretch limit ({:.0}%)", tau * 100.0));
+    }
+    if let Some(s) = p.sphere {
+        constraints.push(format!(
+            "sphere collider (centre {:?}, radius {} m, touched at {} m)",
+            s.center.to_array(),
+            s.radius - p.thickness,
+            s.radius
+        ));
+    }
+    if p.self_collides() {
+        constraints.push(format!(
+            "self-collision (particles {} m apart, friction {})",
+            p.thickness, p.friction
+        ));
+    }
+    if let Some(max_speed) = p.max_speed {
+        constraints.push(format!("speed limit ({max_speed} m/s)"));
+    }
+    if let Some(tau) = p.tear_strain {
+        constraints.push(format!(
+            "tearing (a spring breaks past {:.0}% stretch)",
+            tau * 100.0
+        ));
+    }
+    let surfaces = [
+        ("sphere", p.sphere.map(|_| p.friction)),
+        ("ground", p.ground.map(|g| g.friction)),
+    ];
+    for (surface, mu) in surfaces {
+        if let Some(mu) = mu.filter(|&mu| mu > 0.0) {
+            constraints.push(format!("Coulomb friction (mu = {mu}) on the {surface}"));
+        }
+    }
+    constraints
 }
 
 /// Prints the info object as indented `key: value` lines.
