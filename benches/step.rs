@@ -57,9 +57,11 @@ fn checks(c: &mut Criterion) {
     let mut scene = Scene::load("bench").unwrap();
     scene.set_all(["width=256", "height=256"]).unwrap();
     let mut system = scene.build().unwrap();
+    // The engine `cloth run` and the app step it with.
+    system.set_fast_path(true);
     system.run(64).unwrap();
     let mut group = c.benchmark_group("checks_256");
-    group.sample_size(20);
+    group.sample_size(10);
     group.bench_function("check", |b| b.iter(|| system.check().unwrap()));
     group.throughput(Throughput::Elements(ENERGY_CHECK_STEPS));
     group.bench_function("steps_between_checks", |b| {

@@ -315,65 +315,29 @@ fn load_scene(scene: &SceneArgs, args: &StepArgs) -> Result<Scene, String> {
 
 fn run(args: RunArgs) -> Result<ExitCode, String> {
     if let Some(name) = &args.simd {
-        let names = SimdLevel::ALL.map(SimdLevel::name).join(", ");
-        let level = SimdLevel::from_name(name)
-            .ok_or_else(|| format!("--simd: `{name}` is not a SIMD level; use one of {names}"))?;
-        SimdLevel::cap(level).map_err(|e| format!("--simd {name}: {e}"))?;
+        cap_simd(name)?;
     }
     let scene = load_scene(&args.scene, &args.step)?;
     let inputs = scene.inputs(&args.scene.scene);
     let mut system = scene.build().map_err(|e| e.to_string())?;
     let dt = system.params().dt;
-    let steps = match (args.steps, args.duration) {
-        (Some(n), _) => n,
-        (None, Some(d)) => {
-            limits::steps_for_duration(d, dt).map_err(|e| format!("--duration: {e}"))?
-        }
-        (None, None) => limits::steps_for_duration(1.0, dt)
-            .map_err(|e| format!("the default --duration of 1 s: {e}"))?,
+    let steps = requested_steps(&args, dt)?;
+    let substeps = if args.safe {
+        safe_stepping(&mut system, dt)
+    } else {
+        1
     };
-    let mut substeps = 1;
-    if args.safe {
-        let choice = safe_step_below(
-            system.stability().dt_critical,
-            dt,
-            DEFAULT_SAFETY,
-            DEFAULT_MAX_SUBSTEPS,
-        );
-        let mut params = *system.params();
-        params.dt = choice.dt;
-        let added_limit = added_stretch_limit(system.model(), params.stretch_limit);
-        params.stretch_limit = params.stretch_limit.or(added_limit);
-        system.set_params(params);
-        if let Some(tau) = added_limit {
-            eprintln!(
-                "safe stepping: the wind is strong for these springs, so a {:.0}% stretch limit is added (as in the app)",
-                100.0 * tau
-            );
-        }
-        substeps = u64::from(choice.substeps);
-        eprintln!(
-            "safe stepping: {} substeps of {:.4e} s per step of {dt:.4e} s{}",
-            choice.substeps,
-            choice.dt,
-            if choice.safe {
-                ""
-            } else {
-                " (not enough: the integrator has no stable step here, or the cap was hit)"
-            }
-        );
-    }
     // The whole run is checked before any of it starts: nothing the user asks for
     // may run for ever, and the results must have somewhere to go.
     let work = limits::StepWork::of(system.model());
     let steps =
         limits::total_steps(steps, substeps, work).map_err(|e| format!("run too long: {e}"))?;
     limits::total_steps(args.warmup, 1, work).map_err(|e| format!("--warmup: {e}"))?;
-    let mut dump = match &args.dump {
+    let dump = match &args.dump {
         Some(path) => Some(prepare_dump(path, &inputs)?),
         None => None,
     };
-    let mut obj = match &args.obj {
+    let obj = match &args.obj {
         Some(path) => Some(prepare_obj(&system, path, &args, &inputs)?),
         None => None,
     };
@@ -415,40 +379,8 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         )?;
         dumped = Some((system.steps_taken(), system.time()));
     }
-    if let (Some(file), Some(path)) = (dump.take(), &args.dump) {
-        write_csv(&system, file).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-    }
-    if let (Some(file), Some(path)) = (obj.take(), &args.obj) {
-        let scene = &args.scene.scene;
-        match write_obj(&system, scene, file) {
-            Ok(()) => eprintln!(
-                "wrote {} ({} vertices, {} triangles, t = {:.4} s)",
-                path.display(),
-                system.particle_count(),
-                system.triangles().len(),
-                system.time()
-            ),
-            // After a divergence the exit code says so; the note below tells why
-            // there is no file.
-            Err(e) if outcome.is_err() => eprintln!("note: {} not written: {e}", path.display()),
-            Err(e) => return Err(format!("cannot write {}: {e}", path.display())),
-        }
-    }
-    if args.json {
-        let mut value = summary.to_json();
-        if let Err(d) = &outcome {
-            value["diverged"] = json!({
-                "time": d.time(),
-                "step": d.step(),
-                "message": d.to_string(),
-                "hint": hint(&system, args.safe),
-                "dump": dumped.map(|(step, time)| json!({ "step": step, "time": time })),
-            });
-        }
-        println!("{value}");
-    } else {
-        summary.print();
-    }
+    write_outputs(&system, &args, dump, obj, outcome.is_err())?;
+    print_summary(&system, &args, &summary, &outcome, dumped);
     if outcome.is_ok()
         && let Some(warning) = summary.limiters.and_then(|a| a.warning())
     {
@@ -458,26 +390,142 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         Ok(()) => Ok(ExitCode::SUCCESS),
         Err(divergence) => {
             report_divergence(&system, &divergence, args.safe);
-            let finite = system.positions().iter().all(|p| p.is_finite());
-            if let (Some((step, time)), Some(path)) = (dumped, &args.dump) {
-                eprintln!(
-                    "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s){}",
-                    path.display(),
-                    if finite {
-                        ""
-                    } else {
-                        ", and even it is not finite"
-                    }
-                );
-            }
-            if let (Some((step, time)), Some(path), true) = (dumped, &args.obj, finite) {
-                eprintln!(
-                    "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s)",
-                    path.display(),
-                );
-            }
+            divergence_notes(&system, &args, dumped);
             Ok(ExitCode::from(EXIT_DIVERGED))
         }
+    }
+}
+
+/// Caps the fast engines' loops at the SIMD level `--simd` names.
+fn cap_simd(name: &str) -> Result<(), String> {
+    let names = SimdLevel::ALL.map(SimdLevel::name).join(", ");
+    let level = SimdLevel::from_name(name)
+        .ok_or_else(|| format!("--simd: `{name}` is not a SIMD level; use one of {names}"))?;
+    SimdLevel::cap(level).map_err(|e| format!("--simd {name}: {e}"))
+}
+
+/// The steps of `dt` that `--steps` or `--duration` asks for (1 s by default).
+fn requested_steps(args: &RunArgs, dt: f64) -> Result<u64, String> {
+    match (args.steps, args.duration) {
+        (Some(n), _) => Ok(n),
+        (None, Some(d)) => {
+            limits::steps_for_duration(d, dt).map_err(|e| format!("--duration: {e}"))
+        }
+        (None, None) => limits::steps_for_duration(1.0, dt)
+            .map_err(|e| format!("the default --duration of 1 s: {e}")),
+    }
+}
+
+/// `--safe`: sets `system`'s step below half its critical step, with the stretch
+/// limit the app adds in a strong wind, says so, and returns the substeps each
+/// step of `dt` is split into.
+fn safe_stepping(system: &mut System, dt: f64) -> u64 {
+    let choice = safe_step_below(
+        system.stability().dt_critical,
+        dt,
+        DEFAULT_SAFETY,
+        DEFAULT_MAX_SUBSTEPS,
+    );
+    let mut params = *system.params();
+    params.dt = choice.dt;
+    let added_limit = added_stretch_limit(system.model(), params.stretch_limit);
+    params.stretch_limit = params.stretch_limit.or(added_limit);
+    system.set_params(params);
+    if let Some(tau) = added_limit {
+        eprintln!(
+            "safe stepping: the wind is strong for these springs, so a {:.0}% stretch limit is added (as in the app)",
+            100.0 * tau
+        );
+    }
+    eprintln!(
+        "safe stepping: {} substeps of {:.4e} s per step of {dt:.4e} s{}",
+        choice.substeps,
+        choice.dt,
+        if choice.safe {
+            ""
+        } else {
+            " (not enough: the integrator has no stable step here, or the cap was hit)"
+        }
+    );
+    u64::from(choice.substeps)
+}
+
+/// Writes `system` into the prepared `--dump` and `--obj` files. After a
+/// divergence the exit code says so, and an OBJ that cannot be written is a note.
+fn write_outputs(
+    system: &System,
+    args: &RunArgs,
+    dump: Option<PendingFile>,
+    obj: Option<PendingFile>,
+    diverged: bool,
+) -> Result<(), String> {
+    if let (Some(file), Some(path)) = (dump, &args.dump) {
+        write_csv(system, file).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    }
+    if let (Some(file), Some(path)) = (obj, &args.obj) {
+        let scene = &args.scene.scene;
+        match write_obj(system, scene, file) {
+            Ok(()) => eprintln!(
+                "wrote {} ({} vertices, {} triangles, t = {:.4} s)",
+                path.display(),
+                system.particle_count(),
+                system.triangles().len(),
+                system.time()
+            ),
+            // The note tells why there is no file.
+            Err(e) if diverged => eprintln!("note: {} not written: {e}", path.display()),
+            Err(e) => return Err(format!("cannot write {}: {e}", path.display())),
+        }
+    }
+    Ok(())
+}
+
+/// Prints the summary: as text, or as JSON with the divergence, its hint and the
+/// state the dump holds.
+fn print_summary(
+    system: &System,
+    args: &RunArgs,
+    summary: &Summary,
+    outcome: &Result<(), Divergence>,
+    dumped: Option<(u64, f64)>,
+) {
+    if args.json {
+        let mut value = summary.to_json();
+        if let Err(d) = outcome {
+            value["diverged"] = json!({
+                "time": d.time(),
+                "step": d.step(),
+                "message": d.to_string(),
+                "hint": hint(system, args.safe),
+                "dump": dumped.map(|(step, time)| json!({ "step": step, "time": time })),
+            });
+        }
+        println!("{value}");
+    } else {
+        summary.print();
+    }
+}
+
+/// After a divergence: the state the `--dump` and `--obj` files hold, the last
+/// before it (`dumped`: its step and time).
+fn divergence_notes(system: &System, args: &RunArgs, dumped: Option<(u64, f64)>) {
+    let finite = system.positions().iter().all(|p| p.is_finite());
+    if let (Some((step, time)), Some(path)) = (dumped, &args.dump) {
+        eprintln!(
+            "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s){}",
+            path.display(),
+            if finite {
+                ""
+            } else {
+                ", and even it is not finite"
+            }
+        );
+    }
+    if let (Some((step, time)), Some(path), true) = (dumped, &args.obj, finite) {
+        eprintln!(
+            "note: {} holds the last state before the divergence, at step {step} (t = {time:.4} s)",
+            path.display(),
+        );
     }
 }
 
@@ -792,48 +840,7 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         let n = system.springs().iter().filter(|s| s.kind == kind).count();
         per_kind.insert(kind.name().to_string(), json!(n));
     }
-    let mut constraints = Vec::new();
-    if p.integrator == Integrator::Xpbd && !system.springs().is_empty() {
-        constraints.push("springs as XPBD distance constraints (compliance 1/k)".to_string());
-    }
-    if !system.bars().is_empty() && p.bar_iterations > 0 {
-        constraints.push(format!("rigid bars ({} passes per step)", p.bar_iterations));
-    }
-    if let Some(tau) = p.stretch_limit {
-        constraints.push(format!("stretch limit ({:.0}%)", tau * 100.0));
-    }
-    if let Some(s) = p.sphere {
-        constraints.push(format!(
-            "sphere collider (centre {:?}, radius {} m, touched at {} m)",
-            s.center.to_array(),
-            s.radius - p.thickness,
-            s.radius
-        ));
-    }
-    if p.self_collides() {
-        constraints.push(format!(
-            "self-collision (particles {} m apart, friction {})",
-            p.thickness, p.friction
-        ));
-    }
-    if let Some(max_speed) = p.max_speed {
-        constraints.push(format!("speed limit ({max_speed} m/s)"));
-    }
-    if let Some(tau) = p.tear_strain {
-        constraints.push(format!(
-            "tearing (a spring breaks past {:.0}% stretch)",
-            tau * 100.0
-        ));
-    }
-    let surfaces = [
-        ("sphere", p.sphere.map(|_| p.friction)),
-        ("ground", p.ground.map(|g| g.friction)),
-    ];
-    for (surface, mu) in surfaces {
-        if let Some(mu) = mu.filter(|&mu| mu > 0.0) {
-            constraints.push(format!("Coulomb friction (mu = {mu}) on the {surface}"));
-        }
-    }
+    let constraints = constraints(&system);
     let stability = system.stability();
     let (_, extent) = bounding_sphere(system.positions());
     let value = json!({
@@ -896,6 +903,55 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         print_info(&value);
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The constraints, limiters and contacts `system` applies after its forces, as
+/// `cloth info` lists them.
+fn constraints(system: &System) -> Vec<String> {
+    let p = system.params();
+    let mut constraints = Vec::new();
+    if p.integrator == Integrator::Xpbd && !system.springs().is_empty() {
+        constraints.push("springs as XPBD distance constraints (compliance 1/k)".to_string());
+    }
+    if !system.bars().is_empty() && p.bar_iterations > 0 {
+        constraints.push(format!("rigid bars ({} passes per step)", p.bar_iterations));
+    }
+    if let Some(tau) = p.stretch_limit {
+        constraints.push(format!("stretch limit ({:.0}%)", tau * 100.0));
+    }
+    if let Some(s) = p.sphere {
+        constraints.push(format!(
+            "sphere collider (centre {:?}, radius {} m, touched at {} m)",
+            s.center.to_array(),
+            s.radius - p.thickness,
+            s.radius
+        ));
+    }
+    if p.self_collides() {
+        constraints.push(format!(
+            "self-collision (particles {} m apart, friction {})",
+            p.thickness, p.friction
+        ));
+    }
+    if let Some(max_speed) = p.max_speed {
+        constraints.push(format!("speed limit ({max_speed} m/s)"));
+    }
+    if let Some(tau) = p.tear_strain {
+        constraints.push(format!(
+            "tearing (a spring breaks past {:.0}% stretch)",
+            tau * 100.0
+        ));
+    }
+    let surfaces = [
+        ("sphere", p.sphere.map(|_| p.friction)),
+        ("ground", p.ground.map(|g| g.friction)),
+    ];
+    for (surface, mu) in surfaces {
+        if let Some(mu) = mu.filter(|&mu| mu > 0.0) {
+            constraints.push(format!("Coulomb friction (mu = {mu}) on the {surface}"));
+        }
+    }
+    constraints
 }
 
 /// Prints the info object as indented `key: value` lines.

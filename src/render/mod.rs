@@ -296,203 +296,15 @@ impl Renderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let globals_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene globals layout"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            }],
-        });
-        let globals_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("scene globals bind group"),
-            layout: &globals_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: globals.as_entire_binding(),
-            }],
-        });
-
-        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("cloth texture layout"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-            ],
-        });
-        let texture_view = checker_texture(device, queue);
-        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
-            label: Some("cloth sampler"),
-            address_mode_u: wgpu::AddressMode::Repeat,
-            address_mode_v: wgpu::AddressMode::Repeat,
-            mag_filter: wgpu::FilterMode::Linear,
-            min_filter: wgpu::FilterMode::Linear,
-            ..Default::default()
-        });
-        let texture_bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("cloth texture bind group"),
-            layout: &texture_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&texture_view),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::Sampler(&sampler),
-                },
-            ],
-        });
-
-        let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("mesh pipeline layout"),
-            bind_group_layouts: &[Some(&globals_layout), Some(&texture_layout)],
-            immediate_size: 0,
-        });
-        let overlay_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("overlay pipeline layout"),
-            bind_group_layouts: &[Some(&globals_layout)],
-            immediate_size: 0,
-        });
-
-        let multisample = wgpu::MultisampleState {
-            count: sample_count,
-            mask: !0,
-            alpha_to_coverage_enabled: false,
-        };
-        let depth = |write: bool| {
-            Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
-                depth_write_enabled: Some(write),
-                depth_compare: Some(wgpu::CompareFunction::LessEqual),
-                stencil: wgpu::StencilState::default(),
-                bias: wgpu::DepthBiasState::default(),
-            })
-        };
-        let targets = [Some(wgpu::ColorTargetState {
+        let (globals_layout, globals_bind) = globals_bind_group(device, &globals);
+        let (texture_layout, texture_bind) = texture_bind_group(device, queue);
+        let [mesh_pipeline, line_pipeline, point_pipeline] = pipelines(
+            device,
             format,
-            blend: Some(wgpu::BlendState::REPLACE),
-            write_mask: wgpu::ColorWrites::ALL,
-        })];
-
-        let mesh_shader = shader(device, "mesh.wgsl", include_str!("../../shaders/mesh.wgsl"));
-        let mesh_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
-        let mesh_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("mesh pipeline"),
-            layout: Some(&mesh_layout),
-            vertex: wgpu::VertexState {
-                module: &mesh_shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<MeshVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &mesh_attrs,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleList,
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: depth(true),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &mesh_shader,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-
-        let line_shader = shader(
-            device,
-            "lines.wgsl",
-            include_str!("../../shaders/lines.wgsl"),
+            sample_count,
+            &globals_layout,
+            &texture_layout,
         );
-        let line_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
-        let line_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("line pipeline"),
-            layout: Some(&overlay_layout),
-            vertex: wgpu::VertexState {
-                module: &line_shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<LineVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &line_attrs,
-                })],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::LineList,
-                ..Default::default()
-            },
-            depth_stencil: depth(true),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &line_shader,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-
-        let point_shader = shader(
-            device,
-            "points.wgsl",
-            include_str!("../../shaders/points.wgsl"),
-        );
-        let point_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4];
-        let point_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("point pipeline"),
-            layout: Some(&overlay_layout),
-            vertex: wgpu::VertexState {
-                module: &point_shader,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<PointInstance>() as u64,
-                    step_mode: wgpu::VertexStepMode::Instance,
-                    attributes: &point_attrs,
-                })],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: depth(true),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &point_shader,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-
         let vertex = wgpu::BufferUsages::VERTEX;
         let index = wgpu::BufferUsages::INDEX;
         let size = (size.0.max(1), size.1.max(1));
@@ -581,6 +393,20 @@ impl Renderer {
         camera: &OrbitCamera,
         options: &ViewOptions,
     ) {
+        self.upload_globals(queue, camera, options);
+        let mut positions = std::mem::take(&mut self.scratch_positions);
+        let mut valid = std::mem::take(&mut self.scratch_valid);
+        geometry::sanitize_all(frame.positions, &mut positions, &mut valid);
+        self.upload_surface(device, queue, frame, &positions, &valid, options);
+        self.upload_colliders(device, queue, frame, &positions);
+        self.upload_lines(device, queue, frame, &positions, &valid, options);
+        self.upload_points(device, queue, frame, &positions, &valid, options);
+        self.scratch_positions = positions;
+        self.scratch_valid = valid;
+    }
+
+    /// The camera and light uniforms, and the background colour.
+    fn upload_globals(&mut self, queue: &wgpu::Queue, camera: &OrbitCamera, options: &ViewOptions) {
         let viewport = Vec2::new(self.viewport[2], self.viewport[3]);
         let mut globals = Globals {
             view_proj: camera.view_proj(viewport).to_cols_array_2d(),
@@ -605,12 +431,18 @@ impl Renderer {
         queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&globals));
         let [r, g, b] = options.background.map(|c| f64::from(c) / 255.0);
         self.background = wgpu::Color { r, g, b, a: 1.0 };
+    }
 
-        let mut positions = std::mem::take(&mut self.scratch_positions);
-        let mut valid = std::mem::take(&mut self.scratch_valid);
-        geometry::sanitize_all(frame.positions, &mut positions, &mut valid);
-
-        // Surface: indices only when the topology changes, vertices every frame.
+    /// The surface: indices only when the topology changes, vertices every frame.
+    fn upload_surface(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &SceneFrame<'_>,
+        positions: &[Vec3],
+        valid: &[bool],
+        options: &ViewOptions,
+    ) {
         let n = positions.len();
         let changed = match &self.topology {
             Some((tris, count)) => *count != n || tris.as_slice() != frame.triangles,
@@ -637,9 +469,9 @@ impl Renderer {
         let all_valid = valid.iter().all(|&v| v);
         self.mesh_visible = options.mesh && self.cloth_index_count > 0;
         if self.mesh_visible && self.cloth_index_count > 0 {
-            let normals = geometry::vertex_normals(&positions, &self.wound, &valid);
+            let normals = geometry::vertex_normals(positions, &self.wound, valid);
             let mut mesh = std::mem::take(&mut self.scratch_mesh);
-            geometry::cloth_vertices(&positions, &normals, frame.uvs, options.textured, &mut mesh);
+            geometry::cloth_vertices(positions, &normals, frame.uvs, options.textured, &mut mesh);
             if self.cloth_vertices.write(device, queue, &mesh) < mesh.len() {
                 // Indices would reach past the vertices uploaded: no surface.
                 self.mesh_visible = false;
@@ -650,7 +482,7 @@ impl Renderer {
                 let idx: Vec<u32> = self
                     .wound
                     .iter()
-                    .filter(|t| geometry::usable_triangle(t, &valid))
+                    .filter(|t| geometry::usable_triangle(t, valid))
                     .flatten()
                     .copied()
                     .collect();
@@ -659,11 +491,19 @@ impl Renderer {
                 self.topology = None;
             }
         }
+    }
 
-        // Colliders.
+    /// The ground and the sphere, sized to the cloth's bounds.
+    fn upload_colliders(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &SceneFrame<'_>,
+        positions: &[Vec3],
+    ) {
         let mut extra = Vec::new();
         let mut extra_idx = Vec::new();
-        let (centre, half) = match cloth_sandbox::view::bounds(&positions) {
+        let (centre, half) = match cloth_sandbox::view::bounds(positions) {
             Some((lo, hi)) => ((lo + hi) * 0.5, ((hi - lo).length() * 1.5).max(6.0)),
             None => (Vec3::ZERO, 10.0),
         };
@@ -687,15 +527,25 @@ impl Renderer {
             written - written % 3
         };
         self.extra_index_count = draw_count(extra_index_count);
+    }
 
-        // Lines: springs, then wireframe.
+    /// Lines: springs, then wireframe.
+    fn upload_lines(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &SceneFrame<'_>,
+        positions: &[Vec3],
+        valid: &[bool],
+        options: &ViewOptions,
+    ) {
         let mut lines = std::mem::take(&mut self.scratch_lines);
         lines.clear();
         if options.springs {
             let colors = frame.line_colors;
             geometry::push_lines(
-                &positions,
-                &valid,
+                positions,
+                valid,
                 frame.lines,
                 |k| colors.get(k).copied().unwrap_or(geometry::WIRE_COLOR),
                 &mut lines,
@@ -707,12 +557,22 @@ impl Renderer {
                 true => geometry::WIRE_COLOR,
                 false => geometry::WIRE_ALONE_COLOR,
             };
-            geometry::push_lines(&positions, &valid, &self.edges, |_| color, &mut lines);
+            geometry::push_lines(positions, valid, &self.edges, |_| color, &mut lines);
         }
         self.lines.write(device, queue, &lines);
         self.scratch_lines = lines;
+    }
 
-        // Points: free particles, then pins and the highlight on top.
+    /// Points: free particles, then pins and the highlight on top.
+    fn upload_points(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        frame: &SceneFrame<'_>,
+        positions: &[Vec3],
+        valid: &[bool],
+        options: &ViewOptions,
+    ) {
         let mut points = std::mem::take(&mut self.scratch_points);
         points.clear();
         let size = options.particle_px.clamp(1.0, 64.0);
@@ -743,9 +603,6 @@ impl Renderer {
         points.sort_by(|a, b| a.size.total_cmp(&b.size));
         self.point_count = draw_count(self.points.write(device, queue, &points));
         self.scratch_points = points;
-
-        self.scratch_positions = positions;
-        self.scratch_valid = valid;
     }
 
     /// Records the scene pass into `encoder`, clearing and drawing into `target`
@@ -816,6 +673,210 @@ impl Renderer {
             pass.draw(0..6, 0..self.point_count);
         }
     }
+}
+
+/// The camera and light uniforms' bind group, and its layout.
+fn globals_bind_group(
+    device: &wgpu::Device,
+    globals: &wgpu::Buffer,
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene globals layout"),
+        entries: &[wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }],
+    });
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene globals bind group"),
+        layout: &layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: globals.as_entire_binding(),
+        }],
+    });
+    (layout, bind)
+}
+
+/// The checker texture and its repeating sampler as a bind group, and its layout.
+fn texture_bind_group(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+) -> (wgpu::BindGroupLayout, wgpu::BindGroup) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("cloth texture layout"),
+        entries: &[
+            wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                count: None,
+            },
+        ],
+    });
+    let texture_view = checker_texture(device, queue);
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+        label: Some("cloth sampler"),
+        address_mode_u: wgpu::AddressMode::Repeat,
+        address_mode_v: wgpu::AddressMode::Repeat,
+        mag_filter: wgpu::FilterMode::Linear,
+        min_filter: wgpu::FilterMode::Linear,
+        ..Default::default()
+    });
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("cloth texture bind group"),
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&texture_view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::Sampler(&sampler),
+            },
+        ],
+    });
+    (layout, bind)
+}
+
+/// The mesh, line and point pipelines, for output in `format` with
+/// `sample_count` samples: each depth-tested and writing depth, with its shader's
+/// `vs_main` and `fs_main`.
+fn pipelines(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    sample_count: u32,
+    globals_layout: &wgpu::BindGroupLayout,
+    texture_layout: &wgpu::BindGroupLayout,
+) -> [wgpu::RenderPipeline; 3] {
+    let mesh_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("mesh pipeline layout"),
+        bind_group_layouts: &[Some(globals_layout), Some(texture_layout)],
+        immediate_size: 0,
+    });
+    let overlay_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("overlay pipeline layout"),
+        bind_group_layouts: &[Some(globals_layout)],
+        immediate_size: 0,
+    });
+    let targets = [Some(wgpu::ColorTargetState {
+        format,
+        blend: Some(wgpu::BlendState::REPLACE),
+        write_mask: wgpu::ColorWrites::ALL,
+    })];
+    let pipeline = |label: &str,
+                    layout: &wgpu::PipelineLayout,
+                    shader: &wgpu::ShaderModule,
+                    buffer: wgpu::VertexBufferLayout<'_>,
+                    primitive: wgpu::PrimitiveState| {
+        device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(layout),
+            vertex: wgpu::VertexState {
+                module: shader,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(buffer)],
+            },
+            primitive,
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::LessEqual),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: sample_count,
+                mask: !0,
+                alpha_to_coverage_enabled: false,
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: shader,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    };
+
+    let mesh_shader = shader(device, "mesh.wgsl", include_str!("../../shaders/mesh.wgsl"));
+    let mesh_attrs =
+        wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4];
+    let mesh = pipeline(
+        "mesh pipeline",
+        &mesh_layout,
+        &mesh_shader,
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<MeshVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &mesh_attrs,
+        },
+        wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::TriangleList,
+            cull_mode: None,
+            ..Default::default()
+        },
+    );
+
+    let line_shader = shader(
+        device,
+        "lines.wgsl",
+        include_str!("../../shaders/lines.wgsl"),
+    );
+    let line_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
+    let line = pipeline(
+        "line pipeline",
+        &overlay_layout,
+        &line_shader,
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<LineVertex>() as u64,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &line_attrs,
+        },
+        wgpu::PrimitiveState {
+            topology: wgpu::PrimitiveTopology::LineList,
+            ..Default::default()
+        },
+    );
+
+    let point_shader = shader(
+        device,
+        "points.wgsl",
+        include_str!("../../shaders/points.wgsl"),
+    );
+    let point_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4];
+    let point = pipeline(
+        "point pipeline",
+        &overlay_layout,
+        &point_shader,
+        wgpu::VertexBufferLayout {
+            array_stride: std::mem::size_of::<PointInstance>() as u64,
+            step_mode: wgpu::VertexStepMode::Instance,
+            attributes: &point_attrs,
+        },
+        wgpu::PrimitiveState::default(),
+    );
+    [mesh, line, point]
 }
 
 fn make_targets(

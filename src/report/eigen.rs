@@ -37,38 +37,8 @@ pub fn omega_max(
 ) -> PowerIteration {
     let n = x.len();
     let scale: Vec<f64> = model.inv_mass.iter().map(|w| w.max(0.0).sqrt()).collect();
-    let blocks: Vec<DMat3> = (model.springs.iter())
-        .map(|s| {
-            let d = x[s.a as usize] - x[s.b as usize];
-            let l = d.length();
-            if l <= EPSILON_LENGTH {
-                // Coincident ends: the force is zero and has no direction, but a
-                // zero-rest spring still pulls isotropically with k.
-                return if s.rest <= EPSILON_LENGTH {
-                    DMat3::from_diagonal(DVec3::splat(s.stiffness))
-                } else {
-                    DMat3::ZERO
-                };
-            }
-            let u = d / l;
-            let uu = DMat3::from_cols(u * u.x, u * u.y, u * u.z);
-            let transverse = (1.0 - s.rest / l).max(0.0);
-            s.stiffness * (uu + transverse * (DMat3::IDENTITY - uu))
-        })
-        .collect();
-    let ground: Vec<f64> = match model.params.ground {
-        Some(g) => x
-            .iter()
-            .map(|p| {
-                if g.height - p.y > 0.0 {
-                    g.stiffness
-                } else {
-                    0.0
-                }
-            })
-            .collect(),
-        None => vec![0.0; n],
-    };
+    let blocks = spring_blocks(model, x);
+    let ground = ground_stiffness(model, x);
     let apply = |v: &[DVec3], out: &mut [DVec3]| {
         for i in 0..n {
             out[i] = DVec3::new(0.0, ground[i], 0.0) * v[i] * scale[i];
@@ -133,5 +103,47 @@ pub fn omega_max(
         omega_max: lambda.max(0.0).sqrt(),
         iterations,
         last_change,
+    }
+}
+
+/// Each spring's 3x3 block of `K` at positions `x`: `k [u uᵀ + max(0, 1 - L/l)
+/// (I - u uᵀ)]`.
+fn spring_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
+    (model.springs.iter())
+        .map(|s| {
+            let d = x[s.a as usize] - x[s.b as usize];
+            let l = d.length();
+            if l <= EPSILON_LENGTH {
+                // Coincident ends: the force is zero and has no direction, but a
+                // zero-rest spring still pulls isotropically with k.
+                return if s.rest <= EPSILON_LENGTH {
+                    DMat3::from_diagonal(DVec3::splat(s.stiffness))
+                } else {
+                    DMat3::ZERO
+                };
+            }
+            let u = d / l;
+            let uu = DMat3::from_cols(u * u.x, u * u.y, u * u.z);
+            let transverse = (1.0 - s.rest / l).max(0.0);
+            s.stiffness * (uu + transverse * (DMat3::IDENTITY - uu))
+        })
+        .collect()
+}
+
+/// The ground's contact stiffness on the vertical of each particle below it at
+/// positions `x`, 0 elsewhere.
+fn ground_stiffness(model: &Model, x: &[DVec3]) -> Vec<f64> {
+    match model.params.ground {
+        Some(g) => x
+            .iter()
+            .map(|p| {
+                if g.height - p.y > 0.0 {
+                    g.stiffness
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+        None => vec![0.0; x.len()],
     }
 }

@@ -175,12 +175,12 @@ impl Scan {
     }
 }
 
-/// Scans the `v`, `f` and `l` lines as `tobj` reads them (one line each, words
-/// split on white space, negative indices counting back from the vertices so
-/// far), checking counts and vertex references.
 /// Largest texture coordinate a mesh may give (a texture repeated a million times).
 pub const MAX_TEXCOORD: f64 = 1e6;
 
+/// Scans the `v`, `f` and `l` lines as `tobj` reads them (one line each, words
+/// split on white space, negative indices counting back from the vertices so
+/// far), checking counts and vertex references.
 fn scan(text: &str) -> Result<Scan, String> {
     let mut scan = Scan {
         face_starts: vec![0],
@@ -195,33 +195,15 @@ fn scan(text: &str) -> Result<Scan, String> {
         let mut words = line.split_whitespace();
         let keyword = words.next();
         match keyword {
-            // Texture coordinates and normals are checked as vertices are: a
-            // number that is not finite (`vt nan nan`) would reach the cloth's
-            // texture and `--obj`'s output.
             Some(kind @ ("vt" | "vn")) => {
-                let (count, what, limit) = if kind == "vt" {
+                let count = if kind == "vt" {
                     texcoords += 1;
-                    (texcoords, "texture coordinate", MAX_TEXCOORD)
+                    texcoords
                 } else {
                     normals += 1;
-                    (normals, "normal", f64::MAX)
+                    normals
                 };
-                let bad = words
-                    .filter_map(|w| w.parse::<f64>().ok())
-                    .any(|x| !(x.is_finite() && x.abs() <= limit));
-                if bad {
-                    let range = if kind == "vt" {
-                        format!(" of at most {MAX_TEXCOORD:e}")
-                    } else {
-                        String::new()
-                    };
-                    return Err(at(
-                        number,
-                        format!(
-                            "{what} {count} (`{kind}`) has a value that is not a finite number{range}"
-                        ),
-                    ));
-                }
+                check_finite(number, kind, count, words)?;
             }
             Some("v") => {
                 if scan.vertex_lines.len() == MESH_MAX_VERTICES {
@@ -251,35 +233,7 @@ fn scan(text: &str) -> Result<Scan, String> {
                         ),
                     ));
                 }
-                let so_far = scan.vertex_lines.len() as i64;
-                for r in refs.iter() {
-                    let index = r
-                        .split('/')
-                        .next()
-                        .and_then(|v| v.parse::<i64>().ok())
-                        .ok_or_else(|| {
-                            at(
-                                number,
-                                format!(
-                                    "`{}` is not a vertex reference (faces are written `f 1 2 3`, `f 1/1 2/2 3/3` or `f 1//1 2//2 3//3`)",
-                                    crate::limits::echo(r)
-                                ),
-                            )
-                        })?;
-                    let zero_based = match index {
-                        0 => {
-                            return Err(at(
-                                number,
-                                "vertex 0 does not exist: OBJ numbers vertices from 1",
-                            ));
-                        }
-                        i if i > 0 => i - 1,
-                        i => so_far + i,
-                    };
-                    // Out of range either way: kept as a value that fails below.
-                    scan.corners
-                        .push(u32::try_from(zero_based).unwrap_or(u32::MAX));
-                }
+                push_corners(&mut scan, number, &refs)?;
                 triangles += refs.len() - 2;
                 if triangles > MESH_MAX_TRIANGLES {
                     return Err(format!(
@@ -292,6 +246,81 @@ fn scan(text: &str) -> Result<Scan, String> {
             _ => {}
         }
     }
+    check_references(&scan)?;
+    if scan.faces() == 0 {
+        return Err(": has no faces (`f` lines): a cloth needs at least one triangle".to_string());
+    }
+    Ok(scan)
+}
+
+/// Checks the values of texture coordinate or normal `count` (`kind`: `vt` or
+/// `vn`) on line `number`, as vertices are checked: a number that is not finite
+/// (`vt nan nan`) would reach the cloth's texture and `--obj`'s output.
+fn check_finite<'a>(
+    number: u32,
+    kind: &str,
+    count: usize,
+    words: impl Iterator<Item = &'a str>,
+) -> Result<(), String> {
+    let (what, limit) = if kind == "vt" {
+        ("texture coordinate", MAX_TEXCOORD)
+    } else {
+        ("normal", f64::MAX)
+    };
+    let bad = words
+        .filter_map(|w| w.parse::<f64>().ok())
+        .any(|x| !(x.is_finite() && x.abs() <= limit));
+    if bad {
+        let range = if kind == "vt" {
+            format!(" of at most {MAX_TEXCOORD:e}")
+        } else {
+            String::new()
+        };
+        return Err(at(
+            number,
+            format!("{what} {count} (`{kind}`) has a value that is not a finite number{range}"),
+        ));
+    }
+    Ok(())
+}
+
+/// Appends the corners `refs` of the face on line `number` to `scan`, 0-based
+/// (negative references count back from the vertices so far).
+fn push_corners(scan: &mut Scan, number: u32, refs: &[&str]) -> Result<(), String> {
+    let so_far = scan.vertex_lines.len() as i64;
+    for r in refs.iter() {
+        let index = r
+            .split('/')
+            .next()
+            .and_then(|v| v.parse::<i64>().ok())
+            .ok_or_else(|| {
+                at(
+                    number,
+                    format!(
+                        "`{}` is not a vertex reference (faces are written `f 1 2 3`, `f 1/1 2/2 3/3` or `f 1//1 2//2 3//3`)",
+                        crate::limits::echo(r)
+                    ),
+                )
+            })?;
+        let zero_based = match index {
+            0 => {
+                return Err(at(
+                    number,
+                    "vertex 0 does not exist: OBJ numbers vertices from 1",
+                ));
+            }
+            i if i > 0 => i - 1,
+            i => so_far + i,
+        };
+        // Out of range either way: kept as a value `check_references` refuses.
+        scan.corners
+            .push(u32::try_from(zero_based).unwrap_or(u32::MAX));
+    }
+    Ok(())
+}
+
+/// Checks that every face's vertices are in the file.
+fn check_references(scan: &Scan) -> Result<(), String> {
     let n = scan.vertex_lines.len();
     for f in 0..scan.faces() {
         if let Some(&bad) = scan.face(f).iter().find(|&&c| c as usize >= n) {
@@ -306,10 +335,7 @@ fn scan(text: &str) -> Result<Scan, String> {
             ));
         }
     }
-    if scan.faces() == 0 {
-        return Err(": has no faces (`f` lines): a cloth needs at least one triangle".to_string());
-    }
-    Ok(scan)
+    Ok(())
 }
 
 fn tobj_options() -> tobj::LoadOptions {
@@ -434,6 +460,27 @@ pub fn from_text(text: &str) -> Result<Mesh, String> {
     if face != scan.faces() {
         return Err(mismatch(face));
     }
+    check_vertices(&scan, &positions, &used)?;
+    let (triangles, triangle_lines) = triangulate(&scan, &positions)?;
+    let (edges, bends) = springs(&triangles, &triangle_lines)?;
+    let uvs_from_file = file_uvs.iter().all(Option::is_some);
+    let uvs = if uvs_from_file {
+        file_uvs.into_iter().flatten().collect()
+    } else {
+        planar_uvs(&positions)
+    };
+    Ok(Mesh {
+        positions,
+        triangles,
+        uvs,
+        uvs_from_file,
+        edges,
+        bends,
+    })
+}
+
+/// Checks that every vertex is used by a face and has finite coordinates in range.
+fn check_vertices(scan: &Scan, positions: &[DVec3], used: &[bool]) -> Result<(), String> {
     for (i, x) in positions.iter().enumerate() {
         let line = scan.vertex_lines[i];
         if !used[i] {
@@ -455,6 +502,11 @@ pub fn from_text(text: &str) -> Result<Mesh, String> {
             ));
         }
     }
+    Ok(())
+}
+
+/// The faces as triangle fans, each triangle checked, with the line of its face.
+fn triangulate(scan: &Scan, positions: &[DVec3]) -> Result<(Vec<[u32; 3]>, Vec<u32>), String> {
     let mut triangles = Vec::new();
     let mut triangle_lines = Vec::new();
     for f in 0..scan.faces() {
@@ -462,26 +514,12 @@ pub fn from_text(text: &str) -> Result<Mesh, String> {
         let line = scan.face_lines[f];
         for w in 1..corners.len() - 1 {
             let t = [corners[0], corners[w], corners[w + 1]];
-            check_triangle(t, &positions).map_err(|why| at(line, why))?;
+            check_triangle(t, positions).map_err(|why| at(line, why))?;
             triangles.push(t);
             triangle_lines.push(line);
         }
     }
-    let (edges, bends) = springs(&triangles, &triangle_lines)?;
-    let uvs_from_file = file_uvs.iter().all(Option::is_some);
-    let uvs = if uvs_from_file {
-        file_uvs.into_iter().flatten().collect()
-    } else {
-        planar_uvs(&positions)
-    };
-    Ok(Mesh {
-        positions,
-        triangles,
-        uvs,
-        uvs_from_file,
-        edges,
-        bends,
-    })
+    Ok((triangles, triangle_lines))
 }
 
 /// A triangle's problem, if it has one: a repeated vertex, or no area (its

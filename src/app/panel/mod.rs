@@ -1,0 +1,263 @@
+//! The egui side panel: scene and integrator, parameter sliders (only those the
+//! scene uses), play/pause/step/reset and speed, display toggles, live stats and
+//! the divergence notice. It edits view options directly and returns every
+//! change to the simulation as an `Action` for the app to apply; parameter changes
+//! are typed [`Edit`]s.
+
+mod controls;
+mod display;
+mod parameters;
+mod stats;
+
+use std::time::Instant;
+
+use cloth_sandbox::scene::Pins;
+use cloth_sandbox::session::{Edit, Pace, Session};
+use egui::{Color32, RichText, Ui};
+
+use crate::render::ViewOptions;
+use controls::{outputs, pin_presets, run_buttons, scene_and_integrator, speed};
+use display::display;
+use parameters::parameters;
+use stats::stats;
+
+/// Something the user asked for in the panel (or by key).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    /// Quit the app (Esc).
+    Quit,
+    /// Frame the scene with the default camera.
+    ResetView,
+    /// Open another scene.
+    LoadScene(String),
+    /// Rebuild the scene with the current settings (R).
+    Reset,
+    /// Change a setting (a slider or dropdown).
+    Edit(Edit),
+    /// Change dt, keeping the speed (the dt slider).
+    DtKeepingSpeed(f64),
+    /// Pause or resume (Space).
+    TogglePause,
+    /// Run one step.
+    Step,
+    /// Turn safe stepping on or off.
+    SafeStepping(bool),
+    /// Pin exactly these particles (a preset, or none to unpin all).
+    Pins(Pins),
+    /// Turn the wind (and gusts) on or off.
+    WindOn(bool),
+    /// Save the setup as a scene file (Ctrl+S).
+    Save,
+    /// Write the cloth's surface as `cloth-<scene>-N.obj`.
+    ExportObj,
+    /// Save the view as `screenshot-N.png` (F12).
+    Screenshot,
+    /// Record this many seconds of the view as `cloth-<scene>-N.gif`.
+    Record(f64),
+    /// Show or hide the help overlay (F1, ?).
+    ToggleHelp,
+    /// Take back the last change of parameters or pins (Ctrl+Z).
+    Undo,
+    /// Do again the last change undone (Ctrl+Shift+Z).
+    Redo,
+    /// Restore the scene's own parameters and pins.
+    Defaults,
+}
+
+/// Panel state that lives between frames.
+#[derive(Default)]
+pub struct PanelState {
+    /// Colour springs by strain instead of kind.
+    pub strain_colors: bool,
+    /// Last error from a scene change, shown until the next success.
+    pub error: Option<String>,
+    /// Where the setup was last saved.
+    pub saved: Option<String>,
+    /// The last OBJ export, screenshot or recording: what was written where.
+    pub wrote: Option<String>,
+    /// Seconds the Record button records (4 until changed).
+    pub record_seconds: f64,
+    /// A recording under way: frames done and frames in all.
+    pub recording: Option<(u64, u64)>,
+    /// Whether the help overlay is open.
+    pub help: bool,
+    /// The readings the plots show.
+    pub history: super::plots::History,
+    frame_time: f64,
+    frames_in_window: u64,
+    window_start: Option<Instant>,
+}
+
+impl PanelState {
+    /// Folds one frame's time (s, smoothed) into the stats.
+    pub fn record(&mut self, frame_time: f64, pace: Pace) {
+        self.frame_time = frame_time;
+        self.frames_in_window += 1;
+        let now = Instant::now();
+        let start = *self.window_start.get_or_insert(now);
+        let span = now.duration_since(start).as_secs_f64();
+        if span >= 0.5 {
+            // For measuring the app from outside (benches/xvfb_slider_drag.sh).
+            log::debug!(
+                target: "cloth::frames",
+                "frame {:.2} ms, {:.1} frames/s, real-time factor {:.3} of {:.3} asked, physics busy {:.1}%, {:.0} steps/s",
+                1e3 * self.frame_time,
+                self.frames_in_window as f64 / span,
+                pace.real_time_factor,
+                pace.target,
+                1e2 * pace.busy,
+                pace.steps_per_second
+            );
+            self.frames_in_window = 0;
+            self.window_start = Some(now);
+        }
+    }
+}
+
+/// Draws the panel; returns what the user asked for and the rectangle (points)
+/// left for the scene.
+pub fn show(
+    ui: &mut Ui,
+    state: &mut PanelState,
+    session: &Session,
+    view: &mut ViewOptions,
+    adapter: &str,
+) -> (Vec<Action>, egui::Rect) {
+    let mut actions = Vec::new();
+    super::help::show(ui.ctx(), &mut state.help);
+    egui::Panel::left("controls")
+        .resizable(false)
+        .exact_size(PANEL_WIDTH)
+        .show(ui, |ui| {
+            header(ui, &mut actions);
+            status(ui, state, session, &mut actions);
+            ui.separator();
+            egui::ScrollArea::vertical().show(ui, |ui| {
+                contents(ui, state, session, view, adapter, &mut actions);
+            });
+        });
+    (actions, ui.available_rect_before_wrap())
+}
+
+/// Width of the panel (points): the same in every scene.
+const PANEL_WIDTH: f32 = 320.0;
+
+/// Height of the status box (points): messages come and go inside it, and the
+/// controls below never move.
+const STATUS_HEIGHT: f32 = 104.0;
+
+fn header(ui: &mut Ui, actions: &mut Vec<Action>) {
+    ui.horizontal(|ui| {
+        ui.heading("cloth-sandbox");
+        if ui
+            .button("Help")
+            .on_hover_text("Every key and mouse binding (F1 or ?)")
+            .clicked()
+        {
+            actions.push(Action::ToggleHelp);
+        }
+    });
+    ui.label(
+        RichText::new(
+            "Click a particle: pin · drag it: move · drag elsewhere: orbit · F1 or ?: all keys",
+        )
+        .small(),
+    );
+    ui.separator();
+}
+
+/// The status box: how the run keeps up, a divergence, the last error, what was
+/// written where. Fixed height, scrolling when a message is long.
+fn status(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mut Vec<Action>) {
+    egui::ScrollArea::vertical()
+        .id_salt("status")
+        .max_height(STATUS_HEIGHT)
+        .show(ui, |ui| {
+            ui.set_min_height(STATUS_HEIGHT);
+            ui.set_width(ui.available_width());
+            status_lines(ui, state, session, actions);
+        });
+}
+
+fn status_lines(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mut Vec<Action>) {
+    if let Some(d) = session.divergence() {
+        ui.horizontal(|ui| {
+            ui.colored_label(Color32::from_rgb(255, 110, 90), "Diverged and paused.");
+            if ui
+                .button("Reset scene")
+                .on_hover_text("Start the scene again from its setup (R)")
+                .clicked()
+            {
+                actions.push(Action::Reset);
+            }
+        });
+        ui.label(format!(
+            "Showing the last good frame, t = {:.3} s.",
+            d.shown_time
+        ));
+        ui.label("Lower dt or the stiffness, or try another integrator, then reset.");
+        match d.margin {
+            Some(m) => ui.label(format!("At t = {:.3} s, dt / dt_crit = {m:.2}:", d.time)),
+            None => ui.label(format!("At t = {:.3} s:", d.time)),
+        };
+        ui.label(RichText::new(&d.message).small());
+    } else if session.paused() {
+        ui.label("Paused (Space or Play resumes).");
+    } else {
+        let pace = session.pace();
+        let factor = format!(
+            "{:.2} s simulated per s (asked {:.2})",
+            pace.real_time_factor, pace.target
+        );
+        // A backlog dropped once (a long pause of the window's thread) is not
+        // "slower": only a factor short of the one asked for is.
+        if pace.behind && pace.real_time_factor < 0.97 * pace.target {
+            ui.colored_label(
+                Color32::from_rgb(255, 200, 60),
+                format!("Slower than asked: {factor}"),
+            )
+            .on_hover_text("The physics cannot run every step due: it is busy all the time on its own thread. Fewer particles, a larger dt or fewer steps per frame make it keep up.");
+        } else {
+            ui.label(format!("Keeping up: {factor}"))
+                .on_hover_text("The physics runs on its own thread, at the speed asked for whatever the frame rate.");
+        }
+    }
+    if let Some(e) = &state.error {
+        ui.colored_label(Color32::from_rgb(255, 170, 60), e);
+    }
+    if let Some(path) = &state.saved {
+        ui.label(RichText::new(format!("Saved to {path}")).small());
+    }
+    if let Some(text) = &state.wrote {
+        ui.label(RichText::new(text).small());
+    }
+}
+
+/// The panel below the status box, section by section.
+fn contents(
+    ui: &mut Ui,
+    state: &mut PanelState,
+    session: &Session,
+    view: &mut ViewOptions,
+    adapter: &str,
+    actions: &mut Vec<Action>,
+) {
+    scene_and_integrator(ui, session, actions);
+    run_buttons(ui, session, actions);
+    outputs(ui, state, session, actions);
+    speed(ui, session, actions);
+    ui.separator();
+    pin_presets(ui, session.settings().layout, session.pins().len(), actions);
+    ui.separator();
+    parameters(ui, session, actions);
+    egui::CollapsingHeader::new("Plots")
+        .default_open(false)
+        .show(ui, |ui| state.history.show(ui))
+        .header_response
+        .on_hover_text(format!(
+            "Energy and dt / dt_crit over the last {} s of simulated time",
+            super::plots::WINDOW_S
+        ));
+    stats(ui, state, session, adapter);
+    display(ui, state, view, actions);
+}
