@@ -13,11 +13,11 @@
 //! Building a built-in scene, stepping it and reading the positions:
 //!
 //! ```rust
-//! use cloth_sandbox::scene::Scene;
+//! use cloth_sandbox::scene::{Edit, Scene};
 //!
-//! let mut scene = Scene::load("cloth")?; // a name from `builtin_scenes()`, or a path
-//! scene.set("width", "8")?; // as `--set width=8` does
-//! scene.set("height", "8")?;
+//! // A name from `builtin_scenes()`, or a path to a scene file; typed edits are
+//! // checked as `--set width=8` is (`Scene::set` takes the text form).
+//! let scene = Scene::load("cloth")?.with(Edit::Width(8))?.with(Edit::Height(8))?;
 //! let mut system = scene.build()?;
 //!
 //! let dt = system.params().dt;

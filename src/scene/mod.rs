@@ -751,6 +751,27 @@ impl Scene {
         Ok(())
     }
 
+    /// [`Self::apply`] for building a scene in one expression: the typed
+    /// counterpart of `--set`, checked against the same ranges.
+    ///
+    /// ```rust
+    /// use cloth_sandbox::scene::{Edit, Scene};
+    ///
+    /// let scene = Scene::load("cloth")?
+    ///     .with(Edit::Width(16))?
+    ///     .with(Edit::Height(12))?
+    ///     .with(Edit::Stiffness(800.0))?;
+    /// assert_eq!(scene.build()?.positions().len(), 16 * 12);
+    /// // A value out of range is refused with the field and its range.
+    /// let refused = Scene::load("cloth")?.with(Edit::Stiffness(-1.0)).unwrap_err();
+    /// assert!(refused.to_string().contains("stiffness"));
+    /// # Ok::<(), cloth_sandbox::scene::SceneError>(())
+    /// ```
+    pub fn with(mut self, edit: Edit) -> Result<Self, SceneError> {
+        self.apply(edit)?;
+        Ok(self)
+    }
+
     /// Applies `key=value` overrides in order.
     pub fn set_all<'a>(
         &mut self,
