@@ -588,160 +588,20 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
     let s = k.s;
     let n = S::LANES;
     let (len, lanes) = (k.len, k.lanes);
-    let (zero, one) = (S::E::ZERO, S::E::ONE);
-    let (a, b) = (line_a - k.base, line_b - k.base);
-    let (pos, start) = (k.pos, k.start);
-    let multipliers = k.multipliers;
-    // SAFETY (every load and store below): `j + n <= lanes`, and the arrays hold
-    // `a + lanes` and `b + lanes` floats from `base` on (the starting positions,
-    // the masks of torn springs and the multipliers `line_a + lanes` and `line_b
-    // + lanes` from 0; asserted by `LineKernel::new`).
-    let load = |p: *const S::E, i: usize| unsafe { s.load(p.add(i)) };
-    // The coordinates of the springs' first and second ends, from the line's
-    // start: a block's loads then take its offset as a constant, where an address
-    // a block cost the pass a register and an instruction.
-    // SAFETY: `a` and `b` are inside the arrays (see above).
-    // (Written out: `map` here ran as a call a line.)
-    let ends = unsafe {
-        [
-            [pos[0].add(a), pos[1].add(a), pos[2].add(a)],
-            [pos[0].add(b), pos[1].add(b), pos[2].add(b)],
-        ]
-    };
-    // The vectors `d` of the block at `j`, first end less second.
-    macro_rules! vectors {
-        ($j:expr) => {{
-            let j = $j;
-            per_axis!(|i| difference::<S, FIXED>(s, load(ends[0][i], j), load(ends[1][i], j)))
-        }};
-    }
-    // The block at `j`: its springs' vectors `d` (first end less second), their
-    // squared lengths, positive where a spring is in the class (and for the
-    // stretch limit over the limit), and whether any is.
-    // (`$tail`: whether the block may be the line's last, with lanes past it.)
-    macro_rules! measure {
-        ($j:expr, $tail:literal) => {{
-            let j = $j;
-            let d: [S::V; 3] = vectors!(j);
-            let mut keep = if $tail && j + n > len {
-                k.class_tail
-            } else {
-                k.class
-            };
-            if MASKED {
-                if let Some(m) = k.alive {
-                    keep = s.mul(keep, load(m, line_a + j));
-                }
-                if let Some(m) = k.real {
-                    keep = s.mul(keep, s.mul(load(m, a + j), load(m, b + j)));
-                }
-            }
-            let l2 = k.length2(d);
-            // Positive where the spring is to be corrected.
-            let over = if XPBD { keep } else { k.over_limit(l2, keep) };
-            (d, l2, over, s.any_positive(over))
-        }};
-    }
-    // XPBD's `t = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)` for the block at `j` (`C
-    // = l - rest`, `Δ` the first end's move since the start of the step less the
-    // second's, `λ` the multiplier so far, 0 in the forward sweep), and `t / l`,
-    // to scale `d` by (0 where `l` is about 0). The multiplier's change is `-t`.
-    macro_rules! xpbd_scale {
-        ($j:expr, $d:expr, $l2:expr, $w:expr) => {{
-            let (j, d, l2, w) = ($j, $d, $l2, $w);
-            let moved: [S::V; 3] = per_axis!(|i| {
-                let (ia, ib) = (line_a + j, line_b + j);
-                s.sub(
-                    difference::<S, FIXED>(s, load(pos[i], a + j), load(start[i], ia)),
-                    difference::<S, FIXED>(s, load(pos[i], b + j), load(start[i], ib)),
-                )
-            });
-            let inv_l = s.rsqrt_or_zero(l2, k.tiny_length2);
-            // n·Δ with n = d / l, and C + α̃ λ.
-            let along = s.mul_add(
-                d[0],
-                moved[0],
-                s.mul_add(d[1], moved[1], s.mul(d[2], moved[2])),
-            );
-            let stretch = s.mul_sub(l2, inv_l, k.rest);
-            let stretch = match multipliers {
-                Some(m) if m.second => s.add(stretch, load(m.values, line_a + j)),
-                _ => stretch,
-            };
-            let along = s.mul(along, inv_l);
-            let t = s.div(
-                s.mul_add(k.gamma, along, stretch),
-                s.mul_add(k.one_gamma, w, k.alpha),
-            );
-            (s.mul(t, inv_l), t)
-        }};
-    }
-    // Moves the ends of the block at `j` by their corrections. (The stretch
-    // limit measures its springs again: kept from `measure`, the vectors of four
-    // blocks went to the stack, where most blocks correct none; the sheet at
-    // 128 ran 1.4 instructions a particle-step more.)
-    macro_rules! correct {
-        ($j:expr, $d:expr, $l2:expr, $over:expr) => {{
-            let (j, over) = ($j, $over);
-            // The stretch limit's kernel, opaque here: else the compiler worked
-            // out the addresses of every array the correction touches before
-            // each line and kept them on the stack, for blocks that mostly
-            // correct nothing (the sheet at 128: 3.0 instructions a particle-step
-            // more). XPBD corrects every block.
-            let k = if XPBD { k } else { std::hint::black_box(k) };
-            let (d, l2) = if XPBD {
-                ($d, $l2)
-            } else {
-                let d: [S::V; 3] = vectors!(j);
-                (d, k.length2(d))
-            };
-            let w = s.add(load(k.inv_mass, a + j), load(k.inv_mass, b + j));
-            // Positive where a spring to correct is not pinned at both ends.
-            let over = s.keep_if_positive(w, over);
-            let scale = if XPBD {
-                let (scale, t) = xpbd_scale!(j, d, l2, w);
-                if let Some(m) = multipliers.filter(|m| !m.second) {
-                    // `α̃ λ` after the first correction (from `λ = 0`): `-α̃ t`, 0
-                    // where no spring was corrected; lanes past the line keep
-                    // what they hold (they may be the next row's springs).
-                    let mut kept = s.keep_if_positive(over, s.mul(k.minus_alpha, t));
-                    let i = line_a + j;
-                    if j + n > len {
-                        kept = s.add(kept, s.keep_if_positive(k.past_tail, load(m.values, i)));
-                    }
-                    // SAFETY: `i + n <= line_a + lanes <= m.len` (asserted).
-                    unsafe { s.store(m.values.add(i), kept) };
-                }
-                s.keep_if_positive(over, scale)
-            } else {
-                k.limit_scale(l2, w, over)
-            };
-            // Exactly no move where none is due: a lane out of the class or past
-            // the line may reach a ghost, whose move `0 d` would be NaN (and stay)
-            // once a diverging neighbour's `d` is not finite.
-            let d: [S::V; 3] = per_axis!(|axis| s.keep_if_positive(over, d[axis]));
-            for (start, sign) in [(a, zero - one), (b, one)] {
-                let f = s.mul(s.mul(s.splat(sign), load(k.inv_mass, start + j)), scale);
-                for axis in 0..3 {
-                    let t = s.mul(f, d[axis]);
-                    let i = start + j;
-                    // SAFETY: as above.
-                    unsafe { k.move_by::<FIXED>(axis, i, load(k.pos[axis], i), t) };
-                }
-            }
-        }};
-    }
+    let line = LineEnds::<S, FIXED, XPBD, MASKED>::new(k, (line_a, line_b));
     // Blocks four at a time (then two, then one), all measured before any moves,
     // so that their measurements overlap in the core: a block's springs in the
     // class share no particle with the next block's, and a lane out of the class
     // moves nothing, so a block's moves change nothing the next one measured.
+    // (`$tail`: whether the block may be the line's last, with lanes past it.)
+    // SAFETY (every block): `j + n <= lanes` (see `LineEnds`).
     macro_rules! blocks {
         ($tail:literal; $j:expr; $($b:tt)+) => {{
             let j = $j;
-            let m = ($(measure!(j + $b * n, $tail),)+);
+            let m = ($(unsafe { line.measure::<$tail>(j + $b * n) },)+);
             $(
                 if m.$b.3 {
-                    correct!(j + $b * n, m.$b.0, m.$b.1, m.$b.2);
+                    unsafe { line.correct(j + $b * n, m.$b.0, m.$b.1, m.$b.2) };
                 }
             )+
         }};
@@ -752,13 +612,14 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
     let whole = len - len % n;
     // The stretch limit without masks tests four blocks at once first, with
     // nothing kept from it: most groups of blocks have no spring to correct.
-    let zero_lanes = s.splat(zero);
+    let zero_lanes = s.splat(S::E::ZERO);
+    // SAFETY (each test): as above.
     macro_rules! over {
         ($j:expr) => {
             over!($j, k.class_limit2)
         };
         ($j:expr, $limit2:expr) => {
-            k.over(vectors!($j), $limit2)
+            unsafe { line.over($j, $limit2) }
         };
     }
     let mut j = 0;
@@ -809,5 +670,231 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
     while j < lanes {
         blocks!(true; j; 0);
         j += n;
+    }
+}
+
+/// One line of [`spring_line`]: its kernel, and its springs' first and second
+/// ends as array indices from the kernel's `base` (`a`, `b`) and from 0 (`line_a`,
+/// `line_b`, which index the starting positions, masks and multipliers). Each
+/// block's method takes the block's offset `j` in the line.
+///
+/// SAFETY (every load and store of the methods, whose callers keep `j + LANES <=
+/// lanes`): the arrays hold `a + lanes` and `b + lanes` floats from `base` on (the
+/// starting positions, the masks of torn springs and the multipliers `line_a +
+/// lanes` and `line_b + lanes` from 0; asserted by `LineKernel::new`).
+struct LineEnds<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool> {
+    k: &'k LineKernel<S>,
+    a: usize,
+    b: usize,
+    line_a: usize,
+    line_b: usize,
+    /// The coordinates of the springs' first and second ends, from the line's
+    /// start: a block's loads then take its offset as a constant, where an
+    /// address a block cost the pass a register and an instruction.
+    ends: [[*const S::E; 3]; 2],
+}
+
+impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
+    LineEnds<'k, S, FIXED, XPBD, MASKED>
+{
+    /// The line whose springs' ends are at array indices `line_a` and `line_b`
+    /// from 0, of a sweep whose bounds `k` asserted.
+    #[inline(always)]
+    fn new(k: &'k LineKernel<S>, (line_a, line_b): (usize, usize)) -> Self {
+        let (a, b) = (line_a - k.base, line_b - k.base);
+        let pos = k.pos;
+        // SAFETY: `a` and `b` are inside the arrays (see above).
+        // (Written out: `map` here ran as a call a line.)
+        let ends = unsafe {
+            [
+                [
+                    pos[0].add(a).cast_const(),
+                    pos[1].add(a).cast_const(),
+                    pos[2].add(a).cast_const(),
+                ],
+                [
+                    pos[0].add(b).cast_const(),
+                    pos[1].add(b).cast_const(),
+                    pos[2].add(b).cast_const(),
+                ],
+            ]
+        };
+        LineEnds {
+            k,
+            a,
+            b,
+            line_a,
+            line_b,
+            ends,
+        }
+    }
+
+    /// The lanes at `p + i`.
+    ///
+    /// # Safety
+    /// Inside the arrays (see above).
+    #[inline(always)]
+    unsafe fn load(&self, p: *const S::E, i: usize) -> S::V {
+        // SAFETY: the caller's contract.
+        unsafe { self.k.s.load(p.add(i)) }
+    }
+
+    /// The vectors `d` of the block at `j`, first end less second.
+    ///
+    /// # Safety
+    /// As for [`Self::load`].
+    #[inline(always)]
+    unsafe fn vectors(&self, j: usize) -> [S::V; 3] {
+        let (s, ends) = (self.k.s, &self.ends);
+        // SAFETY: the caller's contract.
+        per_axis!(|i| unsafe {
+            difference::<S, FIXED>(s, self.load(ends[0][i], j), self.load(ends[1][i], j))
+        })
+    }
+
+    /// The block at `j`: its springs' vectors `d` (first end less second), their
+    /// squared lengths, positive where a spring is in the class (and for the
+    /// stretch limit over the limit), and whether any is. (`TAIL`: whether the
+    /// block may be the line's last, with lanes past it.)
+    ///
+    /// # Safety
+    /// As for [`Self::load`].
+    #[inline(always)]
+    unsafe fn measure<const TAIL: bool>(&self, j: usize) -> ([S::V; 3], S::V, S::V, bool) {
+        let (k, s) = (self.k, self.k.s);
+        // SAFETY (every load): the caller's contract.
+        let d: [S::V; 3] = unsafe { self.vectors(j) };
+        let mut keep = if TAIL && j + S::LANES > k.len {
+            k.class_tail
+        } else {
+            k.class
+        };
+        if MASKED {
+            if let Some(m) = k.alive {
+                keep = s.mul(keep, unsafe { self.load(m, self.line_a + j) });
+            }
+            if let Some(m) = k.real {
+                let (ma, mb) = unsafe { (self.load(m, self.a + j), self.load(m, self.b + j)) };
+                keep = s.mul(keep, s.mul(ma, mb));
+            }
+        }
+        let l2 = k.length2(d);
+        // Positive where the spring is to be corrected.
+        let over = if XPBD { keep } else { k.over_limit(l2, keep) };
+        (d, l2, over, s.any_positive(over))
+    }
+
+    /// Whether a spring of the block at `j` is over `limit2` ([`LineKernel::over`]).
+    ///
+    /// # Safety
+    /// As for [`Self::load`].
+    #[inline(always)]
+    unsafe fn over(&self, j: usize, limit2: S::V) -> S::Mask {
+        // SAFETY: the caller's contract.
+        self.k.over(unsafe { self.vectors(j) }, limit2)
+    }
+
+    /// XPBD's `t = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)` for the block at `j` (`C
+    /// = l - rest`, `Δ` the first end's move since the start of the step less the
+    /// second's, `λ` the multiplier so far, 0 in the forward sweep), and `t / l`,
+    /// to scale `d` by (0 where `l` is about 0). The multiplier's change is `-t`.
+    ///
+    /// # Safety
+    /// As for [`Self::load`].
+    #[inline(always)]
+    unsafe fn xpbd_scale(&self, j: usize, d: [S::V; 3], l2: S::V, w: S::V) -> (S::V, S::V) {
+        let (k, s) = (self.k, self.k.s);
+        let (pos, start) = (k.pos, k.start);
+        let (ia, ib) = (self.line_a + j, self.line_b + j);
+        // SAFETY (every load): the caller's contract.
+        let moved: [S::V; 3] = per_axis!(|i| unsafe {
+            s.sub(
+                difference::<S, FIXED>(s, self.load(pos[i], self.a + j), self.load(start[i], ia)),
+                difference::<S, FIXED>(s, self.load(pos[i], self.b + j), self.load(start[i], ib)),
+            )
+        });
+        let inv_l = s.rsqrt_or_zero(l2, k.tiny_length2);
+        // n·Δ with n = d / l, and C + α̃ λ.
+        let along = s.mul_add(
+            d[0],
+            moved[0],
+            s.mul_add(d[1], moved[1], s.mul(d[2], moved[2])),
+        );
+        let stretch = s.mul_sub(l2, inv_l, k.rest);
+        let stretch = match k.multipliers {
+            Some(m) if m.second => s.add(stretch, unsafe { self.load(m.values, ia) }),
+            _ => stretch,
+        };
+        let along = s.mul(along, inv_l);
+        let t = s.div(
+            s.mul_add(k.gamma, along, stretch),
+            s.mul_add(k.one_gamma, w, k.alpha),
+        );
+        (s.mul(t, inv_l), t)
+    }
+
+    /// Moves the ends of the block at `j` by their corrections, where `over` is
+    /// positive. (The stretch limit measures its springs again: kept from
+    /// `measure`, the vectors of four blocks went to the stack, where most blocks
+    /// correct none; the sheet at 128 ran 1.4 instructions a particle-step more.)
+    ///
+    /// # Safety
+    /// As for [`Self::load`].
+    #[inline(always)]
+    unsafe fn correct(&self, j: usize, d: [S::V; 3], l2: S::V, over: S::V) {
+        let (s, n, (a, b)) = (self.k.s, S::LANES, (self.a, self.b));
+        let (zero, one) = (S::E::ZERO, S::E::ONE);
+        // The stretch limit's kernel, opaque here: else the compiler worked
+        // out the addresses of every array the correction touches before
+        // each line and kept them on the stack, for blocks that mostly
+        // correct nothing (the sheet at 128: 3.0 instructions a particle-step
+        // more). XPBD corrects every block.
+        let k = if XPBD {
+            self.k
+        } else {
+            std::hint::black_box(self.k)
+        };
+        // SAFETY (every load and store): the caller's contract.
+        let (d, l2) = if XPBD {
+            (d, l2)
+        } else {
+            let d: [S::V; 3] = unsafe { self.vectors(j) };
+            (d, k.length2(d))
+        };
+        let w = unsafe { s.add(self.load(k.inv_mass, a + j), self.load(k.inv_mass, b + j)) };
+        // Positive where a spring to correct is not pinned at both ends.
+        let over = s.keep_if_positive(w, over);
+        let scale = if XPBD {
+            let (scale, t) = unsafe { self.xpbd_scale(j, d, l2, w) };
+            if let Some(m) = k.multipliers.filter(|m| !m.second) {
+                // `α̃ λ` after the first correction (from `λ = 0`): `-α̃ t`, 0
+                // where no spring was corrected; lanes past the line keep
+                // what they hold (they may be the next row's springs).
+                let mut kept = s.keep_if_positive(over, s.mul(k.minus_alpha, t));
+                let i = self.line_a + j;
+                if j + n > k.len {
+                    let held = unsafe { self.load(m.values, i) };
+                    kept = s.add(kept, s.keep_if_positive(k.past_tail, held));
+                }
+                // SAFETY: `i + n <= line_a + lanes <= m.len` (asserted).
+                unsafe { s.store(m.values.add(i), kept) };
+            }
+            s.keep_if_positive(over, scale)
+        } else {
+            k.limit_scale(l2, w, over)
+        };
+        // Exactly no move where none is due: a lane out of the class or past
+        // the line may reach a ghost, whose move `0 d` would be NaN (and stay)
+        // once a diverging neighbour's `d` is not finite.
+        let d: [S::V; 3] = per_axis!(|axis| s.keep_if_positive(over, d[axis]));
+        for (start, sign) in [(a, zero - one), (b, one)] {
+            let inv_mass = unsafe { self.load(k.inv_mass, start + j) };
+            let f = s.mul(s.mul(s.splat(sign), inv_mass), scale);
+            for (axis, &d) in d.iter().enumerate() {
+                let t = s.mul(f, d);
+                let i = start + j;
+                unsafe { k.move_by::<FIXED>(axis, i, self.load(k.pos[axis], i), t) };
+            }
+        }
     }
 }
