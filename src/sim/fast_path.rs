@@ -24,8 +24,8 @@
 //! something outside changed it, and back after every chunk of steps (or when a
 //! cheap scan of the engine's state finds trouble), where the divergence check
 //! runs. A live edit of a coefficient (stiffness, damping, mass, wind...) updates
-//! the engine in place ([`GridCloth::respec`](grid_kernel::GridCloth::respec)); only a new shape, integrator or
-//! precision builds a new one.
+//! the engine in place ([`GridCloth::respec`](grid_kernel::GridCloth::respec));
+//! only a new shape, integrator or precision builds a new one.
 
 use glam::DVec3;
 
@@ -74,8 +74,9 @@ pub struct PrecisionRule {
     /// The noise (m/s²) on fixed-point positions at `unit`.
     pub fixed_point: f64,
     /// The fixed-point unit (m): roomy, or tight where the roomy one's noise is
-    /// over the limit ([`GridSpec::fixed_unit`](grid_kernel::GridSpec::fixed_unit)); or, once the body spread past
-    /// what that holds, the coarser unit a kernel had to take then.
+    /// over the limit ([`GridSpec::fixed_unit`](grid_kernel::GridSpec::fixed_unit));
+    /// or, once the body spread past what that holds, the coarser unit a kernel
+    /// had to take then.
     pub unit: f64,
 }
 

@@ -6,11 +6,11 @@
 //! with aerodynamic drag (below); under XPBD the first is skipped: its springs are
 //! constraints, after the step:
 //! 1. each spring's force on its `a` end, `f_a = -(k (l - L) + b (v_a - v_b)·u) u`
-//!    with `u = (x_a - x_b)/l` ([`spring_force`](super::forces::spring_force)), into a per-spring array: the
-//!    springs are evaluated in batches of up to `BATCH`, their ends read as
-//!    slices where they come in runs with consecutive ends (a lattice's do, in
-//!    `SpringArrays`' order), else gathered to the stack, in a loop the compiler
-//!    vectorizes (built for AVX2 when the CPU has it);
+//!    with `u = (x_a - x_b)/l` ([`spring_force`](super::forces::spring_force)),
+//!    into a per-spring array: the springs are evaluated in batches of up to
+//!    `BATCH`, their ends read as slices where they come in runs with consecutive
+//!    ends (a lattice's do, in `SpringArrays`' order), else gathered to the stack,
+//!    in a loop the compiler vectorizes (built for AVX2 when the CPU has it);
 //! 2. per particle, the sum over its springs from a compressed adjacency (CSR) in
 //!    the model's canonical spring order, `+f` at an `a` end and `-f` at a `b` end,
 //!    then air damping `-c v`, ground penalty `k_c d - c_g v_y` (at depth `d > 0`),
@@ -32,9 +32,10 @@
 //! positions, on the pool's threads from its own size on.
 //!
 //! Per-triangle aerodynamic drag is a third pass before the particles' one, as
-//! the f64 engine computes it: each triangle's [`triangle_drag`](super::forces::triangle_drag) (the wind
-//! at the step's start time, gusts included) into a per-triangle array, which each
-//! particle adds after its springs, in the order of the triangles.
+//! the f64 engine computes it: each triangle's
+//! [`triangle_drag`](super::forces::triangle_drag) (the wind at the step's start
+//! time, gusts included) into a per-triangle array, which each particle adds
+//! after its springs, in the order of the triangles.
 //!
 //! With a tear strain, a step that leaves springs past it breaks them as the f64
 //! engine does ([`super::tearing`]): the engine removes them (and the triangles

@@ -82,7 +82,8 @@ impl GridCloth {
         fn is_empty(&self) -> bool
     );
     forward!(
-        /// Use `n` threads (at least 1) for grids of [`PARALLEL_MIN_PARTICLES`](super::PARALLEL_MIN_PARTICLES)
+        /// Use `n` threads (at least 1) for grids of
+        /// [`PARALLEL_MIN_PARTICLES`](super::PARALLEL_MIN_PARTICLES)
         /// particles or more; smaller grids always run on the calling thread. Builds
         /// a rayon pool of `n` threads (this allocates; the steps do not).
         fn set_threads(&mut self, n: usize)

@@ -67,7 +67,8 @@ pub struct GridSpec {
     pub tear_strain: Option<f64>,
     /// Speed limit in m/s, if any (`laws::speed_limit`).
     pub max_speed: Option<f64>,
-    /// Symplectic Euler, explicit Euler or position Verlet (see [`GridCloth::supports`](super::GridCloth::supports)).
+    /// Symplectic Euler, explicit Euler or position Verlet (see
+    /// [`GridCloth::supports`](super::GridCloth::supports)).
     pub integrator: Integrator,
     /// Which kinds of spring exist (structural, shear, bend); an absent kind has
     /// `k = b = 0` and no stretch limit.

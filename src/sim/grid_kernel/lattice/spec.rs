@@ -112,8 +112,9 @@ pub(super) const FORWARD: [(isize, isize, isize); 13] = [
     (1, 1, 1),
 ];
 
-/// Everything that defines a lattice for [`LatticeKernel::new`](super::LatticeKernel::new) (the positions and
-/// velocities come from [`LatticeKernel::set_state`](super::LatticeKernel::set_state)).
+/// Everything that defines a lattice for
+/// [`LatticeKernel::new`](super::LatticeKernel::new) (the positions and velocities
+/// come from [`LatticeKernel::set_state`](super::LatticeKernel::set_state)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LatticeSpec {
     /// The extents.

@@ -338,7 +338,7 @@ impl Iterator for ClassRows {
 
 /// The lines of a [`Sweep`] starting on `rows`, rows `stride` floats apart, and
 /// what they read besides the state: inverse masses, the direction's tear mask
-/// when springs tore ([`super::Torn`], indexed by first end), the mask of real
+/// when springs tore ([`crate::sim::grid_kernel::Torn`], indexed by first end), the mask of real
 /// particles when the arrays hold ghosts that springs reach (1 for particles, 0
 /// for ghosts: a lattice's), and for XPBD the positions at the start of the step
 /// (empty for the stretch limit) and, when it sweeps
