@@ -365,35 +365,24 @@ impl SelfCollision {
         parallel: bool,
     ) {
         self.rebuilds += 1;
-        let n = x.len();
         self.anchor.clear();
         self.anchor.extend_from_slice(x);
-        // A power of two at least twice the particles, so that a mask picks the
-        // bucket.
-        let buckets = (2 * n).next_power_of_two();
-        let mask = buckets as u32 - 1;
-        let bucket = |[a, b, c]: [i32; 3]| {
-            ((b as u32).wrapping_mul(HASH[0]) ^ (c as u32).wrapping_mul(HASH[1]))
-                .wrapping_add(a as u32)
-                & mask
-        };
-        // Cells a little over `reach`, so that round-off cannot put two particles
-        // within `reach` two cells apart. Non-finite coordinates land in cell 0 or
-        // far out (the divergence check reports them).
-        let scale = 1.0 / (reach * (1.0 + 1e-6));
-        let cell_of = |p: DVec3| {
-            (p * scale).to_array().map(|c| {
-                let c = c.clamp(-1e9, 1e9);
-                let t = c as i32;
-                t - i32::from(f64::from(t) > c)
-            })
-        };
-        let blocks = n.div_ceil(BLOCK);
+        let hash = CellHash::new(x.len(), reach);
+        self.sort_into_buckets(x, hash, parallel);
+        self.search(x, reach, hash, joined, parallel);
+        self.gather_found(parallel);
+    }
+
+    /// Puts each particle's cell and bucket in `cells`, then, by a counting sort,
+    /// the particles with their positions in bucket order in `sorted`, and where
+    /// each bucket starts in `cell_start`.
+    fn sort_into_buckets(&mut self, x: &[DVec3], hash: CellHash, parallel: bool) {
+        let n = x.len();
         self.cells.resize(n, ([0; 3], 0));
         let locate = |(k, out): (usize, &mut [([i32; 3], u32)])| {
             for (o, p) in out.iter_mut().zip(&x[k * BLOCK..]) {
-                let cell = cell_of(*p);
-                *o = (cell, bucket(cell));
+                let cell = hash.cell_of(*p);
+                *o = (cell, hash.bucket(cell));
             }
         };
         if parallel {
@@ -405,7 +394,7 @@ impl SelfCollision {
             self.cells.chunks_mut(BLOCK).enumerate().for_each(locate);
         }
         self.cell_start.clear();
-        self.cell_start.resize(buckets + 1, 0);
+        self.cell_start.resize(hash.buckets + 1, 0);
         for &(_, b) in &self.cells {
             self.cell_start[b as usize] += 1;
         }
@@ -423,6 +412,19 @@ impl SelfCollision {
                 index: i as u32,
             };
         }
+    }
+
+    /// Each block's particles' partners within `reach` that `joined` does not
+    /// join, into the block's list in `found_by_searcher` (see [`Self::rebuild`]).
+    fn search(
+        &mut self,
+        x: &[DVec3],
+        reach: f64,
+        hash: CellHash,
+        joined: impl Fn(usize, usize) -> bool + Sync,
+        parallel: bool,
+    ) {
+        let (n, buckets) = (x.len(), hash.buckets);
         let (cells, sorted, starts) = (&self.cells, &self.sorted, &self.cell_start);
         let reach2 = reach * reach;
         // The entries of buckets `from .. from + len`: one or two runs of the
@@ -482,15 +484,16 @@ impl SelfCollision {
                 // scene ran 3.6% more instructions (valgrind, 1,500 steps).
                 for (db, dc) in FORWARD_ROWS {
                     let cell = [a.wrapping_sub(1), b.wrapping_add(db), c.wrapping_add(dc)];
-                    let [first, second] = entries(bucket(cell), 3);
+                    let [first, second] = entries(hash.bucket(cell), 3);
                     scan(first);
                     scan(second);
                 }
-                let [first, second] = entries(bucket([a.wrapping_add(1), b, c]), 1);
+                let [first, second] = entries(hash.bucket([a.wrapping_add(1), b, c]), 1);
                 scan(first);
                 scan(second);
             }
         };
+        let blocks = n.div_ceil(BLOCK);
         self.found_by_searcher.resize_with(blocks, Vec::new);
         self.overflowed.resize(blocks, false);
         if parallel {
@@ -500,9 +503,13 @@ impl SelfCollision {
             let lists = self.found_by_searcher.iter_mut();
             (lists.zip(self.overflowed.iter_mut()).enumerate()).for_each(search);
         }
-        // Each pair to the block of its first particle, then each block's in order,
-        // once (a pair is found twice where the hash puts two cells that a
-        // particle reads in one bucket).
+    }
+
+    /// Each pair the searchers found to the block of its first particle, then
+    /// each block's in order, once (a pair is found twice where the hash puts two
+    /// cells that a particle reads in one bucket).
+    fn gather_found(&mut self, parallel: bool) {
+        let blocks = self.found_by_searcher.len();
         self.found.resize_with(blocks, Vec::new);
         for list in &mut self.found {
             // The same room as the searchers' lists.
@@ -521,6 +528,49 @@ impl SelfCollision {
         } else {
             self.found.iter_mut().for_each(order);
         }
+    }
+}
+
+/// The spatial hash of [`SelfCollision::rebuild`]: cells of about `reach`, hashed
+/// to a power of two of buckets, at least twice the particles, so that a mask
+/// picks the bucket.
+#[derive(Clone, Copy)]
+struct CellHash {
+    buckets: usize,
+    mask: u32,
+    /// Cells per metre.
+    scale: f64,
+}
+
+impl CellHash {
+    fn new(particles: usize, reach: f64) -> Self {
+        let buckets = (2 * particles).next_power_of_two();
+        CellHash {
+            buckets,
+            mask: buckets as u32 - 1,
+            // Cells a little over `reach`, so that round-off cannot put two
+            // particles within `reach` two cells apart.
+            scale: 1.0 / (reach * (1.0 + 1e-6)),
+        }
+    }
+
+    /// The bucket of `cell`: the three cells of a row along the first axis, `a -
+    /// 1, a, a + 1`, fall in consecutive buckets.
+    #[inline]
+    fn bucket(&self, [a, b, c]: [i32; 3]) -> u32 {
+        ((b as u32).wrapping_mul(HASH[0]) ^ (c as u32).wrapping_mul(HASH[1])).wrapping_add(a as u32)
+            & self.mask
+    }
+
+    /// The cell of position `p`. Non-finite coordinates land in cell 0 or far out
+    /// (the divergence check reports them).
+    #[inline]
+    fn cell_of(&self, p: DVec3) -> [i32; 3] {
+        (p * self.scale).to_array().map(|c| {
+            let c = c.clamp(-1e9, 1e9);
+            let t = c as i32;
+            t - i32::from(f64::from(t) > c)
+        })
     }
 }
 

@@ -578,7 +578,9 @@ pub(super) fn row_step<
     }
 }
 
-/// Columns `c .. c + LANES` of a row (see [`row_step`]).
+/// Columns `c .. c + LANES` of a row (see [`row_step`]): the block's springs and
+/// drag triangles ([`cell_forces`]), then each axis's forces carried and its
+/// particles stepped ([`block_axis`]).
 ///
 /// # Safety
 /// `c + LANES <= nv`, and the pointers and offsets of `k` are valid as asserted in
@@ -599,7 +601,6 @@ unsafe fn block<
     carry: &mut [[S::V; 3]; 3],
 ) {
     let s = k.s;
-    let zero = k.step.zero;
     // SAFETY: offsets are inside the arrays (caller's contract).
     let ld = |ptr: [*const S::E; 3], i: usize| unsafe {
         [
@@ -615,138 +616,29 @@ unsafe fn block<
     let p10 = (&ld(k.x, b1 + c), &ld(k.v, b1 + c));
     let p11 = (&ld(k.x, b1 + c + 1), &ld(k.v, b1 + c + 1));
     let p20 = (&ld(k.x, b2 + c), &ld(k.v, b2 + c));
-    // Masks of the springs right, two right, down, down-right, the other diagonal,
-    // two down, and of the two triangles.
-    let masks: Option<[S::V; 8]> = if MASK {
-        Some(match k.torn {
-            // SAFETY: as above (the other diagonal's mask is read one column on).
-            Some(t) => unsafe {
-                std::array::from_fn(|m| s.load(t[m].add(b0 + c + usize::from(m == 4))))
-            },
-            None => {
-                // SAFETY: as above.
-                let (m1, m2) = unsafe {
-                    (
-                        s.load(k.col_mask.add(c)),
-                        s.load(k.col_mask.add(k.stride + c)),
-                    )
-                };
-                let m1d = s.mul(m1, k.down);
-                [m1, m2, k.down, m1d, m1d, k.down2, m1d, m1d]
-            }
-        })
+    // SAFETY: as above.
+    let masks = if MASK {
+        Some(unsafe { block_masks(k, c) })
     } else {
         None
     };
-    let mask = |m: usize| masks.map(|masks| masks[m]);
-    let [structural, bend, shear] = k.kinds;
-    let (right, e_right) = spring::<S, FIXED>(s, p00, p01, structural, mask(0));
-    let (right2, _) = spring::<S, FIXED>(s, p00, p02, bend, mask(1));
-    let (d, e_down) = spring::<S, FIXED>(s, p00, p10, structural, mask(2));
-    let (dr, e_diagonal) = spring::<S, FIXED>(s, p00, p11, shear, mask(3));
-    // The other diagonal: with fixed-point positions, `x_01 - x_10` as the down
-    // spring's vector less the right one's, rather than as a difference of
-    // positions, which costs a conversion more. Exact while the three are under
-    // 2^24 units; else rounded to its own size, as a difference is.
-    let (anti, e_anti) = if FIXED {
-        let d = std::array::from_fn(|i| s.sub(e_down[i], e_right[i]));
-        spring_of(s, d, (p01.1, p10.1), shear, mask(4))
-    } else {
-        spring::<S, FIXED>(s, p01, p10, shear, mask(4))
-    };
-    let (d2, _) = spring::<S, FIXED>(s, p00, p20, bend, mask(5));
-    let (t1, t2) = if DRAG {
-        // Relative air velocity of (a, b, d) and (b, e, d), which share `b + d`.
-        let [va, vb, vd, ve] = [p00.1, p01.1, p10.1, p11.1].map(|v| lanes3(s, *v));
-        let third = Vector(s, k.third);
-        let vr1 = laws::air_velocity([va, vb, vd], k.wind, third);
-        let vr2 = laws::air_velocity([ve, vb, vd], k.wind, third);
-        (
-            // (a, b, d): edges b - a and d - a, the springs right and down negated.
-            triangle(s, [e_right, e_down], vr1, k.neg_drag, mask(6)),
-            // (b, e, d): edges e - b and d - b negated, b - e = (a - e) - (a - b)
-            // and the other diagonal.
-            triangle(
-                s,
-                [
-                    std::array::from_fn(|i| s.sub(e_diagonal[i], e_right[i])),
-                    e_anti,
-                ],
-                vr2,
-                k.neg_drag,
-                mask(7),
-            ),
-        )
-    } else {
-        ((zero, [zero; 3]), (zero, [zero; 3]))
-    };
-    let nv = k.nv;
+    let forces = cell_forces::<S, DRAG, FIXED>(k, [p00, p01, p02, p10, p11, p20], masks);
     // SAFETY: as above.
     let w = if OWN {
         unsafe { s.load(k.inv_mass.add(b0 + c)) }
     } else {
-        zero
+        k.step.zero
     };
-    // Each axis: the forces carried to the lanes beside and the rows below, then
-    // the step. Written out per axis where the level asks it (`Simd::UNROLL_AXES`).
+    // Each axis in turn, written out where the level asks it (`Simd::UNROLL_AXES`).
     macro_rules! axis {
-        ($i:expr) => {{
-            let i = $i;
-            // Terms for the lane to the right (column c+1), two to the right (c+2) and,
-            // on the next row, one to the right.
-            let q = s.sub(zero, right2[i]);
-            // With the triangles' drag `a m` (the first triangle's on this lane and
-            // the lane beside and below; the second's on the lane beside, below, and
-            // beside below), each product fused into a sum.
-            let ((a1, m1), (a2, m2)) = (t1, t2);
-            let (l, m, in1) = if DRAG {
-                (
-                    s.mul_add(a1, m1[i], s.mul_add(a2, m2[i], s.sub(anti[i], right[i]))),
-                    s.mul_sub(a2, m2[i], dr[i]),
-                    s.mul_add(a1, m1[i], s.mul_sub(a2, m2[i], s.add(d[i], anti[i]))),
-                )
-            } else {
-                (
-                    s.sub(anti[i], right[i]),
-                    s.sub(zero, dr[i]),
-                    s.sub(zero, s.add(d[i], anti[i])),
-                )
-            };
-            let in1 = s.add(in1, s.shift1(carry[2][i], m));
-            // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
+        ($i:expr) => {
+            // SAFETY: as above.
             unsafe {
-                let pa1 = k.acc.add(k.a[1] + i * nv + c);
-                s.store(pa1, s.add(s.load(pa1), in1));
-                s.store(k.acc.add(k.a[2] + i * nv + c), s.sub(zero, d2[i]));
+                block_axis::<S, DRAG, OWN, PLAIN, FIXED, METHOD, GROUND>(
+                    k, c, $i, &forces, carry, w, p00,
+                )
             }
-            if OWN {
-                let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
-                own = s.add(own, d2[i]);
-                if DRAG {
-                    own = s.mul_add(a1, m1[i], own);
-                }
-                own = s.add(
-                    own,
-                    s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
-                );
-                // SAFETY: as above; outputs hold `lo + nv` floats.
-                unsafe {
-                    let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
-                    integrate::<S, PLAIN, FIXED, METHOD, GROUND>(
-                        &k.step,
-                        k.b[0] + c,
-                        k.lo + c,
-                        i,
-                        w,
-                        p00,
-                        force,
-                    );
-                }
-            }
-            carry[0][i] = l;
-            carry[1][i] = q;
-            carry[2][i] = m;
-        }};
+        };
     }
     if S::UNROLL_AXES && !PLAIN {
         axis!(0);
@@ -761,6 +653,204 @@ unsafe fn block<
         // SAFETY: as above.
         unsafe { project_out_of_sphere::<S, FIXED>(&k.step, k.lo + c, w) };
     }
+}
+
+/// The masks of a block's springs right, two right, down, down-right, the other
+/// diagonal and two down, and of its two triangles: the torn cloth's, else the
+/// columns' and rows' that have them.
+///
+/// # Safety
+/// As for [`block`].
+#[inline(always)]
+unsafe fn block_masks<S: Simd>(k: &RowKernel<S>, c: usize) -> [S::V; 8] {
+    let s = k.s;
+    match k.torn {
+        // SAFETY: as above (the other diagonal's mask is read one column on).
+        Some(t) => unsafe {
+            std::array::from_fn(|m| s.load(t[m].add(k.b[0] + c + usize::from(m == 4))))
+        },
+        None => {
+            // SAFETY: as above.
+            let (m1, m2) = unsafe {
+                (
+                    s.load(k.col_mask.add(c)),
+                    s.load(k.col_mask.add(k.stride + c)),
+                )
+            };
+            let m1d = s.mul(m1, k.down);
+            [m1, m2, k.down, m1d, m1d, k.down2, m1d, m1d]
+        }
+    }
+}
+
+/// The forces on a block's particles of the springs that start on them and the
+/// drag of the triangles of their cells (see [`cell_forces`]).
+struct CellForces<V> {
+    /// The springs right, two right, down, down-right, the other diagonal
+    /// (down-left from the next column) and two down.
+    right: [V; 3],
+    right2: [V; 3],
+    down: [V; 3],
+    down_right: [V; 3],
+    anti: [V; 3],
+    down2: [V; 3],
+    /// The drag `(a, m)` of the triangles `(a, b, d)` and `(b, e, d)`.
+    drag: [(V, [V; 3]); 2],
+}
+
+/// [`CellForces`] of the particles `[p00, p01, p02, p10, p11, p20]` (row and
+/// column offsets from the block's own) with the block's `masks`.
+#[inline(always)]
+fn cell_forces<S: Simd, const DRAG: bool, const FIXED: bool>(
+    k: &RowKernel<S>,
+    [p00, p01, p02, p10, p11, p20]: [Particle<S::V>; 6],
+    masks: Option<[S::V; 8]>,
+) -> CellForces<S::V> {
+    let s = k.s;
+    let zero = k.step.zero;
+    let mask = |m: usize| masks.map(|masks| masks[m]);
+    let [structural, bend, shear] = k.kinds;
+    let (right, e_right) = spring::<S, FIXED>(s, p00, p01, structural, mask(0));
+    let (right2, _) = spring::<S, FIXED>(s, p00, p02, bend, mask(1));
+    let (down, e_down) = spring::<S, FIXED>(s, p00, p10, structural, mask(2));
+    let (down_right, e_diagonal) = spring::<S, FIXED>(s, p00, p11, shear, mask(3));
+    // The other diagonal: with fixed-point positions, `x_01 - x_10` as the down
+    // spring's vector less the right one's, rather than as a difference of
+    // positions, which costs a conversion more. Exact while the three are under
+    // 2^24 units; else rounded to its own size, as a difference is.
+    let (anti, e_anti) = if FIXED {
+        let d = std::array::from_fn(|i| s.sub(e_down[i], e_right[i]));
+        spring_of(s, d, (p01.1, p10.1), shear, mask(4))
+    } else {
+        spring::<S, FIXED>(s, p01, p10, shear, mask(4))
+    };
+    let (down2, _) = spring::<S, FIXED>(s, p00, p20, bend, mask(5));
+    let drag = if DRAG {
+        // Relative air velocity of (a, b, d) and (b, e, d), which share `b + d`.
+        let [va, vb, vd, ve] = [p00.1, p01.1, p10.1, p11.1].map(|v| lanes3(s, *v));
+        let third = Vector(s, k.third);
+        let vr1 = laws::air_velocity([va, vb, vd], k.wind, third);
+        let vr2 = laws::air_velocity([ve, vb, vd], k.wind, third);
+        [
+            // (a, b, d): edges b - a and d - a, the springs right and down negated.
+            triangle(s, [e_right, e_down], vr1, k.neg_drag, mask(6)),
+            // (b, e, d): edges e - b and d - b negated, b - e = (a - e) - (a - b)
+            // and the other diagonal.
+            triangle(
+                s,
+                [
+                    std::array::from_fn(|i| s.sub(e_diagonal[i], e_right[i])),
+                    e_anti,
+                ],
+                vr2,
+                k.neg_drag,
+                mask(7),
+            ),
+        ]
+    } else {
+        [(zero, [zero; 3]); 2]
+    };
+    CellForces {
+        right,
+        right2,
+        down,
+        down_right,
+        anti,
+        down2,
+        drag,
+    }
+}
+
+/// Component `i` of a block's forces: those carried to the lanes beside and the
+/// rows below, and (`OWN`) the block's particles, whose force is now complete,
+/// stepped ([`integrate`]).
+///
+/// # Safety
+/// As for [`block`].
+#[inline(always)]
+unsafe fn block_axis<
+    S: Simd,
+    const DRAG: bool,
+    const OWN: bool,
+    const PLAIN: bool,
+    const FIXED: bool,
+    const METHOD: u8,
+    const GROUND: bool,
+>(
+    k: &RowKernel<S>,
+    c: usize,
+    i: usize,
+    f: &CellForces<S::V>,
+    carry: &mut [[S::V; 3]; 3],
+    w: S::V,
+    p00: Particle<S::V>,
+) {
+    let s = k.s;
+    let zero = k.step.zero;
+    let nv = k.nv;
+    let CellForces {
+        right,
+        right2,
+        down: d,
+        down_right: dr,
+        anti,
+        down2: d2,
+        drag: [(a1, m1), (a2, m2)],
+    } = f;
+    let (a1, a2) = (*a1, *a2);
+    // Terms for the lane to the right (column c+1), two to the right (c+2) and,
+    // on the next row, one to the right.
+    let q = s.sub(zero, right2[i]);
+    // With the triangles' drag `a m` (the first triangle's on this lane and
+    // the lane beside and below; the second's on the lane beside, below, and
+    // beside below), each product fused into a sum.
+    let (l, m, in1) = if DRAG {
+        (
+            s.mul_add(a1, m1[i], s.mul_add(a2, m2[i], s.sub(anti[i], right[i]))),
+            s.mul_sub(a2, m2[i], dr[i]),
+            s.mul_add(a1, m1[i], s.mul_sub(a2, m2[i], s.add(d[i], anti[i]))),
+        )
+    } else {
+        (
+            s.sub(anti[i], right[i]),
+            s.sub(zero, dr[i]),
+            s.sub(zero, s.add(d[i], anti[i])),
+        )
+    };
+    let in1 = s.add(in1, s.shift1(carry[2][i], m));
+    // SAFETY: accumulator rows a1, a2, component i, columns c .. c + LANES.
+    unsafe {
+        let pa1 = k.acc.add(k.a[1] + i * nv + c);
+        s.store(pa1, s.add(s.load(pa1), in1));
+        s.store(k.acc.add(k.a[2] + i * nv + c), s.sub(zero, d2[i]));
+    }
+    if OWN {
+        let mut own = s.add(s.add(right[i], right2[i]), s.add(d[i], dr[i]));
+        own = s.add(own, d2[i]);
+        if DRAG {
+            own = s.mul_add(a1, m1[i], own);
+        }
+        own = s.add(
+            own,
+            s.add(s.shift1(carry[0][i], l), s.shift2(carry[1][i], q)),
+        );
+        // SAFETY: as above; outputs hold `lo + nv` floats.
+        unsafe {
+            let force = s.add(s.load(k.acc.add(k.a[0] + i * nv + c)), own);
+            integrate::<S, PLAIN, FIXED, METHOD, GROUND>(
+                &k.step,
+                k.b[0] + c,
+                k.lo + c,
+                i,
+                w,
+                p00,
+                force,
+            );
+        }
+    }
+    carry[0][i] = l;
+    carry[1][i] = q;
+    carry[2][i] = m;
 }
 
 /// Integrates component `i` of the `LANES` particles at array index `at` (inverse
