@@ -35,10 +35,16 @@ const MAX_COORDINATE: f64 = 1e6;
 /// (their `../meshes/NAME.obj` from `assets/scenes/`): used where no file is at
 /// that path, so that the installed binary finds them from any folder (and a
 /// changed file in the source tree is read as it is).
-const BUILTIN_MESHES: &[(&str, &str)] = &[(
-    "assets/meshes/tablecloth.obj",
-    include_str!("../../assets/meshes/tablecloth.obj"),
-)];
+const BUILTIN_MESHES: &[(&str, &str)] = &[
+    (
+        "assets/meshes/tablecloth.obj",
+        include_str!("../../assets/meshes/tablecloth.obj"),
+    ),
+    (
+        "assets/meshes/table.obj",
+        include_str!("../../assets/meshes/table.obj"),
+    ),
+];
 
 /// A checked triangle mesh: particles, triangles, texture coordinates and the
 /// springs its edges give, in the file's coordinates (m).

@@ -235,6 +235,52 @@ pub struct SceneSpec {
     /// Speed limit in m/s (seed 000's `vLim`). Absent: no limit.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_speed: Option<f64>,
+    /// Boxes, capsules, meshes and spheres the cloth meets, besides the ground
+    /// and `sphere_center` (`[[colliders]]` tables, last in a file).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub colliders: Vec<ColliderSpec>,
+}
+
+/// One `[[colliders]]` table of a scene file. Lengths in m, angles in degrees,
+/// velocities in m/s and rad/s.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ColliderSpec {
+    /// `sphere`, `box`, `capsule` or `mesh`.
+    pub shape: String,
+    /// Centre (sphere, box; a mesh's origin), `"x,y,z"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub center: Option<Vector>,
+    /// Half the box's size along its axes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub half_extents: Option<Vector>,
+    /// A capsule's ends.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub a: Option<Vector>,
+    /// The capsule's other end.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub b: Option<Vector>,
+    /// Radius of a sphere or capsule.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub radius: Option<f64>,
+    /// A mesh collider's OBJ file, relative to the scene file's folder.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mesh: Option<String>,
+    /// Degrees about z, then x, then y.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation: Option<Vector>,
+    /// Coulomb friction μ (default: the scene's `friction`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<f64>,
+    /// How far outside it the cloth rests (default: the scene's `thickness`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thickness: Option<f64>,
+    /// Velocity of its centre, m/s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<Vector>,
+    /// Angular velocity about its centre, rad/s on the world's axes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub angular_velocity: Option<Vector>,
 }
 
 /// Keys that give the same quantity: setting one clears the others.
@@ -468,6 +514,9 @@ const BUILTINS: &[BuiltinScene] = &[
     builtin!("sheet"),
     builtin!("drape"),
     builtin!("tablecloth"),
+    builtin!("table"),
+    builtin!("twist"),
+    builtin!("slide"),
     builtin!("fold"),
     builtin!("tear"),
     builtin!("spring"),
@@ -535,8 +584,11 @@ impl Scene {
             origin: origin.to_string(),
             message: file_message(&e, text),
         })?;
-        if let (Some(base), Some(mesh)) = (base, &mut spec.mesh) {
-            *mesh = mesh::join_relative(base, mesh);
+        if let Some(base) = base {
+            let collider_meshes = spec.colliders.iter_mut().filter_map(|c| c.mesh.as_mut());
+            for mesh in spec.mesh.iter_mut().chain(collider_meshes) {
+                *mesh = mesh::join_relative(base, mesh);
+            }
         }
         let scene = Self {
             spec,

@@ -19,7 +19,7 @@
 
 use glam::DVec3;
 
-use super::laws::{Contact, XpbdSpring, length_correction, xpbd_correction};
+use super::laws::{Contact, XpbdSpring, collide, length_correction, xpbd_correction};
 use super::{Integrator, LatticeShape, Model, State, Workspace};
 
 /// Applies every constraint the model has, then updates velocities.
@@ -71,13 +71,18 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let h = p.dt;
     let contact = Contact::of(p);
     let active = contact.is_active();
+    // The colliders where they are at the end of the step.
+    let (colliders, t) = (&model.colliders[..], state.time + h);
     let verlet = &mut state.verlet.positions;
     for (i, (v, x)) in state.velocities.iter_mut().zip(x.iter_mut()).enumerate() {
         *v += (*x - work.before_constraints[i]) / h;
         let w = model.inv_mass[i];
-        if active && w > 0.0 {
+        if (active || !colliders.is_empty()) && w > 0.0 {
             let (x_in, v_in) = (*x, *v);
-            (*x, *v) = contact.resolve(x_in, v_in, w);
+            if active {
+                (*x, *v) = contact.resolve(x_in, v_in, w);
+            }
+            (*x, *v) = collide(colliders, *x, *v, h, t);
             // Verlet reads the push from the positions; the friction's change of
             // velocity goes into its previous position.
             if let Some(prev) = verlet.get_mut(i) {

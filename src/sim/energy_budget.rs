@@ -28,7 +28,9 @@
 //!    cloth that then sags stiffens a little (1.4% on the hanging 32 x 32 one).
 //!    RK4 and implicit Euler lose energy inside their limits;
 //! 4. the constraints: the stretch limit and the sphere move particles and give
-//!    them the velocity `δ/h` of the move.
+//!    them the velocity `δ/h` of the move;
+//! 5. a moving collider, which can throw the cloth at twice its surface's speed
+//!    `u`: `2 M u²`.
 //!
 //! **The budget.** `E ≤ E_0 + margin`, with `margin = (SLACK + swing(r)) × scale`.
 //! `scale` is the energy the system can legitimately hold: its free mass falling
@@ -110,7 +112,12 @@ impl EnergyBudget {
         let strained: f64 = (model.springs.iter())
             .map(|s| 0.5 * model.stiffness_in_effect(s).abs() * (0.01 * s.rest).powi(2))
             .sum();
-        let scale = falling + wind + energy.kinetic.abs() + energy.elastic.abs() + strained;
+        // A moving collider can throw the cloth off at twice its surface's speed
+        // (an elastic bounce).
+        let fastest = (model.colliders.iter()).map(|c| c.surface_speed()).fold(0.0, f64::max);
+        let thrown = 2.0 * free_mass * fastest * fastest;
+        let scale =
+            falling + wind + thrown + energy.kinetic.abs() + energy.elastic.abs() + strained;
         let scale = if scale.is_finite() { scale } else { f64::MAX };
         // Without springs or ground contact nothing oscillates, so there is no step
         // limit to pass: what the energy does there is the integrator's drift under

@@ -221,6 +221,8 @@ pub struct MeshKernel {
     triangle_links: Vec<u32>,
     /// Simulated time in s at the start of the next step (the gusts' clock).
     time: f64,
+    /// The model's colliders ([`crate::sim::colliders`]).
+    colliders: Vec<crate::sim::Collider>,
     /// The grid's or the lattice's shape, if the particles form one (the order of
     /// the constraint passes follows it).
     grid: Option<GridShape>,

@@ -10,6 +10,7 @@
 //!   into [`System::run`]; `duo`: its two threads handing over each step by
 //!   spinning; `lanes`: float64 lanes, so that contact is written once for one
 //!   particle and for a block of them;
+//! - [`colliders`]: boxes, capsules, meshes and moving spheres the cloth meets;
 //! - [`self_collision`]: particles of a cloth kept a thickness apart, with friction;
 //! - [`tearing`]: springs that tear past a strain or are cut, and leave the model;
 //! - [`divergence`], [`energy_budget`], [`limiters`], [`stability`],
@@ -22,6 +23,7 @@
 //! State is structure-of-arrays; stepping allocates nothing.
 
 pub mod clock;
+pub mod colliders;
 pub mod constraints;
 pub mod divergence;
 pub(crate) mod duo;
@@ -49,6 +51,7 @@ pub mod verlet;
 pub mod wind;
 
 pub use clock::Clock;
+pub use colliders::{Collider, ColliderMesh, Shape};
 pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere, max_speed};
 pub use energy_budget::EnergyBudget;
 pub use fast_path::{Engine, GridShape, PrecisionRule};

@@ -4,6 +4,7 @@
 use glam::{DVec2, DVec3};
 
 use super::forces;
+use super::colliders::Collider;
 use super::{
     Adjacency, Bar, BarPairs, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
 };
@@ -177,6 +178,9 @@ pub struct Model {
     pub terms: ForceTerms,
     /// The wind as a function of time.
     pub wind: Wind,
+    /// Boxes, capsules, meshes and moving spheres the particles cannot enter,
+    /// besides `params.ground` and `params.sphere` ([`super::colliders`]).
+    pub colliders: Vec<Collider>,
 }
 
 impl Model {

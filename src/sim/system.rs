@@ -16,7 +16,7 @@ use glam::{DVec2, DVec3};
 use super::divergence::Runaway;
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
-    Adjacency, Bar, BarPairs, Divergence, Energy, EnergyBudget, ForceTerms, Grab, HAND_REACH,
+    Adjacency, Bar, BarPairs, Collider, Divergence, Energy, EnergyBudget, ForceTerms, Grab, HAND_REACH,
     Integrator, Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints,
     fast_path, forces, grid_kernel, implicit, integrators, laws, springs, stability,
 };
@@ -128,6 +128,7 @@ impl System {
             params,
             terms: ForceTerms::default(),
             wind,
+            colliders: Vec::new(),
         };
         model.refresh_terms();
         model.refresh_inv_mass(None);
@@ -349,6 +350,35 @@ impl System {
             self.prepare_integrator();
         } else if dt_changed && params.integrator == Integrator::Verlet {
             self.restart_verlet_history();
+        }
+    }
+
+    /// The colliders besides the ground and the scene's sphere.
+    pub fn colliders(&self) -> &[Collider] {
+        &self.model.colliders
+    }
+
+    /// Replaces the colliders ([`super::colliders`]); their poses are taken as
+    /// of their own `since` times.
+    pub fn set_colliders(&mut self, colliders: Vec<Collider>) {
+        self.mark_edited();
+        self.model.colliders = colliders;
+    }
+
+    /// Moves collider `i` to `center` (m) now, moving on at `velocity` (m/s) at
+    /// most its [`Collider::speed_limit`], so that it cannot pass through a
+    /// particle in one step. The user's work starts a new energy budget.
+    pub fn move_collider(&mut self, i: usize, center: DVec3, velocity: DVec3) {
+        self.catch_up();
+        let (t, dt) = (self.state.time, self.model.params.dt);
+        let Some(collider) = self.model.colliders.get_mut(i) else {
+            return;
+        };
+        let limit = collider.speed_limit(dt);
+        let velocity = velocity.clamp_length_max(limit);
+        if center.is_finite() && velocity.is_finite() {
+            collider.move_to(center, velocity, t);
+            self.budget = None;
         }
     }
 
@@ -603,6 +633,7 @@ impl System {
             || (p.stretch_limit.is_some() && !self.model.springs.is_empty())
             || laws::Contact::of(p).is_active()
             || p.self_collides()
+            || !self.model.colliders.is_empty()
     }
 
     /// Checks for non-finite values and runaways ([`super::divergence`]), then the

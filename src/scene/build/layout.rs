@@ -157,7 +157,11 @@ impl Resolved {
             height: self.height as usize,
             depth: self.depth as usize,
         });
-        System::new(masses, positions, &self.pins, topology, self.params)
+        let mut system = System::new(masses, positions, &self.pins, topology, self.params);
+        if !self.colliders.is_empty() {
+            system.set_colliders(self.colliders.clone());
+        }
+        system
     }
 
     /// A spring of `kind` from `a` to `b`, with the kind's stiffness and damping.

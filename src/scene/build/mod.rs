@@ -3,6 +3,7 @@
 //! bars, triangles and pins.
 
 mod anchors;
+mod colliders;
 mod layout;
 mod parts;
 mod ranges;
@@ -67,6 +68,8 @@ pub struct Resolved {
     pub mesh: Option<Arc<Mesh>>,
     /// Simulation parameters.
     pub params: Params,
+    /// The colliders besides the ground and the sphere.
+    pub colliders: Vec<crate::sim::Collider>,
 }
 
 /// Why `rest_length` (and the panel's rest length) does not apply to a mesh.
@@ -186,6 +189,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         1e3,
     )?;
     let params = params(spec, o, bars)?;
+    let colliders = colliders::colliders(&spec.colliders, o, params.thickness, params.friction)?;
     let substeps = SUBSTEPS.check(o, spec.substeps.unwrap_or(16))?;
 
     let mut pins = pin_indices(
@@ -234,6 +238,7 @@ pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
         stretch: ranged(o, "stretch", spec.stretch.unwrap_or(1.0), -1e3, false, 1e3)?,
         mesh,
         params,
+        colliders,
     })
 }
 

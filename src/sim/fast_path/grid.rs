@@ -184,6 +184,10 @@ impl System {
     /// it is either passed to the kernel or made a reason to refuse it.
     pub(super) fn grid_spec(&self) -> Option<GridSpec> {
         let model = &self.model;
+        // The colliders' contact runs on the f64 engines only.
+        if !model.colliders.is_empty() {
+            return None;
+        }
         let (shape, springs) = (model.grid?, self.engines.stencil_springs?);
         let crate::sim::Params {
             gravity,

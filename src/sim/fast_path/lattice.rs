@@ -90,7 +90,7 @@ impl System {
     /// it is either passed to the kernel or made a reason to refuse it.
     pub(in crate::sim) fn lattice_spec(&self) -> Option<LatticeSpec> {
         let model = &self.model;
-        if self.engines.lattice_refused {
+        if self.engines.lattice_refused || !model.colliders.is_empty() {
             return None;
         }
         let (shape, springs) = (model.lattice?, self.engines.stencil_springs?);

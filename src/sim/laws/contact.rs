@@ -162,7 +162,7 @@ pub(crate) struct Near<T> {
 /// `v` with its part along the surface of unit normal `normal` shortened by
 /// `most` (m/s), or removed when it is slower than that.
 #[inline(always)]
-fn coulomb<T: Lanes>(v: V3<T>, normal: V3<T>, most: T) -> V3<T> {
+pub(super) fn coulomb<T: Lanes>(v: V3<T>, normal: V3<T>, most: T) -> V3<T> {
     coulomb_along(v, v - normal.scale(v.dot(normal)), most)
 }
 

@@ -14,6 +14,7 @@
 //! | symplectic Euler, explicit Euler, position Verlet | [`update`] |
 //! | `x' = x + h v` on float positions | [`advanced`] |
 //! | sphere and ground contact with Coulomb friction | [`Contact::resolve_lanes`] |
+//! | a collider's push out, friction on the velocity relative to its surface | [`collide`] ([`pushed_out`]) |
 //! | a length restored (stretch limit `(1 + tau) L`, a bar) | [`length_correction`] |
 //! | XPBD's correction of a spring of compliance `1/k` | [`xpbd_correction`] |
 //! | the speed limit | [`speed_limit`] |
@@ -22,12 +23,14 @@
 //! Units are SI: m, m/s, N, kg. `Lanes::mul_add` is fused in the vector kernels
 //! and rounded twice in `f64`, so the reference keeps plain IEEE arithmetic.
 
+mod collide;
 mod constraints;
 mod contact;
 mod forces;
 mod motion;
 
 pub(crate) use crate::sim::lanes::{Lanes, V3};
+pub(crate) use collide::{collide, pushed_out};
 pub(crate) use constraints::{XpbdSpring, length_correction, xpbd_correction};
 pub use constraints::{overstretched, speed_limit};
 pub(crate) use contact::{Contact, Near, out_of_sphere};

@@ -142,6 +142,7 @@ impl MeshKernel {
             triangle_offsets: Vec::new(),
             triangle_links: Vec::new(),
             time: 0.0,
+            colliders: model.colliders.clone(),
             grid: model.grid,
             lattice: model.lattice,
             torn: Vec::new(),
@@ -287,6 +288,7 @@ impl MeshKernel {
             return false;
         }
         self.params = params;
+        self.colliders.clone_from(&model.colliders);
         self.size_before();
         self.inv_mass.copy_from_slice(&model.inv_mass);
         self.bars.copy_from_slice(&model.bars);
@@ -321,6 +323,7 @@ impl MeshKernel {
             || p.self_collision.is_some()
             || (p.integrator == Integrator::Xpbd && !self.model_springs.is_empty())
             || self.contact().is_active()
+            || !self.colliders.is_empty()
     }
 
     /// The colliders and their friction.

@@ -9,7 +9,7 @@ use super::passes::{
 };
 use super::{MIN_LEAF, MeshKernel};
 use crate::sim::constraints::{xpbd_pass, xpbd_sweeps_back};
-use crate::sim::laws::overstretched;
+use crate::sim::laws::{collide, overstretched};
 use crate::sim::laws::speed_limit;
 use crate::sim::springs;
 use crate::sim::springs::Adjacency;
@@ -225,15 +225,20 @@ impl MeshKernel {
         let h = p.dt;
         let contact = self.contact();
         let active = contact.is_active();
+        // The colliders where they are at the end of the step.
+        let (colliders, t) = (&self.colliders[..], self.time + h);
         let verlet = !self.u[0].is_empty();
         for i in 0..self.inv_mass.len() {
             let before = load(self.before.each_ref().map(Vec::as_slice), i);
             let x = load(self.x.each_ref().map(Vec::as_slice), i);
             let v_old = load(self.v.each_ref().map(Vec::as_slice), i);
             let mut v = v_old + (x - before) / h;
-            if active && self.inv_mass[i] > 0.0 {
-                let x_new;
-                (x_new, v) = contact.resolve(x, v, self.inv_mass[i]);
+            if (active || !colliders.is_empty()) && self.inv_mass[i] > 0.0 {
+                let mut x_new = x;
+                if active {
+                    (x_new, v) = contact.resolve(x, v, self.inv_mass[i]);
+                }
+                (x_new, v) = collide(colliders, x_new, v, h, t);
                 store(&mut self.x.each_mut().map(Vec::as_mut_slice), i, x_new);
             }
             store(&mut self.v.each_mut().map(Vec::as_mut_slice), i, v);

@@ -1,0 +1,204 @@
+//! Solids the cloth cannot enter, besides the ground and the scene's one sphere:
+//! spheres, oriented boxes, capsules and static triangle meshes, each at a pose
+//! that may move kinematically (a velocity and an angular velocity about its
+//! centre) or be moved by the user.
+//!
+//! A collider answers one question, [`Collider::touch`]: how deep a point is
+//! within its contact surface (the solid grown by the cloth's thickness) and along
+//! which normal it leaves, and how fast the solid's surface moves there. The
+//! response (the push out and Coulomb friction on the velocity relative to the
+//! surface) is one law for every shape and engine, `laws::collide`.
+
+mod mesh;
+mod shapes;
+
+use std::sync::Arc;
+
+use glam::{DQuat, DVec3};
+
+pub use mesh::ColliderMesh;
+
+/// A collider's geometry, in its own frame (centred on its pose's origin).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shape {
+    /// A ball of this radius (m).
+    Sphere {
+        /// Radius in m.
+        radius: f64,
+    },
+    /// A box of these half extents (m) along its own axes.
+    Box {
+        /// Half the box's size along x, y and z, in m.
+        half_extents: DVec3,
+    },
+    /// The points within `radius` of the segment from `a` to `b` (m, in the
+    /// collider's frame).
+    Capsule {
+        /// One end of the axis.
+        a: DVec3,
+        /// The other end.
+        b: DVec3,
+        /// Radius in m.
+        radius: f64,
+    },
+    /// A closed triangle mesh, outward normals by its winding.
+    Mesh(Arc<ColliderMesh>),
+}
+
+impl Shape {
+    /// The shape's name in scene files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Self::Sphere { .. } => "sphere",
+            Self::Box { .. } => "box",
+            Self::Capsule { .. } => "capsule",
+            Self::Mesh(_) => "mesh",
+        }
+    }
+
+    /// The radius (m) of a ball about the frame's origin that holds the shape.
+    pub fn bounding_radius(&self) -> f64 {
+        match self {
+            Self::Sphere { radius } => *radius,
+            Self::Box { half_extents } => half_extents.length(),
+            Self::Capsule { a, b, radius } => a.length().max(b.length()) + radius,
+            Self::Mesh(mesh) => mesh.bounding_radius(),
+        }
+    }
+
+    /// The shape's smallest half size (m): how far it may move in a step without a
+    /// particle on one side ending up past its middle.
+    pub fn smallest_half_size(&self) -> f64 {
+        match self {
+            Self::Sphere { radius } | Self::Capsule { radius, .. } => *radius,
+            Self::Box { half_extents } => half_extents.min_element(),
+            Self::Mesh(mesh) => mesh.smallest_half_size(),
+        }
+    }
+
+    /// The signed distance (m) of `p` (in the shape's frame) from its surface,
+    /// negative inside, and the outward unit normal there, when `p` is closer to
+    /// the surface than `reach` outside it (anywhere inside for the analytic
+    /// shapes; within `reach` of the surface for a mesh).
+    pub fn surface(&self, p: DVec3, reach: f64) -> Option<(f64, DVec3)> {
+        match self {
+            Self::Sphere { radius } => shapes::sphere(p, *radius, reach),
+            Self::Box { half_extents } => shapes::cuboid(p, *half_extents, reach),
+            Self::Capsule { a, b, radius } => shapes::capsule(p, (*a, *b), *radius, reach),
+            Self::Mesh(mesh) => mesh.surface(p, reach),
+        }
+    }
+}
+
+/// A solid at a pose, moving at constant velocity and angular velocity from the
+/// time the pose was set.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Collider {
+    /// Its geometry.
+    pub shape: Shape,
+    /// Where its frame's origin is (m) at time [`Self::since`].
+    pub center: DVec3,
+    /// Its orientation at time [`Self::since`].
+    pub rotation: DQuat,
+    /// Velocity of its centre in m/s.
+    pub velocity: DVec3,
+    /// Angular velocity in rad/s about its centre, on the world's axes.
+    pub angular_velocity: DVec3,
+    /// The simulated time (s) at which it is at `center` and `rotation`.
+    pub since: f64,
+    /// Coulomb friction coefficient μ between it and the cloth.
+    pub friction: f64,
+    /// How far outside its surface the cloth rests, m.
+    pub thickness: f64,
+}
+
+/// A point's contact with a collider: how deep it is within the contact surface,
+/// the outward normal, and the velocity of the solid there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Touch {
+    /// Depth (m) within the contact surface, positive.
+    pub depth: f64,
+    /// Outward unit normal.
+    pub normal: DVec3,
+    /// Velocity (m/s) of the solid's material at the point.
+    pub surface_velocity: DVec3,
+}
+
+impl Collider {
+    /// A collider of `shape` at rest at `center`, unrotated, with friction μ and
+    /// contact `thickness` (m).
+    pub fn at_rest(shape: Shape, center: DVec3, friction: f64, thickness: f64) -> Self {
+        Self {
+            shape,
+            center,
+            rotation: DQuat::IDENTITY,
+            velocity: DVec3::ZERO,
+            angular_velocity: DVec3::ZERO,
+            since: 0.0,
+            friction,
+            thickness,
+        }
+    }
+
+    /// Its centre and orientation at time `t` (s).
+    pub fn pose_at(&self, t: f64) -> (DVec3, DQuat) {
+        let elapsed = t - self.since;
+        let turn = DQuat::from_scaled_axis(self.angular_velocity * elapsed);
+        (self.center + self.velocity * elapsed, turn * self.rotation)
+    }
+
+    /// Whether it moves.
+    pub fn moves(&self) -> bool {
+        self.velocity != DVec3::ZERO || self.angular_velocity != DVec3::ZERO
+    }
+
+    /// The fastest a point of its surface moves (m/s).
+    pub fn surface_speed(&self) -> f64 {
+        self.velocity.length() + self.angular_velocity.length() * self.shape.bounding_radius()
+    }
+
+    /// The fastest its surface may move at step `dt` without passing through a
+    /// particle in one step: half its smallest half size (with the thickness) per
+    /// step.
+    pub fn speed_limit(&self, dt: f64) -> f64 {
+        0.5 * (self.shape.smallest_half_size() + self.thickness) / dt
+    }
+
+    /// Moves it to `center` at time `t`, keeping its orientation then, and gives
+    /// it `velocity` (m/s) from then on.
+    pub fn move_to(&mut self, center: DVec3, velocity: DVec3, t: f64) {
+        let (_, rotation) = self.pose_at(t);
+        (self.center, self.rotation, self.velocity, self.since) = (center, rotation, velocity, t);
+    }
+
+    /// The contact of a point at `x` (m) at time `t`, if it is within the contact
+    /// surface.
+    pub fn touch(&self, x: DVec3, t: f64) -> Option<Touch> {
+        let (center, rotation) = self.pose_at(t);
+        let offset = x - center;
+        let reach = self.shape.bounding_radius() + self.thickness;
+        if offset.length_squared() >= reach * reach {
+            return None;
+        }
+        let local = rotation.inverse() * offset;
+        let (distance, normal) = self.shape.surface(local, self.thickness)?;
+        let depth = self.thickness - distance;
+        (depth > 0.0).then(|| Touch {
+            depth,
+            normal: rotation * normal,
+            surface_velocity: self.velocity + self.angular_velocity.cross(offset),
+        })
+    }
+
+    /// A ball (centre, radius in m) that holds its contact surface over the time
+    /// from `t0` to `t1`.
+    pub fn reach(&self, t0: f64, t1: f64) -> (DVec3, f64) {
+        let (a, _) = self.pose_at(t0);
+        let (b, _) = self.pose_at(t1);
+        let radius = self.shape.bounding_radius() + self.thickness;
+        (0.5 * (a + b), radius + 0.5 * (b - a).length())
+    }
+}
+
+#[cfg(test)]
+mod tests;
