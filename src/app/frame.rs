@@ -22,6 +22,8 @@ pub struct FrameData {
     triangles: Vec<[u32; 3]>,
     ground: Option<f32>,
     sphere: Option<(Vec3, f32)>,
+    colliders: Vec<cloth_sandbox::sim::Collider>,
+    time: f64,
 }
 
 /// Colour index of a spring kind (see `kind_color`).
@@ -73,6 +75,9 @@ impl FrameData {
         self.ground = params.ground.map(|g| (g.height - params.thickness) as f32);
         self.sphere =
             (params.sphere).map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32));
+        self.colliders.clear();
+        self.colliders.extend_from_slice(system.colliders());
+        self.time = system.time();
         self.uvs.clear();
         self.uvs.extend(system.uvs().iter().map(|uv| uv.as_vec2()));
         self.pinned.clear();
@@ -112,6 +117,8 @@ impl FrameData {
             highlight,
             ground: self.ground,
             sphere: self.sphere,
+            colliders: &self.colliders,
+            time: self.time,
         }
     }
 }
@@ -131,7 +138,7 @@ pub fn framed_camera(session: &Session, yaw: Option<f32>, pitch: Option<f32>) ->
     camera
 }
 
-/// The box to frame when a scene loads: its particles and its sphere, if any.
+/// The box to frame when a scene loads: its particles, its sphere and its colliders.
 pub fn scene_bounds(session: &Session) -> (Vec3, Vec3) {
     let system = session.system();
     let points: Vec<Vec3> = system.positions().iter().map(|p| p.as_vec3()).collect();
@@ -166,6 +173,15 @@ pub fn scene_bounds(session: &Session) -> (Vec3, Vec3) {
         if c.is_finite() && r.is_finite() {
             lo = lo.min(c - Vec3::splat(r));
             hi = hi.max(c + Vec3::splat(r));
+        }
+    }
+    // The colliders where they start, each by the ball that holds it (a
+    // mesh's or a long capsule's reaches past its shape: framed to its middle).
+    for c in system.colliders() {
+        let (centre, radius) = (c.center.as_vec3(), (0.7 * c.shape.bounding_radius()) as f32);
+        if centre.is_finite() && radius.is_finite() && radius < 1e4 {
+            lo = lo.min(centre - Vec3::splat(radius));
+            hi = hi.max(centre + Vec3::splat(radius));
         }
     }
     (lo, hi)

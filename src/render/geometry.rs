@@ -44,7 +44,9 @@ pub const BACK_TINT: [f32; 3] = [1.0, 0.55, 0.35];
 /// Ground plane colour, lightly modulated by the checker.
 const GROUND_COLOR: [f32; 4] = [0.50, 0.54, 0.50, 0.35];
 /// Sphere collider colour, untextured.
-const SPHERE_COLOR: [f32; 4] = [0.80, 0.38, 0.32, 0.0];
+const SPHERE_COLOR: [f32; 4] = SOLID_COLOR;
+/// Colour of every collider (boxes, capsules, meshes, spheres).
+pub const SOLID_COLOR: [f32; 4] = [0.80, 0.38, 0.32, 0.0];
 /// Wireframe colour.
 pub const WIRE_COLOR: [f32; 4] = [0.08, 0.09, 0.12, 1.0];
 

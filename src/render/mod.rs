@@ -5,6 +5,7 @@
 pub mod geometry;
 pub mod gpu;
 pub mod offscreen;
+mod solids;
 
 use bytemuck::{Pod, Zeroable};
 use cloth_sandbox::view::OrbitCamera;
@@ -44,6 +45,10 @@ pub struct SceneFrame<'a> {
     pub ground: Option<f32>,
     /// Centre (m) and radius (m) of the sphere collider, if any.
     pub sphere: Option<(Vec3, f32)>,
+    /// The other colliders, drawn where they are at `time`.
+    pub colliders: &'a [cloth_sandbox::sim::Collider],
+    /// Simulated time (s) of the frame.
+    pub time: f64,
 }
 
 /// Display toggles and colours.
@@ -519,6 +524,10 @@ impl Renderer {
             // has its particles on the surface and its flat triangles as chords
             // inside it, through which the full-size sphere would show.
             geometry::sphere_mesh(c, SPHERE_SKIN * r.min(1e4), &mut extra, &mut extra_idx);
+        }
+        for collider in frame.colliders {
+            let skin = f64::from(SPHERE_SKIN);
+            solids::push_collider(collider, frame.time, skin, &mut extra, &mut extra_idx);
         }
         let extra_index_count = if self.extra_vertices.write(device, queue, &extra) < extra.len() {
             0

@@ -114,7 +114,9 @@ impl EnergyBudget {
             .sum();
         // A moving collider can throw the cloth off at twice its surface's speed
         // (an elastic bounce).
-        let fastest = (model.colliders.iter()).map(|c| c.surface_speed()).fold(0.0, f64::max);
+        let fastest = (model.colliders.iter())
+            .map(|c| c.surface_speed())
+            .fold(0.0, f64::max);
         let thrown = 2.0 * free_mass * fastest * fastest;
         let scale =
             falling + wind + thrown + energy.kinetic.abs() + energy.elastic.abs() + strained;

@@ -3,8 +3,8 @@
 
 use glam::{DVec2, DVec3};
 
-use super::forces;
 use super::colliders::Collider;
+use super::forces;
 use super::{
     Adjacency, Bar, BarPairs, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
 };

@@ -16,9 +16,9 @@ use glam::{DVec2, DVec3};
 use super::divergence::Runaway;
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
-    Adjacency, Bar, BarPairs, Collider, Divergence, Energy, EnergyBudget, ForceTerms, Grab, HAND_REACH,
-    Integrator, Model, Params, Spring, SpringKind, Stability, State, Topology, Wind, constraints,
-    fast_path, forces, grid_kernel, implicit, integrators, laws, springs, stability,
+    Adjacency, Bar, BarPairs, Collider, Divergence, Energy, EnergyBudget, ForceTerms, Grab,
+    HAND_REACH, Integrator, Model, Params, Spring, SpringKind, Stability, State, Topology, Wind,
+    constraints, fast_path, forces, grid_kernel, implicit, integrators, laws, springs, stability,
 };
 
 /// Scratch space for a step, sized once per model and integrator.

@@ -8,6 +8,7 @@
 mod common;
 
 mod applied_force;
+mod colliders;
 mod convergence;
 mod critical_step_undamped_explicit;
 mod degenerate;

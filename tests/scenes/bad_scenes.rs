@@ -175,3 +175,41 @@ fn every_shipped_scene_file_is_valid() {
         scene.build().unwrap();
     }
 }
+
+/// A collider's bad values and a broken collider mesh are refused with the
+/// field (`colliders[i].key`), the range or the file's line named.
+#[test]
+fn bad_colliders_are_refused_by_name() {
+    let dir = std::env::temp_dir().join(format!("cloth-colliders-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("broken.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
+    )
+    .unwrap();
+    let base = "layout = \"grid\"\n";
+    let cases = [
+        ("shape = \"cone\"", "colliders[0].shape"),
+        ("shape = \"sphere\"\nradius = -1", "colliders[0].radius"),
+        (
+            "shape = \"box\"\nhalf_extents = \"1,0,1\"",
+            "colliders[0].half_extents",
+        ),
+        ("shape = \"capsule\"\na = \"0,0,0\"", "colliders[0].b"),
+        ("shape = \"sphere\"\nfriction = 11", "colliders[0].friction"),
+        ("shape = \"mesh\"", "colliders[0].mesh"),
+        ("shape = \"mesh\"\nmesh = \"broken.obj\"", "line 4"),
+        ("shape = \"box\"\nradius = 1", "colliders[0].radius"),
+    ];
+    for (table, named) in cases {
+        let text = format!("{base}[[colliders]]\n{table}\n");
+        let path = dir.join("scene.toml");
+        std::fs::write(&path, &text).unwrap();
+        let err = cloth_sandbox::scene::Scene::load(path.to_str().unwrap())
+            .err()
+            .unwrap_or_else(|| panic!("accepted:\n{text}"))
+            .to_string();
+        assert!(err.contains(named), "{table}: {err}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -52,7 +52,11 @@ fn collider(
         v.map(|v| vector(o, &key(k), v.0, MAX_SIZE)).transpose()
     };
     let refuse = |k: &str, given: bool, why: &str| match given {
-        true => Err(invalid(o, &key(k), format!("does not apply to a {}: {why}", spec.shape))),
+        true => Err(invalid(
+            o,
+            &key(k),
+            format!("does not apply to a {}: {why}", spec.shape),
+        )),
         false => Ok(()),
     };
     let (shape, center) = match spec.shape.as_str() {
@@ -62,16 +66,29 @@ fn collider(
             let center = point("center", spec.center)?.unwrap_or(DVec3::ZERO);
             let shape = match spec.shape.as_str() {
                 "sphere" => {
-                    refuse("half_extents", spec.half_extents.is_some(), "give its `radius`")?;
-                    refuse("mesh", spec.mesh.is_some(), "only a mesh collider reads a file")?;
+                    refuse(
+                        "half_extents",
+                        spec.half_extents.is_some(),
+                        "give its `radius`",
+                    )?;
+                    refuse(
+                        "mesh",
+                        spec.mesh.is_some(),
+                        "only a mesh collider reads a file",
+                    )?;
                     Shape::Sphere {
                         radius: length("radius", spec.radius, 0.5)?,
                     }
                 }
                 "box" => {
                     refuse("radius", spec.radius.is_some(), "give its `half_extents`")?;
-                    refuse("mesh", spec.mesh.is_some(), "only a mesh collider reads a file")?;
-                    let half = point("half_extents", spec.half_extents)?.unwrap_or(DVec3::splat(0.5));
+                    refuse(
+                        "mesh",
+                        spec.mesh.is_some(),
+                        "only a mesh collider reads a file",
+                    )?;
+                    let half =
+                        point("half_extents", spec.half_extents)?.unwrap_or(DVec3::splat(0.5));
                     if half.min_element() <= 0.0 {
                         return Err(invalid(
                             o,
@@ -83,24 +100,51 @@ fn collider(
                 }
                 _ => {
                     refuse("radius", spec.radius.is_some(), "its file gives its shape")?;
-                    refuse("half_extents", spec.half_extents.is_some(), "its file gives its shape")?;
+                    refuse(
+                        "half_extents",
+                        spec.half_extents.is_some(),
+                        "its file gives its shape",
+                    )?;
                     Shape::Mesh(mesh_shape(spec, o, &key("mesh"), thickness)?)
                 }
             };
             (shape, center)
         }
         "capsule" => {
-            refuse("center", spec.center.is_some(), "its ends `a` and `b` place it")?;
-            refuse("half_extents", spec.half_extents.is_some(), "give its `radius`")?;
-            refuse("mesh", spec.mesh.is_some(), "only a mesh collider reads a file")?;
+            refuse(
+                "center",
+                spec.center.is_some(),
+                "its ends `a` and `b` place it",
+            )?;
+            refuse(
+                "half_extents",
+                spec.half_extents.is_some(),
+                "give its `radius`",
+            )?;
+            refuse(
+                "mesh",
+                spec.mesh.is_some(),
+                "only a mesh collider reads a file",
+            )?;
             let missing = |k: &str| {
-                invalid(o, &key(k), "is missing: a capsule needs both ends, `a` and `b` (m, `\"x,y,z\"`)".into())
+                invalid(
+                    o,
+                    &key(k),
+                    "is missing: a capsule needs both ends, `a` and `b` (m, `\"x,y,z\"`)".into(),
+                )
             };
             let a = point("a", spec.a)?.ok_or_else(|| missing("a"))?;
             let b = point("b", spec.b)?.ok_or_else(|| missing("b"))?;
             let center = 0.5 * (a + b);
             let radius = length("radius", spec.radius, 0.1)?;
-            (Shape::Capsule { a: a - center, b: b - center, radius }, center)
+            (
+                Shape::Capsule {
+                    a: a - center,
+                    b: b - center,
+                    radius,
+                },
+                center,
+            )
         }
         other => {
             return Err(invalid(
@@ -155,5 +199,9 @@ fn mesh_shape(
     // Queries reach twice the thickness, so that a particle that went a little
     // deeper in a step is still found.
     let reach = (2.0 * thickness).max(0.01);
-    Ok(Arc::new(ColliderMesh::new(m.positions.clone(), m.triangles.clone(), reach)))
+    Ok(Arc::new(ColliderMesh::new(
+        m.positions.clone(),
+        m.triangles.clone(),
+        reach,
+    )))
 }

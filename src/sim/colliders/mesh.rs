@@ -173,7 +173,8 @@ impl ColliderMesh {
             let better = match best {
                 None => true,
                 Some((b2, bside, _, _)) => {
-                    d2 < b2 * (1.0 - 1e-12) || (d2 <= b2 * (1.0 + 1e-12) && side.abs() > bside.abs())
+                    d2 < b2 * (1.0 - 1e-12)
+                        || (d2 <= b2 * (1.0 + 1e-12) && side.abs() > bside.abs())
                 }
             };
             if better {
@@ -189,7 +190,11 @@ impl ColliderMesh {
         if d >= reach {
             return None;
         }
-        let normal = if d > 1e-12 { (p - q) / d } else { self.normals[t] };
+        let normal = if d > 1e-12 {
+            (p - q) / d
+        } else {
+            self.normals[t]
+        };
         Some((d, normal))
     }
 }

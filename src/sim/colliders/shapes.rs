@@ -51,7 +51,12 @@ pub(super) fn cuboid(p: DVec3, half: DVec3, reach: f64) -> Option<(f64, DVec3)> 
 
 /// The points within `radius` of the segment `a`–`b`: a ball about the segment's
 /// point nearest to `p`.
-pub(super) fn capsule(p: DVec3, (a, b): (DVec3, DVec3), radius: f64, reach: f64) -> Option<(f64, DVec3)> {
+pub(super) fn capsule(
+    p: DVec3,
+    (a, b): (DVec3, DVec3),
+    radius: f64,
+    reach: f64,
+) -> Option<(f64, DVec3)> {
     sphere(p - nearest_on_segment(p, a, b), radius, reach)
 }
 

@@ -4,4 +4,161 @@
 use glam::{DQuat, DVec3};
 
 use super::mesh::closest_on_triangle;
+use super::shapes;
 use super::*;
+
+const EPS: f64 = 1e-12;
+
+/// A box's distance outside a face, an edge and a corner, and inside from the
+/// nearest face, each worked by hand.
+#[test]
+fn box_distances_and_normals() {
+    let half = DVec3::new(0.5, 0.2, 0.3);
+    let (d, n) = shapes::cuboid(DVec3::new(0.0, 0.25, 0.0), half, 1.0).unwrap();
+    assert!((d - 0.05).abs() < EPS && n == DVec3::Y, "{d} {n}");
+    // Past an edge: (0.6 - 0.5, 0.3 - 0.2) away, along their diagonal.
+    let (d, n) = shapes::cuboid(DVec3::new(0.6, 0.3, 0.0), half, 1.0).unwrap();
+    assert!((d - 0.02f64.sqrt()).abs() < EPS, "{d}");
+    assert!((n - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < EPS);
+    let (d, _) = shapes::cuboid(DVec3::new(-0.6, -0.3, -0.4), half, 1.0).unwrap();
+    assert!((d - 0.03f64.sqrt()).abs() < EPS, "{d}");
+    // Inside: 0.15 from the top face, farther from the others.
+    let (d, n) = shapes::cuboid(DVec3::new(0.1, 0.05, 0.0), half, 1.0).unwrap();
+    assert!((d + 0.15).abs() < EPS && n == DVec3::Y, "{d} {n}");
+    let (d, n) = shapes::cuboid(DVec3::new(-0.45, 0.0, 0.0), half, 1.0).unwrap();
+    assert!((d + 0.05).abs() < EPS && n == -DVec3::X, "{d} {n}");
+    assert!(shapes::cuboid(DVec3::new(0.0, 0.25, 0.0), half, 0.04).is_none());
+}
+
+/// A capsule is a ball about its axis's nearest point: beside the axis, past an
+/// end, and inside.
+#[test]
+fn capsule_distances_and_normals() {
+    let ends = (DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0));
+    let (d, n) = shapes::capsule(DVec3::new(0.3, 0.0, 0.5), ends, 0.2, 1.0).unwrap();
+    assert!((d - 0.3).abs() < EPS && (n - DVec3::Z).length() < EPS);
+    let (d, n) = shapes::capsule(DVec3::new(1.3, 0.4, 0.0), ends, 0.2, 1.0).unwrap();
+    assert!((d - 0.3).abs() < EPS && (n - DVec3::new(0.6, 0.8, 0.0)).length() < EPS);
+    let (d, n) = shapes::capsule(DVec3::new(-0.5, -0.05, 0.0), ends, 0.2, 1.0).unwrap();
+    assert!((d + 0.15).abs() < EPS && (n + DVec3::Y).length() < EPS);
+}
+
+/// The nearest point of a triangle in each of its Voronoi regions.
+#[test]
+fn nearest_points_of_a_triangle() {
+    let (a, b, c) = (DVec3::ZERO, DVec3::X, DVec3::Y);
+    let cases = [
+        (DVec3::new(0.2, 0.2, 1.0), DVec3::new(0.2, 0.2, 0.0)), // the face
+        (DVec3::new(-1.0, -1.0, 0.5), a),                       // corner a
+        (DVec3::new(2.0, -0.5, 0.0), b),                        // corner b
+        (DVec3::new(0.5, -1.0, 0.0), DVec3::new(0.5, 0.0, 0.0)), // edge ab
+        (DVec3::new(1.0, 1.0, 0.0), DVec3::new(0.5, 0.5, 0.0)), // edge bc
+        (DVec3::new(-0.5, 0.3, 0.2), DVec3::new(0.0, 0.3, 0.0)), // edge ca
+    ];
+    for (p, want) in cases {
+        let got = closest_on_triangle(p, a, b, c);
+        assert!((got - want).length() < EPS, "{p}: {got} not {want}");
+    }
+}
+
+/// A unit cube as a mesh, wound outwards.
+fn cube_mesh(reach: f64) -> ColliderMesh {
+    let corners = (0..8)
+        .map(|k| DVec3::new((k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64) - 0.5)
+        .collect();
+    let quads = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+        .collect();
+    ColliderMesh::new(corners, triangles, reach)
+}
+
+/// A cube as a mesh gives the box's distances and normals near its faces, edges
+/// and corners, on both sides, and nothing beyond its reach.
+#[test]
+fn a_mesh_cube_is_the_box() {
+    let mesh = cube_mesh(0.1);
+    let half = DVec3::splat(0.5);
+    let mut rng_state = 7u64;
+    let mut next = || {
+        rng_state = rng_state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng_state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut checked = 0;
+    for _ in 0..20_000 {
+        let p = DVec3::new(next(), next(), next()) * 1.4 - 0.7;
+        let want = shapes::cuboid(p, half, 0.08);
+        let got = mesh.surface(p, 0.08);
+        match (want, got) {
+            (Some((dw, nw)), Some((dg, ng))) if dw > -0.1 => {
+                assert!((dw - dg).abs() < 1e-9, "{p}: {dg} not {dw}");
+                assert!((nw - ng).length() < 1e-6 || dw < 0.0, "{p}: {ng} not {nw}");
+                checked += 1;
+            }
+            (Some((dw, _)), None) => assert!(dw <= -0.1 + 1e-9, "{p}: missed at {dw}"),
+            (None, Some((dg, _))) => panic!("{p}: found at {dg}, out of reach"),
+            _ => {}
+        }
+    }
+    assert!(checked > 1000, "only {checked} points near the surface");
+}
+
+/// The law: a particle inside a still collider is put on its contact surface
+/// with the push's velocity; on a surface moving along itself, friction μ takes
+/// from the velocity relative to the surface at most μ times the push's
+/// velocity, and μ = 0 takes none.
+#[test]
+fn push_and_friction_follow_the_surface() {
+    let h = 1e-3;
+    let mut ball = Collider::at_rest(Shape::Sphere { radius: 0.5 }, DVec3::ZERO, 0.0, 0.01);
+    let x = DVec3::new(0.0, 0.505, 0.0);
+    let touch = ball.touch(x, 0.0).unwrap();
+    assert!((touch.depth - 0.005).abs() < EPS && touch.normal == DVec3::Y);
+    let (x1, v1) = crate::sim::laws::pushed_out(x, DVec3::ZERO, &touch, 0.0, h);
+    assert!((x1.y - 0.51).abs() < EPS && (v1 - DVec3::new(0.0, 5.0, 0.0)).length() < 1e-9);
+    // Turning about y at 2 rad/s: at the top, the surface is still; on the
+    // equator at +x it moves at -z... take a particle at rest on the equator.
+    ball.angular_velocity = DVec3::new(0.0, 2.0, 0.0);
+    let x = DVec3::new(0.505, 0.0, 0.0);
+    let touch = ball.touch(x, 0.0).unwrap();
+    assert!((touch.surface_velocity - DVec3::new(0.0, 0.0, -1.01)).length() < EPS);
+    for (mu, dz) in [(0.0, 0.0), (0.1, -0.5), (10.0, -1.01)] {
+        let (_, v) = crate::sim::laws::pushed_out(x, DVec3::ZERO, &touch, mu, h);
+        assert!((v.x - 5.0).abs() < 1e-9, "the push's velocity stays: {v}");
+        assert!((v.z - dz).abs() < 1e-9, "μ = {mu}: {v} not {dz} along z");
+    }
+}
+
+/// A pose moves and turns with the collider's velocities.
+#[test]
+fn poses_follow_the_motion() {
+    let mut c = Collider::at_rest(
+        Shape::Box {
+            half_extents: DVec3::ONE,
+        },
+        DVec3::ZERO,
+        0.0,
+        0.0,
+    );
+    c.velocity = DVec3::new(1.0, 0.0, 0.0);
+    c.angular_velocity = DVec3::new(0.0, std::f64::consts::PI, 0.0);
+    let (center, rotation) = c.pose_at(0.5);
+    assert!((center - DVec3::new(0.5, 0.0, 0.0)).length() < EPS);
+    let turned = DQuat::from_rotation_y(0.5 * std::f64::consts::PI);
+    assert!(rotation.angle_between(turned) < 1e-9);
+    // Moved and stopped there at 0.5 s, it keeps turning.
+    c.move_to(DVec3::new(3.0, 0.0, 0.0), DVec3::ZERO, 0.5);
+    let (center, rotation) = c.pose_at(1.0);
+    let turned = DQuat::from_rotation_y(std::f64::consts::PI);
+    assert!(center == DVec3::new(3.0, 0.0, 0.0) && rotation.angle_between(turned) < 1e-9);
+}

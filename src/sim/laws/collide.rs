@@ -15,7 +15,13 @@ use crate::sim::colliders::{Collider, Touch};
 /// The colliders' contact of a free particle at `x` with velocity `v`, after a
 /// step `h` that ends at time `t`: each collider in turn, in the order given.
 /// Returns the new position and velocity.
-pub(crate) fn collide(colliders: &[Collider], x: DVec3, v: DVec3, h: f64, t: f64) -> (DVec3, DVec3) {
+pub(crate) fn collide(
+    colliders: &[Collider],
+    x: DVec3,
+    v: DVec3,
+    h: f64,
+    t: f64,
+) -> (DVec3, DVec3) {
     let (mut x, mut v) = (x, v);
     for collider in colliders {
         if let Some(touch) = collider.touch(x, t) {
@@ -27,7 +33,13 @@ pub(crate) fn collide(colliders: &[Collider], x: DVec3, v: DVec3, h: f64, t: f64
 
 /// A particle at `x` with velocity `v` pushed out of a collider it `touch`es,
 /// with friction μ, after a step `h`.
-pub(crate) fn pushed_out(x: DVec3, v: DVec3, touch: &Touch, friction: f64, h: f64) -> (DVec3, DVec3) {
+pub(crate) fn pushed_out(
+    x: DVec3,
+    v: DVec3,
+    touch: &Touch,
+    friction: f64,
+    h: f64,
+) -> (DVec3, DVec3) {
     let push = touch.normal * touch.depth;
     let surface = V3::from(touch.surface_velocity);
     let relative = V3::from(v) - surface;
@@ -41,7 +53,13 @@ pub(crate) fn pushed_out(x: DVec3, v: DVec3, touch: &Touch, friction: f64, h: f6
 /// the push's velocity added, then Coulomb friction removing up to `most` (m/s)
 /// of the part along the surface (none when `most` is 0).
 #[inline(always)]
-pub(crate) fn contact_velocity<T: Lanes>(v: V3<T>, push: V3<T>, normal: V3<T>, h: T, most: T) -> V3<T> {
+pub(crate) fn contact_velocity<T: Lanes>(
+    v: V3<T>,
+    push: V3<T>,
+    normal: V3<T>,
+    h: T,
+    most: T,
+) -> V3<T> {
     let pushed = v + push.over(h);
     if T::all(most.le(most.splat(0.0))) {
         return pushed;

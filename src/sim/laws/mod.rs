@@ -30,7 +30,9 @@ mod forces;
 mod motion;
 
 pub(crate) use crate::sim::lanes::{Lanes, V3};
-pub(crate) use collide::{collide, pushed_out};
+pub(crate) use collide::collide;
+#[cfg(test)]
+pub(crate) use collide::pushed_out;
 pub(crate) use constraints::{XpbdSpring, length_correction, xpbd_correction};
 pub use constraints::{overstretched, speed_limit};
 pub(crate) use contact::{Contact, Near, out_of_sphere};

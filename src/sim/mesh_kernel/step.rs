@@ -9,8 +9,8 @@ use super::passes::{
 };
 use super::{MIN_LEAF, MeshKernel};
 use crate::sim::constraints::{xpbd_pass, xpbd_sweeps_back};
-use crate::sim::laws::{collide, overstretched};
 use crate::sim::laws::speed_limit;
+use crate::sim::laws::{collide, overstretched};
 use crate::sim::springs;
 use crate::sim::springs::Adjacency;
 use crate::sim::tearing::remove_broken;
