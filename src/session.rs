@@ -635,6 +635,22 @@ impl Session {
         Ok(())
     }
 
+    /// Replaces the scene's colliders (the panel's Colliders section): each is
+    /// checked as a scene file's `[[colliders]]` table is, and a bad one refused
+    /// with its field named, changing nothing. One undo step per gesture.
+    pub fn set_colliders(
+        &mut self,
+        colliders: Vec<crate::scene::ColliderSpec>,
+    ) -> Result<(), SceneError> {
+        let before = self.scene.clone();
+        let mut scene = self.scene.clone();
+        scene.spec.colliders = colliders;
+        let settings = scene.resolve()?;
+        self.commit(scene, settings, false);
+        self.remember(before, Some("colliders"));
+        Ok(())
+    }
+
     /// [`Self::apply`] without an undo entry.
     fn apply_unrecorded(&mut self, edit: Edit) -> Result<(), SceneError> {
         let mut scene = self.scene.clone();
@@ -806,6 +822,9 @@ impl Session {
         }
         if new.particle_mass != old.particle_mass {
             self.system.set_particle_mass(new.particle_mass);
+        }
+        if new.colliders != old.colliders {
+            self.system.set_colliders(new.colliders.clone());
         }
         // Parameters (with dt and the stretch limit safe stepping picks) and substeps.
         self.choose_step();

@@ -1,5 +1,6 @@
 //! Mouse gestures on the scene: click a particle to pin it, press and drag a
-//! particle to move it, Ctrl + left drag to cut the cloth, drag elsewhere to orbit
+//! particle to move it, Ctrl + left drag to cut the cloth, Shift + left drag on a
+//! collider to move it, drag elsewhere to orbit
 //! (left/right) or pan (middle, shift+right), wheel to zoom. Pure state machine:
 //! the app applies the actions.
 
@@ -23,6 +24,8 @@ pub enum Gesture {
     Pan,
     /// Cutting the springs the cursor's path crosses (Ctrl + left drag).
     Cutting,
+    /// Moving collider `index` in the view plane (Shift + left drag on it).
+    MovingCollider { index: usize },
 }
 
 /// Something the app should do in response to the mouse.
@@ -41,6 +44,10 @@ pub enum MouseAction {
     /// Cut the springs that the cursor's path from the first point to the second
     /// (px) crosses on screen.
     Cut(Vec2, Vec2),
+    /// Move collider `index` towards the cursor (px).
+    MoveCollider { index: usize, cursor: Vec2 },
+    /// Stop moving the collider.
+    ReleaseCollider(usize),
 }
 
 /// Mouse buttons the scene reacts to.
@@ -96,6 +103,13 @@ impl Mouse {
         None
     }
 
+    /// Shift + left button went down over collider `index`: a drag moves it.
+    pub fn press_collider(&mut self, index: usize) {
+        if self.gesture == Gesture::Idle && self.cursor.is_some() {
+            self.gesture = Gesture::MovingCollider { index };
+        }
+    }
+
     /// The cursor moved to `to`.
     pub fn moved(&mut self, to: Vec2) -> Option<MouseAction> {
         let from = self.cursor.replace(to);
@@ -120,6 +134,9 @@ impl Mouse {
             Gesture::Orbit => Some(MouseAction::Orbit(delta)),
             Gesture::Pan => Some(MouseAction::Pan(delta)),
             Gesture::Cutting => from.map(|from| MouseAction::Cut(from, to)),
+            Gesture::MovingCollider { index } => {
+                Some(MouseAction::MoveCollider { index, cursor: to })
+            }
         }
     }
 
@@ -131,6 +148,9 @@ impl Mouse {
                 Some(MouseAction::TogglePin(particle))
             }
             (Gesture::Dragging { .. }, Button::Left) => Some(MouseAction::Release),
+            (Gesture::MovingCollider { index }, Button::Left) => {
+                Some(MouseAction::ReleaseCollider(index))
+            }
             (Gesture::Orbit, Button::Left | Button::Right)
             | (Gesture::Pan, Button::Right | Button::Middle)
             | (Gesture::Cutting, Button::Left) => None,
@@ -148,17 +168,42 @@ impl Mouse {
         }
     }
 
-    /// Forget any gesture (scene reset or focus lost); returns `Release` if a drag was in progress.
+    /// Forget any gesture (scene reset or focus lost); returns `Release` (or
+    /// `ReleaseCollider`) if a drag was in progress.
     pub fn cancel(&mut self) -> Option<MouseAction> {
-        let was_dragging = self.dragged().is_some();
+        let action = match self.gesture {
+            Gesture::Dragging { .. } => Some(MouseAction::Release),
+            Gesture::MovingCollider { index } => Some(MouseAction::ReleaseCollider(index)),
+            _ => None,
+        };
         self.gesture = Gesture::Idle;
-        was_dragging.then_some(MouseAction::Release)
+        action
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shift_drag_on_a_collider_moves_it_until_release() {
+        let mut m = Mouse::default();
+        m.moved(Vec2::new(10.0, 10.0));
+        m.press_collider(2);
+        let to = Vec2::new(30.0, 12.0);
+        assert_eq!(
+            m.moved(to),
+            Some(MouseAction::MoveCollider {
+                index: 2,
+                cursor: to
+            })
+        );
+        assert_eq!(
+            m.release(Button::Left),
+            Some(MouseAction::ReleaseCollider(2))
+        );
+        assert_eq!(m.gesture, Gesture::Idle);
+    }
 
     #[test]
     fn click_without_motion_toggles_pin() {

@@ -2,6 +2,7 @@
 //! panel. Input goes to egui first; what egui does not use drives the camera and
 //! the picking. Dependencies point one way: app -> render -> (library) session/sim.
 
+mod colliders;
 pub mod frame;
 pub mod gfx;
 pub mod help;
@@ -176,6 +177,8 @@ struct App {
     hovered: Option<usize>,
     /// The last points (px) of the cut the mouse is drawing (Ctrl + left drag).
     cut_path: Vec<Vec2>,
+    /// The collider the mouse moves (Shift + left drag), if any.
+    moving: Option<colliders::Moving>,
     /// A GIF being recorded (the panel's Record button).
     recording: Option<record::Job>,
     fatal: Option<anyhow::Error>,
@@ -203,6 +206,7 @@ impl App {
             out_of_view_since: None,
             hovered: None,
             cut_path: Vec::new(),
+            moving: None,
             recording: None,
             fatal: None,
         };
@@ -347,6 +351,8 @@ impl App {
                 }
                 self.session.system_mut().release();
             }
+            MouseAction::MoveCollider { index, cursor } => self.move_collider(index, cursor),
+            MouseAction::ReleaseCollider(index) => self.release_collider(index),
             MouseAction::Orbit(d) => self.camera.orbit(d),
             MouseAction::Pan(d) => self.camera.pan(d, self.viewport()),
             MouseAction::Cut(from, to) => {
@@ -419,6 +425,10 @@ impl App {
                 }
             },
             Action::DtKeepingSpeed(dt) => match self.session.apply_dt_keeping_speed(dt) {
+                Ok(()) => self.panel.error = None,
+                Err(e) => self.panel.error = Some(e.to_string()),
+            },
+            Action::Colliders(list) => match self.session.set_colliders(list) {
                 Ok(()) => self.panel.error = None,
                 Err(e) => self.panel.error = Some(e.to_string()),
             },
@@ -681,6 +691,7 @@ impl App {
     /// then the session goes back to the physics thread while the frame is drawn.
     fn redraw(&mut self, event_loop: &ActiveEventLoop) {
         self.session.hold();
+        self.steer_collider();
         let now = Instant::now();
         let elapsed = now.duration_since(self.last_frame).as_secs_f64().min(0.25);
         self.last_frame = now;
@@ -887,11 +898,17 @@ impl App {
                 };
                 match state {
                     ElementState::Pressed if !over_ui => {
+                        let m = self.modifiers;
+                        if let (Button::Left, true, Some(c)) =
+                            (button, m.shift_key(), self.mouse.cursor)
+                            && self.grab_collider(c)
+                        {
+                            return;
+                        }
                         let picked = match (button, self.mouse.cursor) {
                             (Button::Left, Some(c)) => self.pick(c),
                             _ => None,
                         };
-                        let m = self.modifiers;
                         if let Some(a) =
                             self.mouse
                                 .press(button, (m.shift_key(), m.control_key()), picked)

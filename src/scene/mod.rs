@@ -22,6 +22,7 @@ use build::{
 pub(crate) use edit::EDIT_ORIGIN;
 pub use edit::Edit;
 pub use values::{PinPreset, Pins, Vector};
+// (`ColliderSpec` is defined below, with `SceneSpec`.)
 
 use crate::limits::echo;
 use crate::sim::System;

@@ -4,6 +4,7 @@
 //! change to the simulation as an `Action` for the app to apply; parameter changes
 //! are typed [`Edit`]s.
 
+mod colliders;
 mod controls;
 mod display;
 mod parameters;
@@ -62,6 +63,8 @@ pub enum Action {
     Redo,
     /// Restore the scene's own parameters and pins.
     Defaults,
+    /// Replace the colliders with these.
+    Colliders(Vec<cloth_sandbox::scene::ColliderSpec>),
 }
 
 /// Panel state that lives between frames.
@@ -250,6 +253,7 @@ fn contents(
     pin_presets(ui, session.settings().layout, session.pins().len(), actions);
     ui.separator();
     parameters(ui, session, actions);
+    colliders::colliders(ui, session, actions);
     egui::CollapsingHeader::new("Plots")
         .default_open(false)
         .show(ui, |ui| state.history.show(ui))

@@ -428,6 +428,11 @@ impl Resolved {
             }
             Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) => *self = scene.resolve()?,
         }
+        // Colliders without their own friction or thickness take the scene's.
+        if matches!(edit, Edit::Friction(_) | Edit::Thickness(_)) {
+            let (thickness, friction) = (self.params.thickness, self.params.friction);
+            self.colliders = colliders::colliders(&spec.colliders, o, thickness, friction)?;
+        }
         Ok(())
     }
 

@@ -190,6 +190,37 @@ impl Collider {
         })
     }
 
+    /// How far (m) along the ray from `origin` in unit direction `dir` it first
+    /// meets the solid at time `t`, within `max` m: marched in steps of a quarter
+    /// of its smallest half size (for picking with the mouse, not for contact).
+    pub fn ray_hit(&self, origin: DVec3, dir: DVec3, t: f64, max: f64) -> Option<f64> {
+        let (center, rotation) = self.pose_at(t);
+        let radius = self.shape.bounding_radius();
+        // Only the part of the ray within its bounding ball.
+        let along = (center - origin).dot(dir);
+        let miss2 = (center - origin).length_squared() - along * along;
+        if miss2 > radius * radius || !along.is_finite() {
+            return None;
+        }
+        let half = (radius * radius - miss2).sqrt();
+        let (from, to) = ((along - half).max(0.0), (along + half).min(max));
+        let step = (0.25 * self.shape.smallest_half_size()).max(1e-4);
+        let inverse = rotation.inverse();
+        let mut s = from;
+        while s <= to {
+            let local = inverse * (origin + dir * s - center);
+            if self
+                .shape
+                .surface(local, 0.0)
+                .is_some_and(|(d, _)| d <= 0.0)
+            {
+                return Some(s);
+            }
+            s += step;
+        }
+        None
+    }
+
     /// A ball (centre, radius in m) that holds its contact surface over the time
     /// from `t0` to `t1`.
     pub fn reach(&self, t0: f64, t1: f64) -> (DVec3, f64) {
