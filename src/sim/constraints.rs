@@ -19,6 +19,7 @@
 
 use glam::DVec3;
 
+use super::colliders::poses_at;
 use super::laws::{Contact, XpbdSpring, collide, length_correction, xpbd_correction};
 use super::{Integrator, LatticeShape, Model, State, Workspace};
 
@@ -72,7 +73,9 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let contact = Contact::of(p);
     let active = contact.is_active();
     // The colliders where they are at the end of the step.
-    let (colliders, t) = (&model.colliders[..], state.time + h);
+    let colliders = &model.colliders[..];
+    poses_at(colliders, state.time + h, &mut work.collider_poses);
+    let poses = &work.collider_poses[..];
     let verlet = &mut state.verlet.positions;
     for (i, (v, x)) in state.velocities.iter_mut().zip(x.iter_mut()).enumerate() {
         *v += (*x - work.before_constraints[i]) / h;
@@ -82,7 +85,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
             if active {
                 (*x, *v) = contact.resolve(x_in, v_in, w);
             }
-            (*x, *v) = collide(colliders, *x, *v, h, t);
+            (*x, *v) = collide(colliders, poses, *x, *v, h);
             // Verlet reads the push from the positions; the friction's change of
             // velocity goes into its previous position.
             if let Some(prev) = verlet.get_mut(i) {

@@ -223,6 +223,8 @@ pub struct MeshKernel {
     time: f64,
     /// The model's colliders ([`crate::sim::colliders`]).
     colliders: Vec<crate::sim::Collider>,
+    /// Their poses at the end of the step (scratch).
+    collider_poses: Vec<crate::sim::Pose>,
     /// The grid's or the lattice's shape, if the particles form one (the order of
     /// the constraint passes follows it).
     grid: Option<GridShape>,

@@ -51,7 +51,7 @@ pub mod verlet;
 pub mod wind;
 
 pub use clock::Clock;
-pub use colliders::{Collider, ColliderMesh, Shape};
+pub use colliders::{Collider, ColliderMesh, Pose, Shape};
 pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere, max_speed};
 pub use energy_budget::EnergyBudget;
 pub use fast_path::{Engine, GridShape, PrecisionRule};

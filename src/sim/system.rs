@@ -35,6 +35,8 @@ pub struct Workspace {
     pub(crate) step_start: Vec<DVec3>,
     /// XPBD's multiplier of each spring in its pass ([`constraints::xpbd_pass`]).
     pub(crate) multipliers: Vec<f64>,
+    /// The colliders' poses at the end of the step.
+    pub(crate) collider_poses: Vec<super::Pose>,
     /// The self-collision pass's candidate pairs.
     pub(crate) self_collision: super::SelfCollision,
     pub(crate) implicit: implicit::ImplicitWorkspace,

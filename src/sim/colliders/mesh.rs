@@ -59,10 +59,11 @@ impl ColliderMesh {
             (lo - DVec3::splat(reach), hi + DVec3::splat(reach))
         };
         let size = hi - lo;
-        // About two cells a triangle, none smaller than twice the reach.
+        // About two cells a triangle, none much smaller than the reach (each
+        // lists the triangles within the reach of it, which then dominate).
         let volume = size.x * size.y * size.z;
         let target = (volume / (2.0 * triangles.len().max(1) as f64)).cbrt();
-        let mut cell = target.max(2.0 * reach);
+        let mut cell = target.max(0.5 * reach);
         let count = |cell: f64| size.to_array().map(|s| ((s / cell).ceil() as usize).max(1));
         while count(cell).iter().product::<usize>() > MAX_CELLS {
             cell *= 1.25;

@@ -112,6 +112,25 @@ pub struct Collider {
     pub thickness: f64,
 }
 
+/// Where a collider is at one time: its centre, its orientation and the
+/// orientation's inverse, worked out once a step for all the particles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// Centre in m.
+    pub center: DVec3,
+    /// Orientation.
+    pub rotation: DQuat,
+    /// Its inverse, from the world's axes to the collider's.
+    pub inverse: DQuat,
+}
+
+/// The poses of `colliders` at time `t` into `out` (which allocates only when
+/// the number of colliders grows).
+pub fn poses_at(colliders: &[Collider], t: f64, out: &mut Vec<Pose>) {
+    out.clear();
+    out.extend(colliders.iter().map(|c| c.pose(t)));
+}
+
 /// A point's contact with a collider: how deep it is within the contact surface,
 /// the outward normal, and the velocity of the solid there.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,6 +166,16 @@ impl Collider {
         (self.center + self.velocity * elapsed, turn * self.rotation)
     }
 
+    /// Its [`Pose`] at time `t` (s).
+    pub fn pose(&self, t: f64) -> Pose {
+        let (center, rotation) = self.pose_at(t);
+        Pose {
+            center,
+            rotation,
+            inverse: rotation.inverse(),
+        }
+    }
+
     /// Whether it moves.
     pub fn moves(&self) -> bool {
         self.velocity != DVec3::ZERO || self.angular_velocity != DVec3::ZERO
@@ -174,18 +203,23 @@ impl Collider {
     /// The contact of a point at `x` (m) at time `t`, if it is within the contact
     /// surface.
     pub fn touch(&self, x: DVec3, t: f64) -> Option<Touch> {
-        let (center, rotation) = self.pose_at(t);
-        let offset = x - center;
+        self.touch_at(&self.pose(t), x)
+    }
+
+    /// [`Self::touch`] with the collider at `pose`.
+    #[inline]
+    pub fn touch_at(&self, pose: &Pose, x: DVec3) -> Option<Touch> {
+        let offset = x - pose.center;
         let reach = self.shape.bounding_radius() + self.thickness;
         if offset.length_squared() >= reach * reach {
             return None;
         }
-        let local = rotation.inverse() * offset;
+        let local = pose.inverse * offset;
         let (distance, normal) = self.shape.surface(local, self.thickness)?;
         let depth = self.thickness - distance;
         (depth > 0.0).then(|| Touch {
             depth,
-            normal: rotation * normal,
+            normal: pose.rotation * normal,
             surface_velocity: self.velocity + self.angular_velocity.cross(offset),
         })
     }

@@ -10,21 +10,22 @@ use glam::DVec3;
 
 use super::contact::coulomb;
 use super::{Lanes, V3};
-use crate::sim::colliders::{Collider, Touch};
+use crate::sim::colliders::{Collider, Pose, Touch};
 
 /// The colliders' contact of a free particle at `x` with velocity `v`, after a
-/// step `h` that ends at time `t`: each collider in turn, in the order given.
-/// Returns the new position and velocity.
+/// step `h`, the colliders at `poses` (where they are at its end): each collider
+/// in turn, in the order given. Returns the new position and velocity.
+#[inline]
 pub(crate) fn collide(
     colliders: &[Collider],
+    poses: &[Pose],
     x: DVec3,
     v: DVec3,
     h: f64,
-    t: f64,
 ) -> (DVec3, DVec3) {
     let (mut x, mut v) = (x, v);
-    for collider in colliders {
-        if let Some(touch) = collider.touch(x, t) {
+    for (collider, pose) in colliders.iter().zip(poses) {
+        if let Some(touch) = collider.touch_at(pose, x) {
             (x, v) = pushed_out(x, v, &touch, collider.friction, h);
         }
     }

@@ -143,6 +143,7 @@ impl MeshKernel {
             triangle_links: Vec::new(),
             time: 0.0,
             colliders: model.colliders.clone(),
+            collider_poses: Vec::new(),
             grid: model.grid,
             lattice: model.lattice,
             torn: Vec::new(),

@@ -8,6 +8,7 @@ use super::passes::{
     restore_length, split_pass, spring_pass, store, triangle_pass,
 };
 use super::{MIN_LEAF, MeshKernel};
+use crate::sim::colliders::poses_at;
 use crate::sim::constraints::{xpbd_pass, xpbd_sweeps_back};
 use crate::sim::laws::speed_limit;
 use crate::sim::laws::{collide, overstretched};
@@ -226,7 +227,8 @@ impl MeshKernel {
         let contact = self.contact();
         let active = contact.is_active();
         // The colliders where they are at the end of the step.
-        let (colliders, t) = (&self.colliders[..], self.time + h);
+        poses_at(&self.colliders, self.time + h, &mut self.collider_poses);
+        let (colliders, poses) = (&self.colliders[..], &self.collider_poses[..]);
         let verlet = !self.u[0].is_empty();
         for i in 0..self.inv_mass.len() {
             let before = load(self.before.each_ref().map(Vec::as_slice), i);
@@ -238,7 +240,7 @@ impl MeshKernel {
                 if active {
                     (x_new, v) = contact.resolve(x, v, self.inv_mass[i]);
                 }
-                (x_new, v) = collide(colliders, x_new, v, h, t);
+                (x_new, v) = collide(colliders, poses, x_new, v, h);
                 store(&mut self.x.each_mut().map(Vec::as_mut_slice), i, x_new);
             }
             store(&mut self.v.each_mut().map(Vec::as_mut_slice), i, v);
