@@ -13,6 +13,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
         "cut the cloth: break the springs the mouse's path crosses",
     ),
     (
+        "Shift + left drag on a collider",
+        "move it: it pushes and drags the cloth",
+    ),
+    (
         "Right drag, or left drag on empty space",
         "orbit the camera",
     ),
