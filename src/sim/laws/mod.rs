@@ -14,8 +14,8 @@
 //! | symplectic Euler, explicit Euler, position Verlet | [`update`] |
 //! | `x' = x + h v` on float positions | [`advanced`] |
 //! | sphere and ground contact with Coulomb friction | [`Contact::resolve_lanes`] |
-//! | a length restored (stretch limit `(1 + tau) L`, a bar) | [`length_correction`] |
-//! | XPBD's correction of a spring of compliance `1/k` | [`xpbd_correction`] |
+//! | a length restored (stretch limit `(1 + tau) L`, a bar): `s = (l - goal) / (l w)` | [`length_factor`] ([`length_correction`]) |
+//! | XPBD's correction of a spring of compliance `1/k` | [`xpbd_factor`] ([`xpbd_correction`]) |
 //! | the speed limit | [`speed_limit`] |
 //! | the tear test `l > (1 + tau) L` | [`overstretched`] |
 //!
@@ -28,7 +28,9 @@ mod forces;
 mod motion;
 
 pub(crate) use crate::sim::lanes::{Lanes, V3};
-pub(crate) use constraints::{XpbdSpring, length_correction, xpbd_correction};
+pub(crate) use constraints::{
+    XpbdCoefficients, XpbdSpring, length_correction, length_factor, xpbd_correction, xpbd_factor,
+};
 pub use constraints::{overstretched, speed_limit};
 pub(crate) use contact::{Contact, Near, out_of_sphere};
 pub use forces::EPSILON_LENGTH;
