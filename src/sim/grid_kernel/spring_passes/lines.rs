@@ -558,9 +558,9 @@ fn limit2_of<E: Real>(longest2: E, kept: bool) -> E {
 /// only where a spring is over the limit.
 ///
 /// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
-///   as [`crate::sim::laws::length_correction`] does.
-/// * XPBD corrects every spring as [`crate::sim::laws::xpbd_correction`]
-///   does, from the positions at the start of the step in `lines.start`.
+///   by [`crate::sim::laws::length_factor`].
+/// * XPBD corrects every spring by [`crate::sim::laws::xpbd_factor`]
+///   from the positions at the start of the step in `lines.start`.
 ///
 /// Each particle has at most one spring in a class, so the moves do not interact:
 /// a lane out of the class (or past the line, or a spring that tore: 0 in the
