@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
 # another, resize the window, press R, F1 twice (help), Ctrl+S (save), F12
-# (screenshot), Ctrl+Z and Ctrl+Shift+Z (undo, redo), Esc; passes when the app
+# (screenshot), Ctrl+Z and Ctrl+Shift+Z (undo, redo), Esc, then Shift + drag a
+# collider in the slide scene; passes when the app
 # logged each action, exited 0 and its log holds no error or panic.
 #
 # Needs: Xvfb, xdotool (and ImageMagick's `import` when SHOT_DIR is set, to save
@@ -143,4 +144,43 @@ APP_PID=""
 if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
     fail "the log has errors"
 fi
-echo "xvfb_app: ok (pin, drag, resize, reset, help, save, screenshot, undo, redo, quit; exit 0, clean log)"
+# The slide scene: Shift + drag on its box (framed in the middle of the view)
+# moves it, and letting go keeps it where it was left.
+LOG=$WORK/slide.log
+(cd "$WORK/cwd" && RUST_LOG=${RUST_LOG:-warn,cloth=info} exec "$BIN" --scene slide) >"$LOG" 2>&1 &
+APP_PID=$!
+sleep 1
+WID=$(timeout 30 xdotool search --sync --name "cloth-sandbox" | head -1) || true
+[[ -n $WID ]] || fail "no window for the slide scene"
+sleep 3
+xdotool windowfocus --sync "$WID"
+xdotool mousemove --window "$WID" 840 450
+sleep 0.3
+xdotool keydown shift
+sleep 0.3
+xdotool mousedown 1
+for step in 1 2 3 4 5 6; do
+    xdotool mousemove --window "$WID" $((840 - step * 30)) 440
+    sleep 0.15
+done
+sleep 0.5
+shot 7-collider-moved
+xdotool mouseup 1
+sleep 0.3
+xdotool keyup shift
+sleep 0.5
+grep -q "moving collider 0 (box)" "$LOG" || fail "Shift + drag on the box took no collider"
+grep -q "released collider 0" "$LOG" || fail "letting go did not release the collider"
+xdotool windowfocus --sync "$WID"
+xdotool key Escape
+set +e
+timeout 20 tail --pid="$APP_PID" -f /dev/null
+wait "$APP_PID"
+STATUS=$?
+set -e
+APP_PID=""
+[[ $STATUS -eq 0 ]] || fail "the slide scene's app exited with status $STATUS"
+if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
+    fail "the slide scene's log has errors"
+fi
+echo "xvfb_app: ok (pin, drag, resize, reset, help, save, screenshot, undo, redo, quit, Shift + drag a collider; exit 0, clean logs)"

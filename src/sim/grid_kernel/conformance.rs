@@ -3,8 +3,9 @@
 //!
 //! - The f64 instance of each law is first held to the textbook formula, written
 //!   here with glam in the physics' own terms (`-(k (l - L) + b dv·u) u`, `-½ ρ
-//!   C_d A (v·n) |v| n / 3`, `x' = 2x - x_prev + h² a`, ...), within `1e-12` of
-//!   each output's scale (the largest term it sums).
+//!   C_d A (v·n) |v| n / 3`, `x' = 2x - x_prev + h² a`, `(l - goal) / (l w) d`,
+//!   XPBD's `t n`, `r d / l`, ...), within `1e-12` of each output's scale (the
+//!   largest term it sums).
 //! - Lanes that round as the reference does (`Floats<f64, _>`, the portable
 //!   kernel's float64 vectors without FMA) must give its numbers bit for bit.
 //! - Float64 vector kernels (fused, the root's estimate refined) within `1e-13`
@@ -18,7 +19,7 @@ use rand::{Rng, SeedableRng};
 use super::Real;
 use super::simd::{Portable, Simd, Vector};
 use crate::sim::lanes::{Floats, Lanes, V3};
-use crate::sim::laws::{self, Method, SpringCoefficients};
+use crate::sim::laws::{self, Method, SpringCoefficients, XpbdCoefficients};
 
 /// One random case's inputs, every law's at once.
 #[derive(Clone, Copy, Debug)]
@@ -44,9 +45,21 @@ struct Case {
     a: f64,
     h: f64,
     x: f64,
+    /// A length to restore a spring to (the stretch limit's `(1 + tau) L`, a bar's).
+    goal: f64,
+    /// XPBD: the first end's move since the start of the step less the second's,
+    /// `α̃ λ` so far, `α̃` and `γ`.
+    moved: DVec3,
+    alpha_lambda: f64,
+    alpha: f64,
+    gamma: f64,
+    radius: f64,
 }
 
-const OUTPUTS: [&str; 17] = [
+/// The laws' outputs, in the order of [`Case::textbook`].
+const N_OUT: usize = 28;
+
+const OUTPUTS: [&str; N_OUT] = [
     "spring x",
     "spring y",
     "spring z",
@@ -64,6 +77,17 @@ const OUTPUTS: [&str; 17] = [
     "verlet u'",
     "verlet v'",
     "advanced",
+    "length correction x",
+    "length correction y",
+    "length correction z",
+    "xpbd correction x",
+    "xpbd correction y",
+    "xpbd correction z",
+    "xpbd t",
+    "xpbd t from λ = 0",
+    "sphere surface x",
+    "sphere surface y",
+    "sphere surface z",
 ];
 
 impl Case {
@@ -78,6 +102,7 @@ impl Case {
         let (d, dv, wind) = (vec(1.0), vec(5.0), vec(10.0));
         let tri = [vec(1.0), vec(1.0), vec(1.0)];
         let tri_v = [vec(3.0), vec(3.0), vec(3.0)];
+        let moved = vec(0.05);
         let mut c = Self {
             d,
             dv,
@@ -100,22 +125,57 @@ impl Case {
             a: rng.random_range(-100.0..100.0),
             h: rng.random_range(1e-4..1e-2),
             x: rng.random_range(-2.0..2.0),
+            goal: rng.random_range(0.01..2.0),
+            moved,
+            alpha_lambda: rng.random_range(-0.05..0.05),
+            alpha: 0.0,
+            gamma: 0.0,
+            radius: rng.random_range(0.05..2.0),
         };
-        // The degenerate cases every engine meets: coincident spring ends, a
-        // triangle with no area, a still triangle in still air, a pinned particle.
-        match rng.random_range(0..12) {
+        // XPBD's `α̃ = 1 / (k h²)` and `γ = b / (k h)` of the case's spring.
+        (c.alpha, c.gamma) = (1.0 / (c.k * c.h * c.h), c.b / (c.k * c.h));
+        // The degenerate cases every engine meets: coincident spring ends (a
+        // particle at the sphere's centre), a triangle with no area, a still
+        // triangle in still air, a pinned particle (a spring pinned at both ends),
+        // a spring at its goal or rest length, a spring that did not move.
+        match rng.random_range(0..14) {
             0 => c.d = DVec3::ZERO,
             1 => c.tri[2] = c.tri[0] + 0.5 * (c.tri[1] - c.tri[0]),
             2 => (c.tri_v, c.wind) = ([DVec3::ZERO; 3], DVec3::ZERO),
             3 => c.w = 0.0,
+            4 => (c.goal, c.rest) = (c.d.length(), c.d.length()),
+            5 => (c.moved, c.alpha_lambda) = (DVec3::ZERO, 0.0),
             _ => {}
         }
         c
     }
 
     /// The textbook value of each output, and its scale.
-    fn textbook(&self) -> [(f64, f64); 17] {
+    fn textbook(&self) -> [(f64, f64); N_OUT] {
         let l = self.d.length();
+        // Restoring a length: `c = (l - goal) / (l w) d`, nothing where `l w` is
+        // 0 (the engines leave those springs alone).
+        let correction = if l > 0.0 && self.w > 0.0 {
+            (l - self.goal) / (l * self.w) * self.d
+        } else {
+            DVec3::ZERO
+        };
+        let correction_scale = (l + self.goal) / self.w.max(1e-300);
+        // XPBD: `t = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)`, `c = t n`, with `n` 0
+        // for coincident ends (which move nothing).
+        let n = if l > 0.0 { self.d / l } else { DVec3::ZERO };
+        let den = (1.0 + self.gamma) * self.w + self.alpha;
+        let along = self.gamma * n.dot(self.moved);
+        let xpbd_t = (l - self.rest + self.alpha_lambda + along) / den;
+        let xpbd_t0 = (l - self.rest + along) / den;
+        let xpbd_scale =
+            (l + self.rest + self.alpha_lambda.abs() + self.gamma * self.moved.length()) / den;
+        // The sphere: `r d / l`, straight up at the centre.
+        let surface = if l > 0.0 {
+            self.radius * self.d / l
+        } else {
+            self.radius * DVec3::Y
+        };
         let spring = if l > 0.0 {
             let u = self.d / l;
             -(self.k * (l - self.rest) + self.b * self.dv.dot(u)) * u
@@ -190,6 +250,17 @@ impl Case {
                 speed + self.x.abs() / h,
             ),
             (self.x + h * self.v, self.x.abs() + h * self.v.abs()),
+            (correction.x, correction_scale),
+            (correction.y, correction_scale),
+            (correction.z, correction_scale),
+            (xpbd_t * n.x, xpbd_scale),
+            (xpbd_t * n.y, xpbd_scale),
+            (xpbd_t * n.z, xpbd_scale),
+            (xpbd_t, xpbd_scale),
+            (xpbd_t0, xpbd_scale),
+            (surface.x, self.radius),
+            (surface.y, self.radius),
+            (surface.z, self.radius),
         ]
     }
 }
@@ -243,7 +314,7 @@ impl<S: Simd> Probe for Vector<S> {
 }
 
 /// Every law's outputs for a block of cases, one per lane of `like`.
-fn laws_in<L: Probe>(like: L, cases: &[Case]) -> Vec<[f64; 17]> {
+fn laws_in<L: Probe>(like: L, cases: &[Case]) -> Vec<[f64; N_OUT]> {
     let lane = |f: &dyn Fn(&Case) -> f64| like.fill(&cases.iter().map(f).collect::<Vec<_>>());
     let v3 = |f: &dyn Fn(&Case) -> DVec3| V3 {
         x: lane(&|c| f(c).x),
@@ -278,6 +349,23 @@ fn laws_in<L: Probe>(like: L, cases: &[Case]) -> Vec<[f64; 17]> {
         step(Method::ExplicitEuler),
         step(Method::Verlet),
     );
+    let d = v3(&|c| c.d);
+    // The length correction where an engine applies it (`l w > 0`), 0 elsewhere
+    // as an engine's masks leave it.
+    let applies = d.length() * w;
+    let correction =
+        d.scale(applies.keep_if_positive(laws::length_factor(d, lane(&|c| c.goal), w)));
+    let xpbd = XpbdCoefficients {
+        rest: lane(&|c| c.rest),
+        alpha: lane(&|c| c.alpha),
+        gamma: lane(&|c| c.gamma),
+        one_gamma: lane(&|c| 1.0 + c.gamma),
+    };
+    let moved = v3(&|c| c.moved);
+    let (xpbd_s, xpbd_t) = laws::xpbd_factor(d, moved, w, xpbd, Some(lane(&|c| c.alpha_lambda)));
+    let (_, xpbd_t0) = laws::xpbd_factor(d, moved, w, xpbd, None);
+    let xpbd_c = d.scale(xpbd_s);
+    let surface = laws::surface_offset(d, d.dot(d), lane(&|c| c.radius));
     let outputs = [
         spring.x,
         spring.y,
@@ -296,6 +384,17 @@ fn laws_in<L: Probe>(like: L, cases: &[Case]) -> Vec<[f64; 17]> {
         ver.u,
         ver.v,
         laws::advanced(x, h, v),
+        correction.x,
+        correction.y,
+        correction.z,
+        xpbd_c.x,
+        xpbd_c.y,
+        xpbd_c.z,
+        xpbd_t,
+        xpbd_t0,
+        surface.x,
+        surface.y,
+        surface.z,
     ]
     .map(Probe::read);
     (0..cases.len())

@@ -921,7 +921,7 @@ pub(super) unsafe fn integrate<
 }
 
 /// Projects the just integrated particles at output index `o` that are inside
-/// the sphere (and free) onto its surface, `center + radius d / |d|` (in the
+/// the sphere (and free) onto its surface ([`laws::surface_offset`], in the
 /// positions' units); the move `δ` (as computed: fixed-point positions take it
 /// rounded to a unit, see `spring_line`) also changes their velocities by `δ / h`.
 ///
@@ -940,21 +940,22 @@ pub(super) unsafe fn project_out_of_sphere<S: Simd, const FIXED: bool>(
     // SAFETY: the outputs just written (caller's contract).
     let out = |j: usize| unsafe { s.load(k.out[j].add(o)) };
     let xn: [S::V; 3] = std::array::from_fn(out);
-    let d: [S::V; 3] = std::array::from_fn(|i| difference::<S, FIXED>(s, xn[i], center[i]));
-    let d2 = s.mul_add(d[2], d[2], s.mul_add(d[1], d[1], s.mul(d[0], d[0])));
-    let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2), k.one));
+    let d = lanes3(
+        s,
+        std::array::from_fn(|i| difference::<S, FIXED>(s, xn[i], center[i])),
+    );
+    let d2 = d.dot(d);
+    let inside = s.keep_if_positive(w, s.keep_if_positive(s.sub(radius2, d2.1), k.one));
     // A block with no particle inside passes over the rest: most of a cloth
     // bigger than the sphere.
     if !s.any_positive(inside) {
         return;
     }
-    let scale = s.mul(
-        radius,
-        s.rsqrt_or_zero(d2, S::E::of(laws::DEGENERATE_LENGTH2)),
-    );
+    let surface = unlanes3(laws::surface_offset(d, d2, Vector(s, radius)));
+    let d = unlanes3(d);
     for i in 0..3 {
-        // The move onto the surface, `d scale - d`.
-        let dx = s.mul(inside, s.mul_sub(d[i], scale, d[i]));
+        // The move onto the surface.
+        let dx = s.mul(inside, s.sub(surface[i], d[i]));
         let to = moved::<S, FIXED>(s, xn[i], k.one, dx);
         let dv = s.mul(dx, k.inv_dt);
         // SAFETY: as above.

@@ -27,10 +27,10 @@ pub(super) use sweep::{
 #[derive(Clone, Copy, Debug)]
 pub(super) enum SpringRule {
     /// Provot's stretch limit `tau`: a spring longer than `(1 + tau) L` is shortened
-    /// to that, as [`crate::sim::laws::length_correction`] does.
+    /// to that by [`crate::sim::laws::length_factor`].
     StretchLimit(f64),
     /// XPBD's springs: each corrected by
-    /// [`crate::sim::laws::xpbd_correction`] against the positions at the
+    /// [`crate::sim::laws::xpbd_factor`] against the positions at the
     /// start of the step (the kernel's other state buffer, after the swap), once
     /// on a grid, twice on a lattice (forward and back, [`Multipliers`]).
     Xpbd,

@@ -4,12 +4,27 @@
 
 use glam::DVec3;
 
-use super::forces::EPSILON_LENGTH;
+use super::forces::{DEGENERATE_LENGTH2, EPSILON_LENGTH};
+use super::{Lanes, V3};
+
+/// The factor `s` that brings the ends of a spring of vector `d = x_a - x_b` to
+/// length `goal`, with `w = w_a + w_b` their inverse masses summed: `x_a -= w_a s
+/// d`, `x_b += w_b s d`, with `s = (l - goal) / (l w)`, `l = |d|`, for `l w > 0`:
+/// coincident ends have no direction and ends both pinned do not move, which
+/// the callers leave alone (the f64 engines before the call, the kernels by
+/// their lanes' masks; a guard here cost the bars' relaxation 4% of its
+/// instructions, a test that the f64 engines had made already).
+#[inline(always)]
+pub(crate) fn length_factor<L: Lanes>(d: V3<L>, goal: L, w: L) -> L {
+    let l = d.length();
+    (l - goal) / (l * w)
+}
 
 /// The correction `c` that brings particles at `xa` and `xb` (inverse masses `wa`,
 /// `wb`) to distance `target(l)` when it returns a length: `xa -= wa c`, `xb += wb c`
-/// (a pinned end stays put). `None` when nothing moves: both ends pinned, coincident
-/// particles (no direction), or no target.
+/// (a pinned end stays put), `c = s d` with `s` the [`length_factor`]. `None` when
+/// nothing moves: both ends pinned, coincident particles (no direction), or no
+/// target.
 pub(crate) fn length_correction(
     xa: DVec3,
     xb: DVec3,
@@ -21,13 +36,13 @@ pub(crate) fn length_correction(
     if w == 0.0 {
         return None;
     }
-    let d = xa - xb;
+    let d = V3::from(xa - xb);
     let l = d.length();
     if l <= EPSILON_LENGTH {
         return None;
     }
     let goal = target(l)?;
-    Some((l - goal) / (l * w) * d)
+    Some(d.scale(length_factor(d, goal, w)).into())
 }
 
 /// A spring as XPBD's pass sees it at step `h`: its rest length and its
@@ -52,22 +67,59 @@ impl XpbdSpring {
     }
 }
 
-/// XPBD's correction of a `spring` between particles now at `x = [xa, xb]` that
-/// were at `prev` at the start of the step, with inverse masses `wa`, `wb`, and its
-/// multiplier so far `λ`: `xa -= wa c`, `xb += wb c`, as [`length_correction`].
-/// Returns `c` and the multiplier's change `Δλ`.
+/// XPBD's correction of a spring of vector `d = x_a - x_b`, whose first end moved
+/// by `moved` more than its second since the start of the step, with `w = w_a +
+/// w_b` its ends' inverse masses summed, coefficients `c` and `α̃ λ` its multiplier
+/// so far times `α̃` (`None` for `λ = 0`): `(s, t)`, with `x_a -= w_a s d`, `x_b +=
+/// w_b s d`, and the multiplier's change `Δλ = -t`.
 ///
 /// The spring `(rest, k, b)` is the constraint `C = l - L` with compliance `α = 1/k`
 /// (the same k, the same material), `α̃ = α / h²`, and the XPBD paper's damping
 /// `γ = α̃ β̃ / h` with `β̃ = h² b`, i.e. `γ = b / (k h)`. One iteration:
-/// `Δλ = -(C + α̃ λ + γ ∇C·(x - x_prev)) / ((1 + γ)(wa + wb) + α̃)`, `c = -Δλ n`
-/// with `n = (xa - xb) / l`.
+/// `t = -Δλ = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)` with `n = d / l`, `Δ = moved`,
+/// and `s = t / l` (0 for coincident ends, which have no direction: their `t`
+/// means nothing). The denominator is positive for `k > 0` ([`XpbdSpring::new`]).
+#[inline(always)]
+pub(crate) fn xpbd_factor<L: Lanes>(
+    d: V3<L>,
+    moved: V3<L>,
+    w: L,
+    c: XpbdCoefficients<L>,
+    alpha_lambda: Option<L>,
+) -> (L, L) {
+    let l2 = d.dot(d);
+    let inv_l = l2.rsqrt_or_zero(DEGENERATE_LENGTH2);
+    // `C + α̃ λ` as `l - (L - α̃ λ)`: `α̃ λ` taken from the rest length, off the
+    // chain of positions that a Gauss-Seidel pass waits on.
+    let rest = match alpha_lambda {
+        Some(alpha_lambda) => c.rest - alpha_lambda,
+        None => c.rest,
+    };
+    let stretch = l2.mul_sub(inv_l, rest);
+    let along = d.dot(moved) * inv_l;
+    let t = c.gamma.mul_add(along, stretch) / c.one_gamma.mul_add(w, c.alpha);
+    (t * inv_l, t)
+}
+
+/// XPBD's coefficients of a spring as [`xpbd_factor`] takes them, in lanes: its
+/// rest length `L`, `α̃`, `γ` and `1 + γ` ([`XpbdSpring`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct XpbdCoefficients<L> {
+    pub rest: L,
+    pub alpha: L,
+    pub gamma: L,
+    pub one_gamma: L,
+}
+
+/// [`xpbd_factor`] for one spring between particles now at `x = [xa, xb]` that
+/// were at `prev` at the start of the step, with inverse masses `wa`, `wb`, and
+/// multiplier so far `λ`: `xa -= wa c`, `xb += wb c`, as [`length_correction`].
+/// Returns `c` and the multiplier's change `Δλ`; `None` where nothing moves (both
+/// ends pinned, coincident ends).
 ///
-/// The grid and lattice engines do the same arithmetic in float32 lanes, a
-/// colour class at a time (`grid_kernel/spring_passes.rs`, as they do
-/// [`length_correction`]), the lattice's keeping `α̃ λ` rather than `λ`;
-/// `tests/engines/fast_engine.rs`, `tests/no_allocation/grid_kernel.rs` and `tests/engines/lattice_kernel.rs`
-/// hold them together.
+/// The grid and lattice engines call [`xpbd_factor`] on blocks of springs, a
+/// colour class at a time (`grid_kernel/spring_passes/lines.rs`, as they do
+/// [`length_factor`]), keeping `α̃ λ` rather than `λ`.
 #[inline(always)]
 pub(crate) fn xpbd_correction(
     x: [DVec3; 2],
@@ -78,22 +130,19 @@ pub(crate) fn xpbd_correction(
     lambda: f64,
 ) -> Option<(DVec3, f64)> {
     let w = wa + wb;
-    if w == 0.0 {
+    let d = V3::from(x[0] - x[1]);
+    if w == 0.0 || d.dot(d) <= DEGENERATE_LENGTH2 {
         return None;
     }
-    let d = x[0] - x[1];
-    let l = d.length();
-    if l <= EPSILON_LENGTH {
-        return None;
-    }
-    let n = d * (1.0 / l);
-    let moved = n.dot((x[0] - prev[0]) - (x[1] - prev[1]));
-    let (alpha, gamma) = (spring.alpha, spring.gamma);
-    // `C + α̃ λ`, with `α̃ λ` taken from the rest length, off the chain of
-    // positions that a Gauss-Seidel pass waits on.
-    let stretch = l - (spring.rest - alpha * lambda);
-    let delta = -(stretch + gamma * moved) / ((1.0 + gamma) * w + alpha);
-    Some((-delta * n, delta))
+    let moved = V3::from((x[0] - prev[0]) - (x[1] - prev[1]));
+    let c = XpbdCoefficients {
+        rest: spring.rest,
+        alpha: spring.alpha,
+        gamma: spring.gamma,
+        one_gamma: 1.0 + spring.gamma,
+    };
+    let (s, t) = xpbd_factor(d, moved, w, c, Some(spring.alpha * lambda));
+    Some((d.scale(s).into(), -t))
 }
 
 /// XPBD's `(α̃, γ) = (1 / (k h²), b / (k h))` for a spring `(k, b)` at step `h`.

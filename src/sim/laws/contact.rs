@@ -9,7 +9,7 @@
 
 use glam::DVec3;
 
-use super::forces::{EPSILON_LENGTH, ground_support};
+use super::forces::{DEGENERATE_LENGTH2, ground_support};
 use super::{Lanes, V3};
 use crate::sim::{Ground, Params, Sphere};
 
@@ -101,7 +101,7 @@ impl Contact {
                 let dist = dist2.sqrt();
                 let inside = dist.lt(radius);
                 if T::any(inside) {
-                    let outside = surface_offset(d, dist, &sphere);
+                    let outside = surface_offset(d, dist2, radius);
                     let push = outside - d;
                     let mut pushed = v + push.over(h);
                     if self.friction > 0.0 {
@@ -204,17 +204,24 @@ fn coulomb_up<T: Lanes>(v: V3<T>, most: T) -> V3<T> {
 pub(crate) fn out_of_sphere(x: DVec3, sphere: &Sphere) -> Option<DVec3> {
     let d = V3::from(x - sphere.center);
     let dist = d.length();
-    (dist < sphere.radius).then(|| sphere.center + DVec3::from(surface_offset(d, dist, sphere)))
+    let offset = |r| DVec3::from(surface_offset(d, d.dot(d), r));
+    (dist < sphere.radius).then(|| sphere.center + offset(sphere.radius))
 }
 
-/// The point of the surface of `sphere` nearest to a particle `d` from its centre,
-/// `dist` away (straight up from the centre for a particle at the centre), as an
-/// offset from the centre, one particle per lane.
+/// The point of the surface of a sphere of `radius` nearest to a particle `d` from
+/// its centre, `dist2 = |d|²` (straight up from the centre for a particle at the
+/// centre), as an offset from the centre, one particle per lane: `r d / l`, with
+/// `1 / l` from the lanes' reciprocal root. Every engine's projection onto the
+/// sphere (here and the grid and lattice kernels' row pass).
 #[inline(always)]
-fn surface_offset<T: Lanes>(d: V3<T>, dist: T, sphere: &Sphere) -> V3<T> {
-    let off_center = dist.gt(dist.splat(EPSILON_LENGTH));
-    let normal = V3::select(off_center, d.over(dist), V3::splat(dist, DVec3::Y));
-    normal.scale(dist.splat(sphere.radius))
+pub(crate) fn surface_offset<T: Lanes>(d: V3<T>, dist2: T, radius: T) -> V3<T> {
+    let offset = d.scale(radius * dist2.rsqrt_or_zero(DEGENERATE_LENGTH2));
+    // A particle at the centre has no direction: up (its x and z are 0 already).
+    let off_center = dist2.gt(dist2.splat(DEGENERATE_LENGTH2));
+    V3 {
+        y: T::select(off_center, offset.y, radius),
+        ..offset
+    }
 }
 
 #[cfg(test)]

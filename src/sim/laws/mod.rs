@@ -14,9 +14,10 @@
 //! | symplectic Euler, explicit Euler, position Verlet | [`update`] |
 //! | `x' = x + h v` on float positions | [`advanced`] |
 //! | sphere and ground contact with Coulomb friction | [`Contact::resolve_lanes`] |
-//! | a collider's push out, friction on the velocity relative to its surface | [`collide`] ([`pushed_out`]) |
-//! | a length restored (stretch limit `(1 + tau) L`, a bar) | [`length_correction`] |
-//! | XPBD's correction of a spring of compliance `1/k` | [`xpbd_correction`] |
+//! | the sphere's surface point nearest a particle `d` from its centre, `r d / l` | [`surface_offset`] |
+//! | a length restored (stretch limit `(1 + tau) L`, a bar): `s = (l - goal) / (l w)` | [`length_factor`] ([`length_correction`]) |
+//! | XPBD's correction of a spring of compliance `1/k` | [`xpbd_factor`] ([`xpbd_correction`]) |
+//! | a collider's push out, friction on the velocity relative to its surface | [`collide`] |
 //! | the speed limit | [`speed_limit`] |
 //! | the tear test `l > (1 + tau) L` | [`overstretched`] |
 //!
@@ -33,12 +34,14 @@ pub(crate) use crate::sim::lanes::{Lanes, V3};
 pub(crate) use collide::collide;
 #[cfg(test)]
 pub(crate) use collide::pushed_out;
-pub(crate) use constraints::{XpbdSpring, length_correction, xpbd_correction};
+pub(crate) use constraints::{
+    XpbdCoefficients, XpbdSpring, length_correction, length_factor, xpbd_correction, xpbd_factor,
+};
 pub use constraints::{overstretched, speed_limit};
-pub(crate) use contact::{Contact, Near, out_of_sphere};
+pub(crate) use contact::{Contact, Near, out_of_sphere, surface_offset};
 pub use forces::EPSILON_LENGTH;
 pub(crate) use forces::{
-    DEGENERATE_LENGTH2, SpringCoefficients, acceleration, air_damped, air_velocity, drag_factor,
-    free_acceleration, ground_support, spring_factor, spring_force, triangle_drag,
+    SpringCoefficients, acceleration, air_damped, air_velocity, drag_factor, free_acceleration,
+    ground_support, spring_factor, spring_force, triangle_drag,
 };
 pub(crate) use motion::{Method, advanced, step_particle, update};

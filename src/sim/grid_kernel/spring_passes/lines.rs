@@ -3,9 +3,10 @@
 //! and [`row_line`] the stretch limit's springs along a row, both colours at once.
 
 use super::sweep::{LineRule, Sweep, SweepLines, SweepMultipliers};
-use crate::sim::grid_kernel::row::{difference, moved};
-use crate::sim::grid_kernel::simd::align_frame;
+use crate::sim::grid_kernel::row::{difference, lanes3, moved};
+use crate::sim::grid_kernel::simd::{Vector, align_frame};
 use crate::sim::grid_kernel::{BLOCK, Out, Real, Simd};
+use crate::sim::laws::{self, XpbdCoefficients};
 
 /// [`spring_line`] on each line of `lines`, in order of rows: one call for a
 /// sweep, where a call per line cost its set-up every 8 blocks at 128 columns.
@@ -330,7 +331,7 @@ unsafe fn pair_block<S: Simd, const FIXED: bool, const DC: usize>(
     let inv_mass = load(k.inv_mass, j);
     let w = s.add(inv_mass, s.swap_pairs::<DC>(inv_mass));
     let over = s.keep_if_positive(w, over);
-    let scale = k.limit_scale(l2, w, over);
+    let scale = k.limit_scale(d, w, over);
     let d: [S::V; 3] = per_axis!(|i| s.keep_if_positive(over, d[i]));
     let f = s.mul(s.mul(s.splat(zero - one), inv_mass), scale);
     for axis in 0..3 {
@@ -370,7 +371,6 @@ struct LineKernel<S: Simd> {
     one_gamma: S::V,
     one: S::V,
     inv_dt: S::V,
-    tiny_length2: S::E,
     pos: [*mut S::E; 3],
     vel: [*mut S::E; 3],
     /// Verlet's update velocities (empty without Verlet).
@@ -386,13 +386,14 @@ struct LineKernel<S: Simd> {
 }
 
 impl<S: Simd> LineKernel<S> {
-    /// The squared lengths of springs of vectors `d`. Every path of the pass
-    /// measures with this one sum, so that a spring `row_line` found within the
-    /// limit is found within it when measured again.
+    /// The squared lengths of springs of vectors `d`, as the laws measure them
+    /// ([`laws::length_factor`]'s `d·d`). Every path of the pass measures with
+    /// this one sum, so that a spring `row_line` found within the limit is found
+    /// within it when measured again.
     #[inline(always)]
     fn length2(&self, d: [S::V; 3]) -> S::V {
-        let s = self.s;
-        s.mul_add(d[0], d[0], s.mul_add(d[1], d[1], s.mul(d[2], d[2])))
+        let d = lanes3(self.s, d);
+        d.dot(d).1
     }
 
     /// Positive in the lanes of `keep` (1 or 0) whose squared length `l2` is
@@ -416,19 +417,15 @@ impl<S: Simd> LineKernel<S> {
         self.s.gt(self.length2(d), limit2)
     }
 
-    /// The stretch limit's scale of springs of squared lengths `l2` and summed
-    /// inverse masses `w`, where `over` is positive, else 0: `(l - longest) / (l
-    /// w)`, with `1 / l` from the lanes' reciprocal square root, as
-    /// [`crate::sim::laws::length_correction`] corrects a spring. An end
-    /// moves by `∓` its inverse mass times the scale times the spring's vector.
+    /// The stretch limit's scale of springs of vectors `d` and summed inverse
+    /// masses `w`, where `over` is positive, else 0: [`laws::length_factor`] to
+    /// `longest`. An end moves by `∓` its inverse mass times the scale times the
+    /// spring's vector.
     #[inline(always)]
-    fn limit_scale(&self, l2: S::V, w: S::V, over: S::V) -> S::V {
+    fn limit_scale(&self, d: [S::V; 3], w: S::V, over: S::V) -> S::V {
         let s = self.s;
-        let shortening = s.sub(
-            self.one,
-            s.mul(self.longest, s.rsqrt_or_zero(l2, S::E::ZERO)),
-        );
-        s.keep_if_positive(over, s.div(shortening, w))
+        let scale = laws::length_factor(lanes3(s, d), Vector(s, self.longest), Vector(s, w));
+        s.keep_if_positive(over, scale.1)
     }
 
     /// Moves the particles at array index `i` (from `base`), at `x` along `axis`
@@ -530,7 +527,6 @@ impl<S: Simd> LineKernel<S> {
             one_gamma: s.splat(one + gamma),
             one: s.splat(one),
             inv_dt: s.splat(line.inv_dt),
-            tiny_length2: line.tiny_length2,
             pos: [x.as_mut_ptr(), y.as_mut_ptr(), z.as_mut_ptr()],
             vel: [vx.as_mut_ptr(), vy.as_mut_ptr(), vz.as_mut_ptr()],
             upd: [ux.as_mut_ptr(), uy.as_mut_ptr(), uz.as_mut_ptr()],
@@ -562,9 +558,9 @@ fn limit2_of<E: Real>(longest2: E, kept: bool) -> E {
 /// only where a spring is over the limit.
 ///
 /// * The stretch limit (`XPBD` false) corrects the springs longer than `longest`
-///   as [`crate::sim::laws::length_correction`] does.
-/// * XPBD corrects every spring as [`crate::sim::laws::xpbd_correction`]
-///   does, from the positions at the start of the step in `lines.start`.
+///   by [`crate::sim::laws::length_factor`].
+/// * XPBD corrects every spring by [`crate::sim::laws::xpbd_factor`]
+///   from the positions at the start of the step in `lines.start`.
 ///
 /// Each particle has at most one spring in a class, so the moves do not interact:
 /// a lane out of the class (or past the line, or a spring that tore: 0 in the
@@ -600,8 +596,8 @@ unsafe fn spring_line<S: Simd, const FIXED: bool, const XPBD: bool, const MASKED
             let j = $j;
             let m = ($(unsafe { line.measure::<$tail>(j + $b * n) },)+);
             $(
-                if m.$b.3 {
-                    unsafe { line.correct(j + $b * n, m.$b.0, m.$b.1, m.$b.2) };
+                if m.$b.2 {
+                    unsafe { line.correct(j + $b * n, m.$b.0, m.$b.1) };
                 }
             )+
         }};
@@ -752,15 +748,15 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
         })
     }
 
-    /// The block at `j`: its springs' vectors `d` (first end less second), their
-    /// squared lengths, positive where a spring is in the class (and for the
-    /// stretch limit over the limit), and whether any is. (`TAIL`: whether the
+    /// The block at `j`: its springs' vectors `d` (first end less second), lanes
+    /// positive where a spring is in the class (and for the stretch limit over
+    /// the limit), and whether any is. (`TAIL`: whether the
     /// block may be the line's last, with lanes past it.)
     ///
     /// # Safety
     /// As for [`Self::load`].
     #[inline(always)]
-    unsafe fn measure<const TAIL: bool>(&self, j: usize) -> ([S::V; 3], S::V, S::V, bool) {
+    unsafe fn measure<const TAIL: bool>(&self, j: usize) -> ([S::V; 3], S::V, bool) {
         let (k, s) = (self.k, self.k.s);
         // SAFETY (every load): the caller's contract.
         let d: [S::V; 3] = unsafe { self.vectors(j) };
@@ -781,7 +777,7 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
         let l2 = k.length2(d);
         // Positive where the spring is to be corrected.
         let over = if XPBD { keep } else { k.over_limit(l2, keep) };
-        (d, l2, over, s.any_positive(over))
+        (d, over, s.any_positive(over))
     }
 
     /// Whether a spring of the block at `j` is over `limit2` ([`LineKernel::over`]).
@@ -794,15 +790,19 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
         self.k.over(unsafe { self.vectors(j) }, limit2)
     }
 
-    /// XPBD's `t = (C + α̃ λ + γ n·Δ) / ((1 + γ) w + α̃)` for the block at `j` (`C
-    /// = l - rest`, `Δ` the first end's move since the start of the step less the
-    /// second's, `λ` the multiplier so far, 0 in the forward sweep), and `t / l`,
-    /// to scale `d` by (0 where `l` is about 0). The multiplier's change is `-t`.
+    /// XPBD's [`laws::xpbd_factor`] for the block at `j` of springs of vectors
+    /// `d` with summed inverse masses `w`: `t / l`, to scale `d` by (0 where `l`
+    /// is about 0), and `t`, from the first ends' moves since the start of the
+    /// step less the second ends' and `α̃ λ` as the first sweep left it (none in
+    /// the first sweep, from `λ = 0`). The multiplier's change is `-t`. (The
+    /// law's degenerate length is in the positions' units here, as the row
+    /// pass's springs take it: metres in float, and in fixed point under the
+    /// unit², below any nonzero squared length of integers.)
     ///
     /// # Safety
     /// As for [`Self::load`].
     #[inline(always)]
-    unsafe fn xpbd_scale(&self, j: usize, d: [S::V; 3], l2: S::V, w: S::V) -> (S::V, S::V) {
+    unsafe fn xpbd_scale(&self, j: usize, d: [S::V; 3], w: S::V) -> (S::V, S::V) {
         let (k, s) = (self.k, self.k.s);
         let (pos, start) = (k.pos, k.start);
         let (ia, ib) = (self.line_a + j, self.line_b + j);
@@ -813,24 +813,23 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
                 difference::<S, FIXED>(s, self.load(pos[i], self.b + j), self.load(start[i], ib)),
             )
         });
-        let inv_l = s.rsqrt_or_zero(l2, k.tiny_length2);
-        // n·Δ with n = d / l, and C + α̃ λ.
-        let along = s.mul_add(
-            d[0],
-            moved[0],
-            s.mul_add(d[1], moved[1], s.mul(d[2], moved[2])),
-        );
-        let stretch = s.mul_sub(l2, inv_l, k.rest);
-        let stretch = match k.multipliers {
-            Some(m) if m.second => s.add(stretch, unsafe { self.load(m.values, ia) }),
-            _ => stretch,
+        let c = XpbdCoefficients {
+            rest: Vector(s, k.rest),
+            alpha: Vector(s, k.alpha),
+            gamma: Vector(s, k.gamma),
+            one_gamma: Vector(s, k.one_gamma),
         };
-        let along = s.mul(along, inv_l);
-        let t = s.div(
-            s.mul_add(k.gamma, along, stretch),
-            s.mul_add(k.one_gamma, w, k.alpha),
-        );
-        (s.mul(t, inv_l), t)
+        let (d, moved, w) = (lanes3(s, d), lanes3(s, moved), Vector(s, w));
+        // The law inlined once per sweep kind, with one test a block: with the
+        // multiplier as an `Option` made here, the law's test was a second one.
+        let (scale, t) = match k.multipliers {
+            Some(m) if m.second => {
+                let alpha_lambda = Vector(s, unsafe { self.load(m.values, ia) });
+                laws::xpbd_factor(d, moved, w, c, Some(alpha_lambda))
+            }
+            _ => laws::xpbd_factor(d, moved, w, c, None),
+        };
+        (scale.1, t.1)
     }
 
     /// Moves the ends of the block at `j` by their corrections, where `over` is
@@ -841,7 +840,7 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
     /// # Safety
     /// As for [`Self::load`].
     #[inline(always)]
-    unsafe fn correct(&self, j: usize, d: [S::V; 3], l2: S::V, over: S::V) {
+    unsafe fn correct(&self, j: usize, d: [S::V; 3], over: S::V) {
         let (s, n, (a, b)) = (self.k.s, S::LANES, (self.a, self.b));
         let (zero, one) = (S::E::ZERO, S::E::ONE);
         // The stretch limit's kernel, opaque here: else the compiler worked
@@ -855,17 +854,12 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
             std::hint::black_box(self.k)
         };
         // SAFETY (every load and store): the caller's contract.
-        let (d, l2) = if XPBD {
-            (d, l2)
-        } else {
-            let d: [S::V; 3] = unsafe { self.vectors(j) };
-            (d, k.length2(d))
-        };
+        let d = if XPBD { d } else { unsafe { self.vectors(j) } };
         let w = unsafe { s.add(self.load(k.inv_mass, a + j), self.load(k.inv_mass, b + j)) };
         // Positive where a spring to correct is not pinned at both ends.
         let over = s.keep_if_positive(w, over);
         let scale = if XPBD {
-            let (scale, t) = unsafe { self.xpbd_scale(j, d, l2, w) };
+            let (scale, t) = unsafe { self.xpbd_scale(j, d, w) };
             if let Some(m) = k.multipliers.filter(|m| !m.second) {
                 // `α̃ λ` after the first correction (from `λ = 0`): `-α̃ t`, 0
                 // where no spring was corrected; lanes past the line keep
@@ -881,7 +875,7 @@ impl<'k, S: Simd, const FIXED: bool, const XPBD: bool, const MASKED: bool>
             }
             s.keep_if_positive(over, scale)
         } else {
-            k.limit_scale(l2, w, over)
+            k.limit_scale(d, w, over)
         };
         // Exactly no move where none is due: a lane out of the class or past
         // the line may reach a ghost, whose move `0 d` would be NaN (and stay)

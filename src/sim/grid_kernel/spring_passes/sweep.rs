@@ -5,7 +5,6 @@
 use std::ops::Range;
 
 use super::SpringRule;
-use crate::sim::forces::EPSILON_LENGTH;
 use crate::sim::grid_kernel::{BLOCK, Buf, Frame, Real, SpringCoefficients};
 use crate::sim::laws::XpbdSpring;
 
@@ -31,8 +30,6 @@ pub(super) struct SpringLine<E> {
     pub(super) rule: LineRule<E>,
     /// Velocity per unit moved: `unit / h`.
     pub(super) inv_dt: E,
-    /// The squared length (units²) under which a spring has no direction.
-    pub(super) tiny_length2: E,
     /// Whether positions are fixed point.
     pub(super) fixed: bool,
 }
@@ -156,7 +153,6 @@ impl<E: Real> Sweep<E> {
                 class: SpringLine::class(c0, along),
                 rule,
                 inv_dt: E::of(frame.unit / rules.dt),
-                tiny_length2: E::of(frame.units(EPSILON_LENGTH).powi(2)),
                 fixed: frame.fixed,
             },
         })
