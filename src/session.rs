@@ -22,7 +22,9 @@ use std::time::Instant;
 pub use crate::scene::Edit;
 use glam::DVec3;
 
-use crate::scene::{Pins, Resolved, Scene, SceneError};
+mod parts;
+
+use crate::scene::{Resolved, Scene, SceneError};
 use crate::sim::safe::{self, DEFAULT_SAFETY};
 use crate::sim::{Clock, Params, SpringKind, State, System};
 
@@ -516,56 +518,6 @@ impl Session {
             .collect()
     }
 
-    /// Pins exactly the particles `pins` names (a preset such as the corners, a list,
-    /// or none) and frees every other: recorded in the scene (key `pins`), so that a
-    /// reset, a rebuild and a saved scene keep it, and applied to the running system
-    /// in place, the rest of its state untouched. An index past the last particle is
-    /// refused with an error naming `pins` and the range, and nothing changes. The
-    /// change can be undone.
-    pub fn set_pins(&mut self, pins: Pins) -> Result<(), SceneError> {
-        let indices = self.settings.pin_indices(&pins)?;
-        self.remember(self.scene.clone(), None);
-        self.scene.spec.pins = Some(pins);
-        self.settings.pins = indices;
-        self.sync_pins();
-        Ok(())
-    }
-
-    /// Pins particle `i` if it is free, frees it if pinned (a click): recorded in the
-    /// scene as the list of pinned particles, and can be undone. An index past the
-    /// last particle does nothing.
-    pub fn toggle_pin(&mut self, i: usize) {
-        if i >= self.system.particle_count() {
-            return;
-        }
-        let mut pins = self.pins();
-        match pins.binary_search(&i) {
-            Ok(at) => {
-                pins.remove(at);
-            }
-            Err(at) => pins.insert(at, i),
-        }
-        self.remember(self.scene.clone(), None);
-        self.scene.spec.pins = Some(Pins::Indices(pins.clone()));
-        self.settings.pins = pins;
-        self.sync_pins();
-    }
-
-    /// Pins and frees the running system's particles to match the settings.
-    fn sync_pins(&mut self) {
-        let mut wanted = vec![false; self.system.particle_count()];
-        for &i in &self.settings.pins {
-            if let Some(w) = wanted.get_mut(i) {
-                *w = true;
-            }
-        }
-        for (i, pin) in wanted.into_iter().enumerate() {
-            if self.system.is_pinned(i) != pin {
-                self.system.set_pinned(i, pin);
-            }
-        }
-    }
-
     /// Whether any wind blows: a mean wind or gusts.
     pub fn wind_on(&self) -> bool {
         let p = &self.settings.params;
@@ -632,22 +584,6 @@ impl Session {
         }
         self.remember(before, Some(key));
         self.dt_drag_frame_time = Some(frame_time);
-        Ok(())
-    }
-
-    /// Replaces the scene's colliders (the panel's Colliders section): each is
-    /// checked as a scene file's `[[colliders]]` table is, and a bad one refused
-    /// with its field named, changing nothing. One undo step per gesture.
-    pub fn set_colliders(
-        &mut self,
-        colliders: Vec<crate::scene::ColliderSpec>,
-    ) -> Result<(), SceneError> {
-        let before = self.scene.clone();
-        let mut scene = self.scene.clone();
-        scene.spec.colliders = colliders;
-        let settings = scene.resolve()?;
-        self.commit(scene, settings, false);
-        self.remember(before, Some("colliders"));
         Ok(())
     }
 

@@ -51,81 +51,9 @@ fn collider(
     let point = |k: &str, v: Option<crate::scene::values::Vector>| {
         v.map(|v| vector(o, &key(k), v.0, MAX_SIZE)).transpose()
     };
-    let refuse = |k: &str, given: bool, why: &str| match given {
-        true => Err(invalid(
-            o,
-            &key(k),
-            format!("does not apply to a {}: {why}", spec.shape),
-        )),
-        false => Ok(()),
-    };
+    check_keys(spec, o, at)?;
     let (shape, center) = match spec.shape.as_str() {
-        "sphere" | "box" | "mesh" => {
-            refuse("a", spec.a.is_some(), "only a capsule has ends")?;
-            refuse("b", spec.b.is_some(), "only a capsule has ends")?;
-            let center = point("center", spec.center)?.unwrap_or(DVec3::ZERO);
-            let shape = match spec.shape.as_str() {
-                "sphere" => {
-                    refuse(
-                        "half_extents",
-                        spec.half_extents.is_some(),
-                        "give its `radius`",
-                    )?;
-                    refuse(
-                        "mesh",
-                        spec.mesh.is_some(),
-                        "only a mesh collider reads a file",
-                    )?;
-                    Shape::Sphere {
-                        radius: length("radius", spec.radius, 0.5)?,
-                    }
-                }
-                "box" => {
-                    refuse("radius", spec.radius.is_some(), "give its `half_extents`")?;
-                    refuse(
-                        "mesh",
-                        spec.mesh.is_some(),
-                        "only a mesh collider reads a file",
-                    )?;
-                    let half =
-                        point("half_extents", spec.half_extents)?.unwrap_or(DVec3::splat(0.5));
-                    if half.min_element() <= 0.0 {
-                        return Err(invalid(
-                            o,
-                            &key("half_extents"),
-                            "must be three positive lengths in m, `\"x,y,z\"`".into(),
-                        ));
-                    }
-                    Shape::Box { half_extents: half }
-                }
-                _ => {
-                    refuse("radius", spec.radius.is_some(), "its file gives its shape")?;
-                    refuse(
-                        "half_extents",
-                        spec.half_extents.is_some(),
-                        "its file gives its shape",
-                    )?;
-                    Shape::Mesh(mesh_shape(spec, o, &key("mesh"), thickness)?)
-                }
-            };
-            (shape, center)
-        }
         "capsule" => {
-            refuse(
-                "center",
-                spec.center.is_some(),
-                "its ends `a` and `b` place it",
-            )?;
-            refuse(
-                "half_extents",
-                spec.half_extents.is_some(),
-                "give its `radius`",
-            )?;
-            refuse(
-                "mesh",
-                spec.mesh.is_some(),
-                "only a mesh collider reads a file",
-            )?;
             let missing = |k: &str| {
                 invalid(
                     o,
@@ -137,24 +65,30 @@ fn collider(
             let b = point("b", spec.b)?.ok_or_else(|| missing("b"))?;
             let center = 0.5 * (a + b);
             let radius = length("radius", spec.radius, 0.1)?;
-            (
-                Shape::Capsule {
-                    a: a - center,
-                    b: b - center,
-                    radius,
-                },
-                center,
-            )
+            let (a, b) = (a - center, b - center);
+            (Shape::Capsule { a, b, radius }, center)
         }
-        other => {
-            return Err(invalid(
-                o,
-                &key("shape"),
-                format!(
-                    "= \"{}\" is not a shape: must be one of sphere, box, capsule, mesh",
-                    crate::limits::echo(other)
-                ),
-            ));
+        shape => {
+            let center = point("center", spec.center)?.unwrap_or(DVec3::ZERO);
+            let shape = match shape {
+                "sphere" => Shape::Sphere {
+                    radius: length("radius", spec.radius, 0.5)?,
+                },
+                "box" => {
+                    let half =
+                        point("half_extents", spec.half_extents)?.unwrap_or(DVec3::splat(0.5));
+                    if half.min_element() <= 0.0 {
+                        return Err(invalid(
+                            o,
+                            &key("half_extents"),
+                            "must be three positive lengths in m, `\"x,y,z\"`".into(),
+                        ));
+                    }
+                    Shape::Box { half_extents: half }
+                }
+                _ => Shape::Mesh(mesh_shape(spec, o, &key("mesh"), thickness)?),
+            };
+            (shape, center)
         }
     };
     let degrees = point("rotation", spec.rotation)?.unwrap_or(DVec3::ZERO);
@@ -171,6 +105,52 @@ fn collider(
         friction,
         thickness,
     })
+}
+
+/// The keys that only some shapes take, and those shapes.
+const SHAPE_KEYS: &[(&str, &[&str])] = &[
+    ("center", &["sphere", "box", "mesh"]),
+    ("radius", &["sphere", "capsule"]),
+    ("half_extents", &["box"]),
+    ("a", &["capsule"]),
+    ("b", &["capsule"]),
+    ("mesh", &["mesh"]),
+];
+
+/// An unknown shape, or a key its shape does not take, refused by name.
+fn check_keys(spec: &ColliderSpec, o: &str, at: &str) -> Result<(), SceneError> {
+    let shape = spec.shape.as_str();
+    if !["sphere", "box", "capsule", "mesh"].contains(&shape) {
+        return Err(invalid(
+            o,
+            &format!("{at}.shape"),
+            format!(
+                "= \"{}\" is not a shape: must be one of sphere, box, capsule, mesh",
+                crate::limits::echo(shape)
+            ),
+        ));
+    }
+    let given = [
+        spec.center.is_some(),
+        spec.radius.is_some(),
+        spec.half_extents.is_some(),
+        spec.a.is_some(),
+        spec.b.is_some(),
+        spec.mesh.is_some(),
+    ];
+    for (&(key, shapes), given) in SHAPE_KEYS.iter().zip(given) {
+        if given && !shapes.contains(&shape) {
+            return Err(invalid(
+                o,
+                &format!("{at}.{key}"),
+                format!(
+                    "does not apply to a {shape}: only a {} has it",
+                    shapes.join(" or ")
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Degrees about z, then x, then y, as a cloth's `rotation` turns it.
