@@ -153,6 +153,25 @@ pub fn number(x: f64) -> String {
     }
 }
 
+/// A number as the panel shows a setting: four significant digits, in
+/// scientific notation only when very large or small.
+pub fn short(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return x.to_string();
+    }
+    let magnitude = x.abs().log10().floor();
+    if !(-3.0..6.0).contains(&magnitude) {
+        return format!("{x:.3e}");
+    }
+    let decimals = (3.0 - magnitude).max(0.0) as usize;
+    let s = format!("{x:.decimals$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
 /// `text` as a message echoes it: at most [`MAX_ECHO_CHARS`] characters, with
 /// the length of what was left out, and with line breaks shown as `\n`.
 pub fn echo(text: &str) -> String {

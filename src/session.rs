@@ -22,7 +22,12 @@ use std::time::Instant;
 pub use crate::scene::Edit;
 use glam::DVec3;
 
+mod diverged;
 mod parts;
+mod sliders;
+
+pub use diverged::DivergenceReport;
+pub use sliders::{EARTH_GRAVITY, Slider};
 
 use crate::scene::{Resolved, Scene, SceneError};
 use crate::sim::safe::{self, DEFAULT_SAFETY};
@@ -65,22 +70,11 @@ const REBUILD_KEYS: &[&str] = &[
 /// 004's breeze, 3 m/s along z (towards the viewer).
 pub const DEFAULT_WIND: DVec3 = DVec3::new(0.0, 0.0, 3.0);
 
+/// The slow-motion factors [`Session::set_slow_motion`] takes.
+pub const SLOW_MOTION: std::ops::RangeInclusive<f64> = 0.05..=1.0;
+
 /// Most changes [`Session::undo`] can take back.
 pub const MAX_UNDO: usize = 200;
-
-/// What happened when the simulation diverged.
-#[derive(Clone, Debug, PartialEq)]
-pub struct DivergenceReport {
-    /// The core's description (what and when).
-    pub message: String,
-    /// Simulated time (s) of the divergence.
-    pub time: f64,
-    /// Stability margin `dt / dt_crit` at the time, if the estimate has one.
-    pub margin: Option<f64>,
-    /// Simulated time (s) of the state on screen: the last frame that passed its
-    /// checks, put back so that the view freezes on it rather than on the wreck.
-    pub shown_time: f64,
-}
 
 /// What one frame did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -110,6 +104,13 @@ pub struct Session {
     last_good: State,
     /// Rest length the springs were last scaled to (m).
     rest_length: f64,
+    /// The scene's own values that the sliders' ranges sit around.
+    home: sliders::Home,
+    /// The last change of the setup (`key = value`) and the simulated time it
+    /// was made at, which a divergence names.
+    last_edit: Option<(String, f64)>,
+    /// Simulated time per wall time, as a share of the scene's speed.
+    slow_motion: f64,
     /// Steps per 1/60 s of wall time.
     substeps: u32,
     /// Smoothed cost of one step (ms).
@@ -232,6 +233,7 @@ impl Session {
     /// Starts `scene`, named `name` in the UI.
     pub fn new(scene: Scene, name: &str) -> Result<Self, SceneError> {
         let settings = scene.resolve()?;
+        let home = sliders::Home::of(&settings);
         let system = settings.build();
         let p = &settings.params;
         crate::scene::check_self_collision(&scene.origin, &system, p.self_collision, p.thickness)?;
@@ -251,6 +253,9 @@ impl Session {
             divergence: None,
             last_good: State::default(),
             rest_length: 0.0,
+            home,
+            last_edit: None,
+            slow_motion: 1.0,
             substeps: 1,
             ms_per_step: 0.0,
             safe_stepping: true,
@@ -385,8 +390,9 @@ impl Session {
     /// On error nothing changes.
     pub fn load_scene(&mut self, name: &str) -> Result<(), SceneError> {
         let (paused, safe_stepping) = (self.paused, self.safe_stepping);
+        let slow_motion = self.slow_motion;
         *self = Self::load_with(name, &[])?;
-        self.paused = paused;
+        (self.paused, self.slow_motion) = (paused, slow_motion);
         self.set_safe_stepping(safe_stepping);
         Ok(())
     }
@@ -541,7 +547,8 @@ impl Session {
         let before = self.scene.clone();
         self.apply_unrecorded(Edit::Wind(wind))?;
         self.apply_unrecorded(Edit::Gust(gust))?;
-        self.remember(before, None);
+        let what = if on { "wind on" } else { "wind off" };
+        self.remember(before, None, what.into());
         Ok(())
     }
 
@@ -558,7 +565,7 @@ impl Session {
     pub fn apply(&mut self, edit: Edit) -> Result<(), SceneError> {
         let before = self.scene.clone();
         self.apply_unrecorded(edit)?;
-        self.remember(before, Some(edit.key()));
+        self.remember(before, Some(edit.key()), edit.to_string());
         Ok(())
     }
 
@@ -582,7 +589,7 @@ impl Session {
         if steps != self.settings.substeps {
             self.apply_unrecorded(Edit::Substeps(steps))?;
         }
-        self.remember(before, Some(key));
+        self.remember(before, Some(key), Edit::Dt(dt).to_string());
         self.dt_drag_frame_time = Some(frame_time);
         Ok(())
     }
@@ -617,14 +624,15 @@ impl Session {
         scene.set(key, value)?;
         let settings = scene.resolve()?;
         self.commit(scene, settings, self.needs_rebuild(key));
-        self.remember(before, None);
+        self.remember(before, None, format!("{key} = {value}"));
         Ok(())
     }
 
     /// Records `before`, the setup before a change, for [`Self::undo`], and forgets
     /// what was undone. A change of the same `group` (edit key) as the last one,
     /// within one gesture, adds no entry.
-    fn remember(&mut self, before: Scene, group: Option<&'static str>) {
+    fn remember(&mut self, before: Scene, group: Option<&'static str>, what: String) {
+        self.last_edit = Some((what, self.system.time()));
         if group.is_some() && group == self.edit_group {
             return;
         }
@@ -691,7 +699,11 @@ impl Session {
     pub fn restore_defaults(&mut self) -> Result<(), SceneError> {
         let before = self.scene.clone();
         self.restore(self.defaults.clone())?;
-        self.remember(before, None);
+        // Safe stepping is the app's default, as the scene's values are its own.
+        if !self.safe_stepping {
+            self.set_safe_stepping(true);
+        }
+        self.remember(before, None, "Defaults".into());
         Ok(())
     }
 
@@ -822,9 +834,23 @@ impl Session {
     }
 
     /// Simulated seconds per wall-clock second asked for: `substeps` steps of `dt`
-    /// per 1/60 s (1 is real time).
+    /// per 1/60 s (1 is real time), slowed by [`Session::slow_motion`].
     pub fn speed(&self) -> f64 {
-        f64::from(self.substeps) * self.system.params().dt / FRAME_PERIOD
+        self.slow_motion * f64::from(self.substeps) * self.system.params().dt / FRAME_PERIOD
+    }
+
+    /// The slow-motion factor: 1 runs at the scene's speed, 0.05 twenty times
+    /// slower, with the same steps (a view setting, not part of the scene).
+    pub fn slow_motion(&self) -> f64 {
+        self.slow_motion
+    }
+
+    /// Sets the slow-motion factor, kept within [`SLOW_MOTION`] (a value that is
+    /// not a number leaves it as it is).
+    pub fn set_slow_motion(&mut self, factor: f64) {
+        if !factor.is_nan() {
+            self.slow_motion = factor.clamp(*SLOW_MOTION.start(), *SLOW_MOTION.end());
+        }
     }
 
     /// How the simulation has kept up with the wall clock lately.
@@ -896,23 +922,6 @@ impl Session {
             sim_ms,
             behind: false,
         }
-    }
-}
-
-impl Session {
-    /// Puts back the last state that passed its checks and pauses with the report.
-    fn diverged(&mut self, d: crate::sim::Divergence) {
-        let margin = Some(self.system.stability().margin).filter(|m| m.is_finite());
-        log::warn!("simulation diverged: {d}");
-        self.system.release();
-        self.system.set_state(self.last_good.clone());
-        self.divergence = Some(DivergenceReport {
-            message: d.to_string(),
-            time: d.time(),
-            margin,
-            shown_time: self.system.time(),
-        });
-        self.paused = true;
     }
 }
 

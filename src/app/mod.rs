@@ -394,7 +394,8 @@ impl App {
             Action::LoadScene(name) => match self.session.load_scene(&name) {
                 Ok(()) => {
                     log::info!("loaded scene {name}");
-                    self.panel.error = None;
+                    // Messages about the last scene's files do not carry over.
+                    (self.panel.error, self.panel.saved, self.panel.wrote) = (None, None, None);
                     self.mouse.cancel();
                     self.scene_loaded();
                 }
@@ -444,6 +445,16 @@ impl App {
             Action::ExportObj => self.export_obj(),
             Action::Screenshot => self.screenshot(),
             Action::Record(seconds) => self.record(seconds),
+            Action::UndoDivergence => match self.session.undo_divergence() {
+                Ok(done) => {
+                    log::info!(
+                        "undo that edit: {}",
+                        if done { "done" } else { "nothing to undo" }
+                    );
+                    self.panel.error = None;
+                }
+                Err(e) => self.panel.error = Some(e.to_string()),
+            },
             Action::Undo | Action::Redo | Action::Defaults => {
                 let particles = self.session.system().particle_count();
                 let done = match action {
@@ -473,6 +484,7 @@ impl App {
                 self.session.set_paused(!paused);
             }
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
+            Action::SlowMotion(factor) => self.session.set_slow_motion(factor),
             Action::Step => {
                 self.session.step_frame();
             }

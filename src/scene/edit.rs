@@ -98,3 +98,35 @@ impl Edit {
         matches!(self, Self::Width(_) | Self::Height(_) | Self::Depth(_))
     }
 }
+
+/// `key = value` as a scene file writes it (vectors as `x,y,z`; an option
+/// turned off as `off`).
+impl std::fmt::Display for Edit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let key = self.key();
+        let g = crate::limits::short;
+        let vector = |v: DVec3| format!("{},{},{}", g(v.x), g(v.y), g(v.z));
+        let option = |o: Option<f64>| o.map_or("off".to_string(), g);
+        let value = match *self {
+            Self::Stiffness(x)
+            | Self::Damping(x)
+            | Self::RestLength(x)
+            | Self::ParticleMass(x)
+            | Self::Gust(x)
+            | Self::AirDamping(x)
+            | Self::Dt(x)
+            | Self::Friction(x)
+            | Self::Thickness(x) => g(x),
+            Self::Gravity(v) | Self::Force(v) | Self::Wind(v) => vector(v),
+            Self::Substeps(n)
+            | Self::BarIterations(n)
+            | Self::Width(n)
+            | Self::Height(n)
+            | Self::Depth(n) => n.to_string(),
+            Self::Integrator(i) => i.to_string(),
+            Self::StretchLimit(o) | Self::TearStrain(o) | Self::MaxSpeed(o) => option(o),
+            Self::SelfCollision(on) => on.to_string(),
+        };
+        write!(f, "{key} = {value}")
+    }
+}

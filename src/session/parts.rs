@@ -14,7 +14,7 @@ impl Session {
     /// change can be undone.
     pub fn set_pins(&mut self, pins: Pins) -> Result<(), SceneError> {
         let indices = self.settings.pin_indices(&pins)?;
-        self.remember(self.scene.clone(), None);
+        self.remember(self.scene.clone(), None, "pins".into());
         self.scene.spec.pins = Some(pins);
         self.settings.pins = indices;
         self.sync_pins();
@@ -35,7 +35,8 @@ impl Session {
             }
             Err(at) => pins.insert(at, i),
         }
-        self.remember(self.scene.clone(), None);
+        let what = format!("pin {i} toggled");
+        self.remember(self.scene.clone(), None, what);
         self.scene.spec.pins = Some(Pins::Indices(pins.clone()));
         self.settings.pins = pins;
         self.sync_pins();
@@ -65,7 +66,7 @@ impl Session {
         scene.spec.colliders = colliders;
         let settings = scene.resolve()?;
         self.commit(scene, settings, false);
-        self.remember(before, Some("colliders"));
+        self.remember(before, Some("colliders"), "colliders".into());
         Ok(())
     }
 }

@@ -64,3 +64,39 @@ fn the_frame_rate_does_not_change_the_physics() {
     };
     assert_eq!(a.positions(), reference.positions());
 }
+
+#[test]
+fn slow_motion_runs_the_same_steps_slower() {
+    use cloth_sandbox::session::Session;
+    let load = || Session::load_with("spring", &[]).unwrap();
+    let (mut full, mut slow) = (load(), load());
+    slow.set_slow_motion(0.1);
+    assert_eq!(slow.slow_motion(), 0.1);
+    let dt = full.system().params().dt;
+    for _ in 0..60 {
+        full.frame(1.0 / 60.0);
+        slow.frame(1.0 / 60.0);
+    }
+    // One wall second: the scene's speed of simulated time, and a tenth of it,
+    // within a step.
+    let speed = full.speed();
+    assert!(
+        (full.system().time() - speed).abs() <= dt + 1e-9,
+        "{}",
+        full.system().time()
+    );
+    assert!(
+        (slow.system().time() - 0.1 * speed).abs() <= dt + 1e-9,
+        "{}",
+        slow.system().time()
+    );
+    // The same steps: ten times fewer of them, each the same dt.
+    assert_eq!(slow.system().params().dt, dt);
+    // Out-of-range factors are held to the range; NaN changes nothing.
+    slow.set_slow_motion(0.0);
+    assert_eq!(slow.slow_motion(), 0.05);
+    slow.set_slow_motion(f64::NAN);
+    assert_eq!(slow.slow_motion(), 0.05);
+    slow.set_slow_motion(7.0);
+    assert_eq!(slow.slow_motion(), 1.0);
+}

@@ -7,9 +7,11 @@
 mod common;
 
 mod clock;
+mod divergence_report;
 mod save_load;
 mod session_params;
 mod session_safe_stepping;
+mod slider_ends;
 mod typed_edits;
 mod undo_defaults;
 mod view_picking;

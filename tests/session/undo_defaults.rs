@@ -186,3 +186,14 @@ fn a_dt_drag_keeps_the_speed_and_is_one_undo_step() {
     );
     assert!(!s.can_undo(), "the drag left more than one undo step");
 }
+
+#[test]
+fn defaults_turn_safe_stepping_back_on() {
+    let mut s = cloth();
+    s.set_safe_stepping(false);
+    s.apply(Edit::Stiffness(5e4)).unwrap();
+    assert!(s.step_choice().is_none());
+    s.restore_defaults().expect("restores");
+    assert!(s.safe_stepping());
+    assert!(s.step_choice().is_some_and(|c| c.safe));
+}

@@ -239,13 +239,27 @@ pub(super) fn speed(ui: &mut Ui, session: &Session, actions: &mut Vec<Action>) {
     {
         actions.push(Action::Edit(Edit::Substeps(substeps)));
     }
+    let mut slow = session.slow_motion();
+    let range = cloth_sandbox::session::SLOW_MOTION;
+    if ui
+        .add(
+            egui::Slider::new(&mut slow, range)
+                .logarithmic(true)
+                .text("slow motion (× speed)"),
+        )
+        .on_hover_text("Watch fast events (a tear, a fling) slowly: 1 runs at the scene's speed, 0.05 twenty times slower, with the same steps. Not part of the scene")
+        .changed()
+    {
+        actions.push(Action::SlowMotion(slow));
+    }
     ui.label(format!(
-        "speed {:.2}x real time ({} x {:.3e} s per 1/60 s)",
+        "speed {:.2}x real time ({} x {:.3e} s per 1/60 s{})",
         session.speed(),
         r.substeps,
-        p.dt
+        p.dt,
+        if slow < 1.0 { format!(", slowed {slow:.2}x") } else { String::new() }
     ))
-    .on_hover_text("Simulated seconds per wall-clock second asked for. The status above says what the physics thread reaches.");
+    .on_hover_text("Simulated seconds per wall-clock second asked for. The corner of the view says what the physics thread reaches.");
     let mut safe = session.safe_stepping();
     if ui
         .checkbox(&mut safe, "safe stepping")

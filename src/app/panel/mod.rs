@@ -43,6 +43,8 @@ pub enum Action {
     Step,
     /// Turn safe stepping on or off.
     SafeStepping(bool),
+    /// Set the slow-motion factor.
+    SlowMotion(f64),
     /// Pin exactly these particles (a preset, or none to unpin all).
     Pins(Pins),
     /// Turn the wind (and gusts) on or off.
@@ -61,6 +63,9 @@ pub enum Action {
     Undo,
     /// Do again the last change undone (Ctrl+Shift+Z).
     Redo,
+    /// After a divergence: take back the edit before it and run on from the last
+    /// good state.
+    UndoDivergence,
     /// Restore the scene's own parameters and pins.
     Defaults,
     /// Replace the colliders with these.
@@ -145,10 +150,6 @@ pub fn show(
 /// Width of the panel (points): the same in every scene.
 const PANEL_WIDTH: f32 = 320.0;
 
-/// Height of the status box (points): messages come and go inside it, and the
-/// controls below never move.
-const STATUS_HEIGHT: f32 = 104.0;
-
 fn header(ui: &mut Ui, actions: &mut Vec<Action>) {
     ui.horizontal(|ui| {
         ui.heading("cloth-sandbox");
@@ -169,61 +170,22 @@ fn header(ui: &mut Ui, actions: &mut Vec<Action>) {
     ui.separator();
 }
 
-/// The status box: how the run keeps up, a divergence, the last error, what was
-/// written where. Fixed height, scrolling when a message is long.
+/// The status box: a divergence in full, the last error, what was written
+/// where. It takes no room when there is nothing to say (the pace is drawn in
+/// the view's corner).
 fn status(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mut Vec<Action>) {
-    egui::ScrollArea::vertical()
-        .id_salt("status")
-        .max_height(STATUS_HEIGHT)
-        .show(ui, |ui| {
-            ui.set_min_height(STATUS_HEIGHT);
-            ui.set_width(ui.available_width());
-            status_lines(ui, state, session, actions);
-        });
-}
-
-fn status_lines(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mut Vec<Action>) {
+    let any = session.divergence().is_some()
+        || session.paused()
+        || state.error.is_some()
+        || state.saved.is_some()
+        || state.wrote.is_some();
+    if !any {
+        return;
+    }
     if let Some(d) = session.divergence() {
-        ui.horizontal(|ui| {
-            ui.colored_label(Color32::from_rgb(255, 110, 90), "Diverged and paused.");
-            if ui
-                .button("Reset scene")
-                .on_hover_text("Start the scene again from its setup (R)")
-                .clicked()
-            {
-                actions.push(Action::Reset);
-            }
-        });
-        ui.label(format!(
-            "Showing the last good frame, t = {:.3} s.",
-            d.shown_time
-        ));
-        ui.label("Lower dt or the stiffness, or try another integrator, then reset.");
-        match d.margin {
-            Some(m) => ui.label(format!("At t = {:.3} s, dt / dt_crit = {m:.2}:", d.time)),
-            None => ui.label(format!("At t = {:.3} s:", d.time)),
-        };
-        ui.label(RichText::new(&d.message).small());
+        divergence(ui, d, session.can_undo(), actions);
     } else if session.paused() {
         ui.label("Paused (Space or Play resumes).");
-    } else {
-        let pace = session.pace();
-        let factor = format!(
-            "{:.2} s simulated per s (asked {:.2})",
-            pace.real_time_factor, pace.target
-        );
-        // A backlog dropped once (a long pause of the window's thread) is not
-        // "slower": only a factor short of the one asked for is.
-        if pace.behind && pace.real_time_factor < 0.97 * pace.target {
-            ui.colored_label(
-                Color32::from_rgb(255, 200, 60),
-                format!("Slower than asked: {factor}"),
-            )
-            .on_hover_text("The physics cannot run every step due: it is busy all the time on its own thread. Fewer particles, a larger dt or fewer steps per frame make it keep up.");
-        } else {
-            ui.label(format!("Keeping up: {factor}"))
-                .on_hover_text("The physics runs on its own thread, at the speed asked for whatever the frame rate.");
-        }
     }
     if let Some(e) = &state.error {
         ui.colored_label(Color32::from_rgb(255, 170, 60), e);
@@ -234,6 +196,46 @@ fn status_lines(ui: &mut Ui, state: &PanelState, session: &Session, actions: &mu
     if let Some(text) = &state.wrote {
         ui.label(RichText::new(text).small());
     }
+    ui.separator();
+}
+
+/// A divergence in full: its cause, the edit before it, and the ways back.
+fn divergence(
+    ui: &mut Ui,
+    d: &cloth_sandbox::session::DivergenceReport,
+    can_undo: bool,
+    actions: &mut Vec<Action>,
+) {
+    ui.colored_label(Color32::from_rgb(255, 110, 90), "Diverged and paused.");
+    ui.horizontal(|ui| {
+        if let Some((what, _)) = &d.edit
+            && can_undo
+            && ui
+                .button("Undo that edit")
+                .on_hover_text(format!(
+                    "Take back {what} and run on from the last good frame"
+                ))
+                .clicked()
+        {
+            actions.push(Action::UndoDivergence);
+        }
+        if ui
+            .button("Reset scene")
+            .on_hover_text("Start the scene again from its setup (R)")
+            .clicked()
+        {
+            actions.push(Action::Reset);
+        }
+    });
+    ui.label(&d.cause);
+    if let Some((what, ago)) = &d.edit {
+        ui.label(format!("Last edit: {what}, {ago:.2} s before."));
+    }
+    ui.label(format!(
+        "Showing the last good frame, t = {:.3} s.",
+        d.shown_time
+    ));
+    ui.label(RichText::new(&d.message).small());
 }
 
 /// The panel below the status box, section by section.
