@@ -77,7 +77,11 @@ impl FrameData {
         // The solids, under the contact surfaces the cloth rests on.
         let params = system.params();
         self.ground = params.ground.map(|g| (g.height - params.thickness) as f32);
-        let key = (system.particle_count(), system.springs().len(), surface.len());
+        let key = (
+            system.particle_count(),
+            system.springs().len(),
+            surface.len(),
+        );
         if self.floor_key != key || self.floor.is_none() {
             let (lo, hi) = system_bounds(system);
             self.floor = Some(lo.y - 0.1 * (hi - lo).max_element().max(0.5));

@@ -42,7 +42,12 @@ impl DynBuffer {
     /// Uploads `items` from offset 0, reallocating if too small, and returns how
     /// many were uploaded: all of them, or as many as the device's largest buffer
     /// holds (the caller draws that many and says what was left out).
-    pub fn write<T: Pod>(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, items: &[T]) -> usize {
+    pub fn write<T: Pod>(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        items: &[T],
+    ) -> usize {
         let stride = std::mem::size_of::<T>().max(1);
         let count = items.len().min(self.max_elements(stride));
         let bytes: &[u8] = bytemuck::cast_slice(&items[..count]);

@@ -52,9 +52,9 @@ pub const SOLID_COLOR: [f32; 4] = [0.86, 0.86, 0.84, 0.0];
 /// Wireframe colour.
 pub const WIRE_COLOR: [f32; 4] = [0.08, 0.09, 0.12, 1.0];
 
-/// Colour of the triangle edges drawn alone, without the surface: light on the
-/// dark background (linear RGBA).
-pub const WIRE_ALONE_COLOR: [f32; 4] = [0.55, 0.62, 0.75, 1.0];
+/// Colour of the triangle edges drawn alone, without the surface: dark slate
+/// on the light sky and floor (linear RGBA).
+pub const WIRE_ALONE_COLOR: [f32; 4] = [0.14, 0.18, 0.27, 1.0];
 /// Free particle colour.
 pub const PARTICLE_COLOR: [f32; 4] = [0.95, 0.95, 0.98, 1.0];
 /// Pinned particle colour.

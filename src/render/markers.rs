@@ -31,7 +31,8 @@ pub fn sphere_radius(positions: &[Vec3], valid: &[bool], lines: &[[u32; 2]]) -> 
         .iter()
         .filter_map(|&[a, b]| {
             let (a, b) = (a as usize, b as usize);
-            let ok = valid.get(a).copied().unwrap_or(false) && valid.get(b).copied().unwrap_or(false);
+            let ok =
+                valid.get(a).copied().unwrap_or(false) && valid.get(b).copied().unwrap_or(false);
             ok.then(|| positions[a].distance(positions[b]))
         })
         .filter(|l| l.is_finite() && *l > 0.0)
@@ -42,7 +43,11 @@ pub fn sphere_radius(positions: &[Vec3], valid: &[bool], lines: &[[u32; 2]]) -> 
         let mid = lengths.len() / 2;
         let (_, median, _) = lengths.select_nth_unstable_by(mid, f32::total_cmp);
         let r = (0.2 * *median).max(0.01 * diagonal);
-        if diagonal > 0.0 { r.min(0.04 * diagonal) } else { r }
+        if diagonal > 0.0 {
+            r.min(0.04 * diagonal)
+        } else {
+            r
+        }
     };
     let r = if r > 0.0 { r } else { 0.05 };
     (r.is_finite() && r < 1e4).then_some(r)
@@ -50,13 +55,23 @@ pub fn sphere_radius(positions: &[Vec3], valid: &[bool], lines: &[[u32; 2]]) -> 
 
 /// Appends a sphere of radius `r` about `c` in `color` (a UV sphere, flat-shaded
 /// by its smooth normals `n = (p - c) / r`).
-pub fn push_sphere(c: Vec3, r: f32, color: [f32; 4], out: &mut Vec<MeshVertex>, idx: &mut Vec<u32>) {
+pub fn push_sphere(
+    c: Vec3,
+    r: f32,
+    color: [f32; 4],
+    out: &mut Vec<MeshVertex>,
+    idx: &mut Vec<u32>,
+) {
     let base = out.len() as u32;
     for i in 0..=SPHERE_RINGS {
         let theta = std::f32::consts::PI * i as f32 / SPHERE_RINGS as f32;
         for j in 0..=SPHERE_SEGMENTS {
             let phi = std::f32::consts::TAU * j as f32 / SPHERE_SEGMENTS as f32;
-            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
             out.push(vertex(c + n * r, n, color));
         }
     }
@@ -72,7 +87,14 @@ pub fn push_sphere(c: Vec3, r: f32, color: [f32; 4], out: &mut Vec<MeshVertex>, 
 
 /// Appends an open cylinder of radius `r` from `a` to `b` in `color`, its
 /// normals pointing radially out; nothing for a zero-length segment.
-pub fn push_tube(a: Vec3, b: Vec3, r: f32, color: [f32; 4], out: &mut Vec<MeshVertex>, idx: &mut Vec<u32>) {
+pub fn push_tube(
+    a: Vec3,
+    b: Vec3,
+    r: f32,
+    color: [f32; 4],
+    out: &mut Vec<MeshVertex>,
+    idx: &mut Vec<u32>,
+) {
     let axis = b - a;
     let Some(dir) = axis.try_normalize() else {
         return;

@@ -376,7 +376,12 @@ impl Renderer {
             None => (Vec3::ZERO, 5.0),
         };
         let fit = (stage.bounds)
-            .filter(|_| options.shadows && (self.mesh_visible || self.extra_index_count > 0 || self.marker_index_count > 0))
+            .filter(|_| {
+                options.shadows
+                    && (self.mesh_visible
+                        || self.extra_index_count > 0
+                        || self.marker_index_count > 0)
+            })
             .and_then(|(lo, hi)| shadow::fit(light, lo, hi, stage.ground));
         self.shadows_on = fit.is_some();
         self.ground_on = stage.ground.is_some();
@@ -385,7 +390,9 @@ impl Renderer {
         let mut globals = Globals {
             view_proj: view_proj.to_cols_array_2d(),
             inv_view_proj: view_proj.inverse().to_cols_array_2d(),
-            light_view_proj: fit.map_or(Mat4::IDENTITY, |f| f.view_proj).to_cols_array_2d(),
+            light_view_proj: fit
+                .map_or(Mat4::IDENTITY, |f| f.view_proj)
+                .to_cols_array_2d(),
             eye: cam.eye().extend(1.0).to_array(),
             light_dir: light.extend(0.0).to_array(),
             viewport: [viewport.x, viewport.y, (cam.fov_y * 0.5).tan(), 0.0],
@@ -437,10 +444,22 @@ impl Renderer {
                 (
                     &self.cloth_vertices.buffer,
                     &self.cloth_indices.buffer,
-                    if self.mesh_visible { self.cloth_index_count } else { 0 },
+                    if self.mesh_visible {
+                        self.cloth_index_count
+                    } else {
+                        0
+                    },
                 ),
-                (&self.extra_vertices.buffer, &self.extra_indices.buffer, self.extra_index_count),
-                (&self.marker_vertices.buffer, &self.marker_indices.buffer, self.marker_index_count),
+                (
+                    &self.extra_vertices.buffer,
+                    &self.extra_indices.buffer,
+                    self.extra_index_count,
+                ),
+                (
+                    &self.marker_vertices.buffer,
+                    &self.marker_indices.buffer,
+                    self.marker_index_count,
+                ),
             ];
             self.shadow.render(encoder, &self.globals_bind, &meshes);
         }
@@ -499,9 +518,25 @@ impl Renderer {
         }
         pass.set_pipeline(&self.pipelines.mesh);
         let meshes = [
-            (&self.cloth_vertices, &self.cloth_indices, if self.mesh_visible { self.cloth_index_count } else { 0 }),
-            (&self.extra_vertices, &self.extra_indices, self.extra_index_count),
-            (&self.marker_vertices, &self.marker_indices, self.marker_index_count),
+            (
+                &self.cloth_vertices,
+                &self.cloth_indices,
+                if self.mesh_visible {
+                    self.cloth_index_count
+                } else {
+                    0
+                },
+            ),
+            (
+                &self.extra_vertices,
+                &self.extra_indices,
+                self.extra_index_count,
+            ),
+            (
+                &self.marker_vertices,
+                &self.marker_indices,
+                self.marker_index_count,
+            ),
         ];
         for (vertices, indices, count) in meshes {
             if count > 0 {

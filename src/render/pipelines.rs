@@ -35,7 +35,12 @@ const COMMON: &str = include_str!("../../shaders/shadow_sample.wgsl");
 
 impl Pipelines {
     /// Every pipeline for output in `format` with `samples` samples per pixel.
-    pub fn new(device: &wgpu::Device, format: wgpu::TextureFormat, samples: u32, layouts: &Layouts<'_>) -> Self {
+    pub fn new(
+        device: &wgpu::Device,
+        format: wgpu::TextureFormat,
+        samples: u32,
+        layouts: &Layouts<'_>,
+    ) -> Self {
         let layout = |label: &str, groups: &[Option<&wgpu::BindGroupLayout>]| {
             device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some(label),
@@ -43,8 +48,18 @@ impl Pipelines {
                 immediate_size: 0,
             })
         };
-        let lit = layout("mesh pipeline layout", &[Some(layouts.globals), Some(layouts.shadow), Some(layouts.texture)]);
-        let shadowed = layout("ground pipeline layout", &[Some(layouts.globals), Some(layouts.shadow)]);
+        let lit = layout(
+            "mesh pipeline layout",
+            &[
+                Some(layouts.globals),
+                Some(layouts.shadow),
+                Some(layouts.texture),
+            ],
+        );
+        let shadowed = layout(
+            "ground pipeline layout",
+            &[Some(layouts.globals), Some(layouts.shadow)],
+        );
         let plain = layout("overlay pipeline layout", &[Some(layouts.globals)]);
         let build = |spec: Spec<'_>| build(device, format, samples, spec);
         let triangles = wgpu::PrimitiveState {
@@ -53,7 +68,11 @@ impl Pipelines {
             ..Default::default()
         };
 
-        let sky_shader = shader(device, "sky.wgsl", &[include_str!("../../shaders/sky.wgsl")]);
+        let sky_shader = shader(
+            device,
+            "sky.wgsl",
+            &[include_str!("../../shaders/sky.wgsl")],
+        );
         let sky = build(Spec {
             label: "sky pipeline",
             layout: &plain,
@@ -62,7 +81,11 @@ impl Pipelines {
             primitive: triangles,
             depth: false,
         });
-        let ground_shader = shader(device, "ground.wgsl", &[COMMON, include_str!("../../shaders/ground.wgsl")]);
+        let ground_shader = shader(
+            device,
+            "ground.wgsl",
+            &[COMMON, include_str!("../../shaders/ground.wgsl")],
+        );
         let ground = build(Spec {
             label: "ground pipeline",
             layout: &shadowed,
@@ -71,7 +94,11 @@ impl Pipelines {
             primitive: triangles,
             depth: true,
         });
-        let mesh_shader = shader(device, "mesh.wgsl", &[COMMON, include_str!("../../shaders/mesh.wgsl")]);
+        let mesh_shader = shader(
+            device,
+            "mesh.wgsl",
+            &[COMMON, include_str!("../../shaders/mesh.wgsl")],
+        );
         let mesh_attrs = wgpu::vertex_attr_array![
             0 => Float32x3, 1 => Float32x3, 2 => Float32x2, 3 => Float32x4, 4 => Float32x4
         ];
@@ -87,7 +114,11 @@ impl Pipelines {
             primitive: triangles,
             depth: true,
         });
-        let line_shader = shader(device, "lines.wgsl", &[include_str!("../../shaders/lines.wgsl")]);
+        let line_shader = shader(
+            device,
+            "lines.wgsl",
+            &[include_str!("../../shaders/lines.wgsl")],
+        );
         let line_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x4];
         let line = build(Spec {
             label: "line pipeline",
@@ -104,7 +135,11 @@ impl Pipelines {
             },
             depth: true,
         });
-        let point_shader = shader(device, "points.wgsl", &[include_str!("../../shaders/points.wgsl")]);
+        let point_shader = shader(
+            device,
+            "points.wgsl",
+            &[include_str!("../../shaders/points.wgsl")],
+        );
         let point_attrs = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4];
         let point = build(Spec {
             label: "point pipeline",
@@ -129,9 +164,15 @@ impl Pipelines {
 }
 
 /// One pipeline with `vs_main` and `fs_main` of its shader, replacing colour.
-fn build(device: &wgpu::Device, format: wgpu::TextureFormat, samples: u32, spec: Spec<'_>) -> wgpu::RenderPipeline {
+fn build(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    samples: u32,
+    spec: Spec<'_>,
+) -> wgpu::RenderPipeline {
     let buffers = [spec.buffer];
-    let buffers: &[Option<wgpu::VertexBufferLayout<'_>>] = if buffers[0].is_some() { &buffers } else { &[] };
+    let buffers: &[Option<wgpu::VertexBufferLayout<'_>>] =
+        if buffers[0].is_some() { &buffers } else { &[] };
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some(spec.label),
         layout: Some(spec.layout),

@@ -155,13 +155,20 @@ impl ShadowMap {
 /// The depth-only pipeline: positions through `light_view_proj`, both sides,
 /// with a slope-scaled depth bias (more bias where a surface is steep to the
 /// light, where one texel spans the most depth).
-fn depth_pipeline(device: &wgpu::Device, globals_layout: &wgpu::BindGroupLayout) -> wgpu::RenderPipeline {
+fn depth_pipeline(
+    device: &wgpu::Device,
+    globals_layout: &wgpu::BindGroupLayout,
+) -> wgpu::RenderPipeline {
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("shadow pipeline layout"),
         bind_group_layouts: &[Some(globals_layout)],
         immediate_size: 0,
     });
-    let module = super::shader(device, "shadow.wgsl", &[include_str!("../../shaders/shadow.wgsl")]);
+    let module = super::shader(
+        device,
+        "shadow.wgsl",
+        &[include_str!("../../shaders/shadow.wgsl")],
+    );
     let attrs = wgpu::vertex_attr_array![0 => Float32x3];
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
         label: Some("shadow pipeline"),
@@ -210,11 +217,21 @@ pub fn fit(light: Vec3, lo: Vec3, hi: Vec3, ground: Option<f32>) -> Option<Light
         return None;
     }
     let light = light.try_normalize()?;
-    let up = if light.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    let up = if light.y.abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
     // Rotation only: light space is the same frame to frame.
     let view = glam::camera::rh::view::look_at_mat4(light, Vec3::ZERO, up);
     let mut points: Vec<Vec3> = (0..8)
-        .map(|k| Vec3::new([lo.x, hi.x][k & 1], [lo.y, hi.y][(k >> 1) & 1], [lo.z, hi.z][k >> 2]))
+        .map(|k| {
+            Vec3::new(
+                [lo.x, hi.x][k & 1],
+                [lo.y, hi.y][(k >> 1) & 1],
+                [lo.z, hi.z][k >> 2],
+            )
+        })
         .collect();
     if let Some(g) = ground.filter(|g| g.is_finite())
         && light.y > 1e-3
@@ -225,7 +242,10 @@ pub fn fit(light: Vec3, lo: Vec3, hi: Vec3, ground: Option<f32>) -> Option<Light
             .collect();
         points.extend(landed);
     }
-    let local: Vec<Vec3> = points.iter().map(|&p| (view * p.extend(1.0)).xyz()).collect();
+    let local: Vec<Vec3> = points
+        .iter()
+        .map(|&p| (view * p.extend(1.0)).xyz())
+        .collect();
     let (min, max) = cloth_sandbox::view::bounds(&local)?;
     let span = (max.x - min.x).max(max.y - min.y).max(1e-3) * 1.02;
     let side = 2f32.powf((span.log2() * 4.0).ceil() / 4.0);
@@ -243,7 +263,8 @@ pub fn fit(light: Vec3, lo: Vec3, hi: Vec3, ground: Option<f32>) -> Option<Light
         -min.z + depth_pad,
     );
     let view_proj = proj * view;
-    (view_proj.is_finite() && texel.is_finite() && texel > 0.0).then_some(LightFit { view_proj, texel })
+    (view_proj.is_finite() && texel.is_finite() && texel > 0.0)
+        .then_some(LightFit { view_proj, texel })
 }
 
 #[cfg(test)]
@@ -254,9 +275,9 @@ mod tests {
     fn the_fit_holds_the_casters_and_their_shadow_on_the_ground() {
         let light = Vec3::new(0.3, 0.9, 0.35).normalize();
         let (lo, hi) = (Vec3::new(-1.0, 1.0, -1.0), Vec3::new(1.0, 3.0, 1.0));
-        let fit = fit(light, lo, hi, Some(0.0)).unwrap();
+        let f = fit(light, lo, hi, Some(0.0)).unwrap();
         let inside = |p: Vec3| {
-            let c = fit.view_proj * p.extend(1.0);
+            let c = f.view_proj * p.extend(1.0);
             let n = c.xyz() / c.w;
             n.x.abs() <= 1.0 && n.y.abs() <= 1.0 && (0.0..=1.0).contains(&n.z)
         };

@@ -131,7 +131,9 @@ impl Renderer {
             let tube = r * markers::TUBE_FRACTION;
             for (k, &[a, b]) in frame.lines.iter().enumerate() {
                 let (a, b) = (a as usize, b as usize);
-                if !(valid.get(a).copied().unwrap_or(false) && valid.get(b).copied().unwrap_or(false)) {
+                if !(valid.get(a).copied().unwrap_or(false)
+                    && valid.get(b).copied().unwrap_or(false))
+                {
                     continue;
                 }
                 let c = (frame.line_colors.get(k).copied())
