@@ -68,6 +68,6 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> @location(0) ve
     // Blinn-Phong highlight of the key light: (n·h)^48, h the half vector.
     let h = normalize(l + v);
     let spec = pow(max(dot(n, h), 0.0), 48.0) * 0.15 * lit * f32(ndl > 0.0);
-    let shade = 0.30 * ambient(n) + vec3<f32>(0.72 * direct + 0.16 * fill);
+    let shade = 0.34 * ambient(n) + vec3<f32>(0.72 * direct + 0.26 * fill);
     return vec4<f32>(base * shade + vec3<f32>(spec), 1.0);
 }
