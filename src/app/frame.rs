@@ -21,6 +21,10 @@ pub struct FrameData {
     pinned: Vec<bool>,
     triangles: Vec<[u32; 3]>,
     ground: Option<f32>,
+    /// Display-only floor under a scene without a ground, and the scene it was
+    /// set for (particles, springs, triangles): set when that changes.
+    floor: Option<f32>,
+    floor_key: (usize, usize, usize),
     sphere: Option<(Vec3, f32)>,
     colliders: Vec<cloth_sandbox::sim::Collider>,
     time: f64,
@@ -73,6 +77,16 @@ impl FrameData {
         // The solids, under the contact surfaces the cloth rests on.
         let params = system.params();
         self.ground = params.ground.map(|g| (g.height - params.thickness) as f32);
+        let key = (
+            system.particle_count(),
+            system.springs().len(),
+            surface.len(),
+        );
+        if self.floor_key != key || self.floor.is_none() {
+            let (lo, hi) = system_bounds(system);
+            self.floor = Some(lo.y - 0.1 * (hi - lo).max_element().max(0.5));
+            self.floor_key = key;
+        }
         self.sphere =
             (params.sphere).map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32));
         self.colliders.clear();
@@ -116,6 +130,7 @@ impl FrameData {
             pinned: &self.pinned,
             highlight,
             ground: self.ground,
+            floor: self.floor,
             sphere: self.sphere,
             colliders: &self.colliders,
             time: self.time,
@@ -140,7 +155,11 @@ pub fn framed_camera(session: &Session, yaw: Option<f32>, pitch: Option<f32>) ->
 
 /// The box to frame when a scene loads: its particles, its sphere and its colliders.
 pub fn scene_bounds(session: &Session) -> (Vec3, Vec3) {
-    let system = session.system();
+    system_bounds(session.system())
+}
+
+/// [`scene_bounds`] of a system.
+fn system_bounds(system: &System) -> (Vec3, Vec3) {
     let points: Vec<Vec3> = system.positions().iter().map(|p| p.as_vec3()).collect();
     let (mut lo, mut hi) =
         cloth_sandbox::view::bounds(&points).unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));

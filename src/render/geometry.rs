@@ -1,6 +1,7 @@
 //! CPU-side vertex building: per-vertex normals (area-weighted sum of face
 //! normals, `n_i = normalize(Σ (b - a) × (c - a))`), line and point vertices,
-//! ground and sphere meshes. Everything that leaves here is finite.
+//! the sphere collider's mesh, and the scene's colours. Everything that leaves
+//! here is finite.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
@@ -15,8 +16,10 @@ pub struct MeshVertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
     pub uv: [f32; 2],
-    /// rgb: base colour; a: how much the texture modulates it.
+    /// rgb: front colour; a: how much the texture modulates it.
     pub color: [f32; 4],
+    /// rgb: back colour (seen from behind the triangle's winding); a: unused.
+    pub back: [f32; 4],
 }
 
 /// A vertex of a line segment.
@@ -37,22 +40,21 @@ pub struct PointInstance {
     pub color: [f32; 4],
 }
 
-/// Cloth front colour (the back is tinted in the shader).
-pub const CLOTH_COLOR: [f32; 4] = [0.62, 0.78, 1.0, 1.0];
-/// Back-face tint of the cloth.
-pub const BACK_TINT: [f32; 3] = [1.0, 0.55, 0.35];
-/// Ground plane colour, lightly modulated by the checker.
-const GROUND_COLOR: [f32; 4] = [0.50, 0.54, 0.50, 0.35];
+/// Cloth front colour, warm (linear RGB; a: unused here, set to the texture weight).
+pub const CLOTH_COLOR: [f32; 4] = [0.93, 0.56, 0.34, 1.0];
+/// Cloth back colour, a cool blue-grey, clearly apart from the front.
+pub const CLOTH_BACK_COLOR: [f32; 4] = [0.38, 0.50, 0.68, 1.0];
 /// Sphere collider colour, untextured.
 const SPHERE_COLOR: [f32; 4] = SOLID_COLOR;
-/// Colour of every collider (boxes, capsules, meshes, spheres).
-pub const SOLID_COLOR: [f32; 4] = [0.80, 0.38, 0.32, 0.0];
+/// Colour of every collider (boxes, capsules, meshes, spheres): a light
+/// porcelain grey, apart from both sides of the cloth.
+pub const SOLID_COLOR: [f32; 4] = [0.86, 0.86, 0.84, 0.0];
 /// Wireframe colour.
 pub const WIRE_COLOR: [f32; 4] = [0.08, 0.09, 0.12, 1.0];
 
-/// Colour of the triangle edges drawn alone, without the surface: light on the
-/// dark background (linear RGBA).
-pub const WIRE_ALONE_COLOR: [f32; 4] = [0.55, 0.62, 0.75, 1.0];
+/// Colour of the triangle edges drawn alone, without the surface: dark slate
+/// on the light sky and floor (linear RGBA).
+pub const WIRE_ALONE_COLOR: [f32; 4] = [0.14, 0.18, 0.27, 1.0];
 /// Free particle colour.
 pub const PARTICLE_COLOR: [f32; 4] = [0.95, 0.95, 0.98, 1.0];
 /// Pinned particle colour.
@@ -122,7 +124,8 @@ pub fn cloth_vertices(
     out: &mut Vec<MeshVertex>,
 ) {
     out.clear();
-    let weight = if textured { 1.0 } else { 0.0 };
+    // The checker modulates the colour partly, so its dark cells keep the hue.
+    let weight = if textured { 0.6 } else { 0.0 };
     let mut color = CLOTH_COLOR;
     color[3] = weight;
     for (i, p) in positions.iter().enumerate() {
@@ -136,6 +139,7 @@ pub fn cloth_vertices(
             normal: normals.get(i).copied().unwrap_or(Vec3::Y).to_array(),
             uv: uv.to_array(),
             color,
+            back: CLOTH_BACK_COLOR,
         });
     }
 }
@@ -182,23 +186,6 @@ pub fn push_lines(
     }
 }
 
-/// A square ground plane at height `y`, centred under `centre`, `half` metres
-/// to each side, with UVs of one checker cell per metre.
-pub fn ground_mesh(y: f32, centre: Vec3, half: f32, out: &mut Vec<MeshVertex>, idx: &mut Vec<u32>) {
-    let base = out.len() as u32;
-    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
-    for (sx, sz) in corners {
-        let p = Vec3::new(centre.x + sx * half, y, centre.z + sz * half);
-        out.push(MeshVertex {
-            position: p.to_array(),
-            normal: [0.0, 1.0, 0.0],
-            uv: [p.x / 8.0, p.z / 8.0],
-            color: GROUND_COLOR,
-        });
-    }
-    idx.extend_from_slice(&[base, base + 2, base + 1, base, base + 3, base + 2]);
-}
-
 /// A UV sphere of radius `r` about `c`.
 pub fn sphere_mesh(c: Vec3, r: f32, out: &mut Vec<MeshVertex>, idx: &mut Vec<u32>) {
     const RINGS: u32 = 24;
@@ -218,6 +205,7 @@ pub fn sphere_mesh(c: Vec3, r: f32, out: &mut Vec<MeshVertex>, idx: &mut Vec<u32
                 normal: n.to_array(),
                 uv: [j as f32 / SEGMENTS as f32, i as f32 / RINGS as f32],
                 color: SPHERE_COLOR,
+                back: SPHERE_COLOR,
             });
         }
     }

@@ -20,8 +20,15 @@ pub struct Offscreen {
 }
 
 impl Offscreen {
-    /// Opens an adapter (no surface) and prepares `width × height` targets.
+    /// Opens an adapter (no surface) and prepares `width × height` targets, with
+    /// as many MSAA samples as the adapter allows.
     pub fn new(width: u32, height: u32) -> anyhow::Result<Self> {
+        Self::with_samples(width, height, None)
+    }
+
+    /// [`Offscreen::new`] with `samples` MSAA samples where given (1: no MSAA,
+    /// so FXAA), else the adapter's most.
+    pub fn with_samples(width: u32, height: u32, samples: Option<u32>) -> anyhow::Result<Self> {
         check_image_range(width, height)?;
         let instance =
             wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
@@ -29,7 +36,7 @@ impl Offscreen {
         let adapter_name = gpu::describe(&adapter);
         log::info!("off-screen adapter: {adapter_name}");
         let (device, queue) = pollster::block_on(gpu::device(&adapter))?;
-        let samples = super::pick_sample_count(&adapter, FORMAT);
+        let samples = samples.unwrap_or_else(|| super::pick_sample_count(&adapter, FORMAT));
         Self::with_device(device, queue, adapter_name, samples, width, height)
     }
 

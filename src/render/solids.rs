@@ -157,5 +157,6 @@ fn vertex(p: DVec3, n: DVec3, uv: [f32; 2]) -> MeshVertex {
         normal: n.as_vec3().to_array(),
         uv,
         color: SOLID_COLOR,
+        back: SOLID_COLOR,
     }
 }

@@ -12,9 +12,6 @@
 use std::path::PathBuf;
 use std::process::Command;
 
-/// The background colour `ViewOptions::default()` clears to.
-const BACKGROUND: [u8; 3] = [38, 44, 56];
-
 /// Runs `cloth screenshot` with `args` and returns the RGBA pixels, or `None`
 /// when there is no adapter and adapters are not required.
 fn shot(name: &str, args: &[&str]) -> Option<Vec<u8>> {
@@ -47,17 +44,14 @@ fn shot(name: &str, args: &[&str]) -> Option<Vec<u8>> {
     Some(buf)
 }
 
-/// Fraction of pixels that are not the background.
-fn covered(rgba: &[u8]) -> f64 {
+/// Fraction of pixels that differ from `backdrop` (the same view without what
+/// is tested: sky, floor).
+fn covered(rgba: &[u8], backdrop: &[u8]) -> f64 {
     let pixels = rgba.chunks_exact(4);
     let n = pixels.len();
     let drawn = pixels
-        .filter(|p| {
-            p[..3]
-                .iter()
-                .zip(BACKGROUND)
-                .any(|(&a, b)| a.abs_diff(b) > 3)
-        })
+        .zip(backdrop.chunks_exact(4))
+        .filter(|(p, q)| p[..3].iter().zip(&q[..3]).any(|(&a, &b)| a.abs_diff(b) > 3))
         .count();
     drawn as f64 / n.max(1) as f64
 }
@@ -65,6 +59,11 @@ fn covered(rgba: &[u8]) -> f64 {
 #[test]
 fn a_1024_by_1024_cloth_renders_with_every_overlay() {
     let side = ["--set", "width=1024", "--set", "height=1024"];
+    let mut bare = side.to_vec();
+    bare.extend(["--no-mesh", "--size", "96x64"]);
+    let Some(backdrop) = shot("largest-backdrop", &bare) else {
+        return;
+    };
     for (name, overlay) in [("springs", "--springs"), ("strain", "--strain")] {
         let mut args = side.to_vec();
         args.extend([overlay, "--wireframe", "--particles", "--size", "96x64"]);
@@ -72,7 +71,7 @@ fn a_1024_by_1024_cloth_renders_with_every_overlay() {
             return;
         };
         assert!(
-            covered(&rgba) > 0.1,
+            covered(&rgba, &backdrop) > 0.1,
             "the cloth and its lines are drawn ({name})"
         );
     }
@@ -93,6 +92,10 @@ fn the_springs_of_an_895_by_895_cloth_render() {
     let Some(rgba) = shot("springs-895", &args) else {
         return;
     };
-    // With no surface, only the lines can cover the picture.
-    assert!(covered(&rgba) > 0.1, "the springs are drawn");
+    let bare: Vec<&str> = args.iter().copied().filter(|a| *a != "--springs").collect();
+    let Some(backdrop) = shot("springs-895-backdrop", &bare) else {
+        return;
+    };
+    // With no surface, only the lines can cover the sky and floor.
+    assert!(covered(&rgba, &backdrop) > 0.1, "the springs are drawn");
 }
