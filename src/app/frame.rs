@@ -25,6 +25,8 @@ pub struct FrameData {
     /// set for (particles, springs, triangles): set when that changes.
     floor: Option<f32>,
     floor_key: (usize, usize, usize),
+    /// How far (m) below the scene's lowest point the floor lies.
+    floor_gap: f32,
     sphere: Option<(Vec3, f32)>,
     colliders: Vec<cloth_sandbox::sim::Collider>,
     time: f64,
@@ -84,8 +86,18 @@ impl FrameData {
         );
         if self.floor_key != key || self.floor.is_none() {
             let (lo, hi) = system_bounds(system);
-            self.floor = Some(lo.y - 0.1 * (hi - lo).max_element().max(0.5));
+            self.floor_gap = 0.1 * (hi - lo).max_element().max(0.5);
+            self.floor = Some(lo.y - self.floor_gap);
             self.floor_key = key;
+        }
+        // The floor gives way under a cloth that grows or falls past it (a rest
+        // length edit, no pins), so nothing ever hangs through it.
+        let lowest = (system.positions().iter()).fold(f64::INFINITY, |m, p| m.min(p.y)) as f32;
+        if let Some(floor) = self.floor.as_mut()
+            && lowest.is_finite()
+            && lowest < *floor + 0.25 * self.floor_gap
+        {
+            *floor = lowest - self.floor_gap;
         }
         self.sphere =
             (params.sphere).map(|s| (s.center.as_vec3(), (s.radius - params.thickness) as f32));

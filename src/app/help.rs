@@ -35,6 +35,8 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ),
     ("Drop a scene file on the window", "open it"),
     ("F1 or ?", "show / hide this help"),
+    ("Tab", "hide / show the panel"),
+    ("F2", "hide / show the readout in the view's corner"),
     ("Esc or P", "quit"),
 ];
 

@@ -7,6 +7,7 @@ pub mod frame;
 pub mod gfx;
 pub mod help;
 pub mod input;
+mod overlay;
 pub mod panel;
 pub mod physics;
 pub mod plots;
@@ -184,12 +185,32 @@ struct App {
     fatal: Option<anyhow::Error>,
 }
 
+/// An egui context whose text reads at 1x: body and buttons at 14 points,
+/// small text at 12 (egui's defaults are 12.5 and 9).
+fn readable_context() -> egui::Context {
+    use egui::{FontFamily, FontId, TextStyle};
+    let ctx = egui::Context::default();
+    ctx.all_styles_mut(|style| {
+        let sizes = [
+            (TextStyle::Small, 12.0, FontFamily::Proportional),
+            (TextStyle::Body, 14.0, FontFamily::Proportional),
+            (TextStyle::Button, 14.0, FontFamily::Proportional),
+            (TextStyle::Heading, 19.0, FontFamily::Proportional),
+            (TextStyle::Monospace, 13.0, FontFamily::Monospace),
+        ];
+        for (text, size, family) in sizes {
+            style.text_styles.insert(text, FontId::new(size, family));
+        }
+    });
+    ctx
+}
+
 impl App {
     fn new(session: Session) -> std::io::Result<Self> {
         let mut app = Self {
             session: SharedSession::start(session)?,
             gfx: None,
-            egui_ctx: egui::Context::default(),
+            egui_ctx: readable_context(),
             egui_state: None,
             camera: OrbitCamera::default(),
             view: ViewOptions::default(),
@@ -475,6 +496,14 @@ impl App {
                     Err(e) => self.panel.error = Some(e.to_string()),
                 }
             }
+            Action::TogglePanel => {
+                self.panel.hidden = !self.panel.hidden;
+                log::info!(
+                    "panel {}",
+                    if self.panel.hidden { "hidden" } else { "shown" }
+                );
+            }
+            Action::ToggleReadout => self.panel.readout_hidden = !self.panel.readout_hidden,
             Action::ToggleHelp => {
                 self.panel.help = !self.panel.help;
                 log::info!("help {}", if self.panel.help { "shown" } else { "hidden" });
@@ -661,6 +690,15 @@ impl App {
         let down = event.state == ElementState::Pressed;
         if down && !event.repeat && (code == KeyCode::F1 || event.text.as_deref() == Some("?")) {
             self.apply(Action::ToggleHelp, event_loop);
+            return;
+        }
+        if down && !event.repeat && matches!(code, KeyCode::Tab | KeyCode::F2) {
+            let toggle = if code == KeyCode::Tab {
+                Action::TogglePanel
+            } else {
+                Action::ToggleReadout
+            };
+            self.apply(toggle, event_loop);
             return;
         }
         // Ctrl+S, Ctrl+Z, Ctrl+Shift+Z, Ctrl+Y. Only presses are taken: a release
@@ -883,7 +921,11 @@ impl App {
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 let released = event.state == ElementState::Released;
-                if released || !(consumed || self.egui_ctx.egui_wants_keyboard_input()) {
+                // egui-winit reports Tab consumed (its focus key) even with no
+                // text field: Tab is the panel's key unless one is being typed in.
+                let tab = event.physical_key == PhysicalKey::Code(KeyCode::Tab);
+                let typing = self.egui_ctx.egui_wants_keyboard_input();
+                if released || !(typing || consumed && !tab) {
                     self.key(&event, event_loop);
                 }
             }

@@ -59,6 +59,10 @@ pub enum Action {
     Record(f64),
     /// Show or hide the help overlay (F1, ?).
     ToggleHelp,
+    /// Hide or show the panel (Tab).
+    TogglePanel,
+    /// Hide or show the view's corner readout (F2).
+    ToggleReadout,
     /// Take back the last change of parameters or pins (Ctrl+Z).
     Undo,
     /// Do again the last change undone (Ctrl+Shift+Z).
@@ -89,6 +93,10 @@ pub struct PanelState {
     pub recording: Option<(u64, u64)>,
     /// Whether the help overlay is open.
     pub help: bool,
+    /// Whether Tab has hidden the panel.
+    pub hidden: bool,
+    /// Whether the view's corner readout is hidden (F2 toggles it).
+    pub readout_hidden: bool,
     /// The readings the plots show.
     pub history: super::plots::History,
     frame_time: f64,
@@ -122,8 +130,8 @@ impl PanelState {
     }
 }
 
-/// Draws the panel; returns what the user asked for and the rectangle (points)
-/// left for the scene.
+/// Draws the panel (unless Tab hid it) and the view's corner readout; returns
+/// what the user asked for and the rectangle (points) left for the scene.
 pub fn show(
     ui: &mut Ui,
     state: &mut PanelState,
@@ -133,22 +141,45 @@ pub fn show(
 ) -> (Vec<Action>, egui::Rect) {
     let mut actions = Vec::new();
     super::help::show(ui.ctx(), &mut state.help);
-    egui::Panel::left("controls")
-        .resizable(false)
-        .exact_size(PANEL_WIDTH)
-        .show(ui, |ui| {
-            header(ui, &mut actions);
-            status(ui, state, session, &mut actions);
-            ui.separator();
-            egui::ScrollArea::vertical().show(ui, |ui| {
-                contents(ui, state, session, view, adapter, &mut actions);
+    if state.hidden {
+        let corner = ui.max_rect().left_top() + egui::vec2(8.0, 8.0);
+        egui::Area::new(egui::Id::unique("show the panel"))
+            .fixed_pos(corner)
+            .show(ui.ctx(), |ui| {
+                if ui
+                    .button("» Panel (Tab)")
+                    .on_hover_text("Show the panel again")
+                    .clicked()
+                {
+                    actions.push(Action::TogglePanel);
+                }
             });
-        });
-    (actions, ui.available_rect_before_wrap())
+    } else {
+        // At most about half a small window, so the view keeps room.
+        let widest = (0.5 * ui.max_rect().width()).max(MIN_PANEL_WIDTH);
+        egui::Panel::left("controls")
+            .resizable(true)
+            .default_size(PANEL_WIDTH.min(widest))
+            .size_range(MIN_PANEL_WIDTH..=widest.max(MIN_PANEL_WIDTH))
+            .show(ui, |ui| {
+                header(ui, &mut actions);
+                status(ui, state, session, &mut actions);
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    contents(ui, state, session, view, adapter, &mut actions);
+                });
+            });
+    }
+    let free = ui.available_rect_before_wrap();
+    if !state.readout_hidden {
+        super::overlay::show(ui.ctx(), free, session, state.frame_time);
+    }
+    (actions, free)
 }
 
-/// Width of the panel (points): the same in every scene.
-const PANEL_WIDTH: f32 = 320.0;
+/// Width of the panel (points) when the app opens, and the narrowest it is
+/// dragged to.
+const PANEL_WIDTH: f32 = 340.0;
+const MIN_PANEL_WIDTH: f32 = 220.0;
 
 fn header(ui: &mut Ui, actions: &mut Vec<Action>) {
     ui.horizontal(|ui| {
@@ -163,7 +194,7 @@ fn header(ui: &mut Ui, actions: &mut Vec<Action>) {
     });
     ui.label(
         RichText::new(
-            "Click a particle: pin · drag it: move · drag elsewhere: orbit · F1 or ?: all keys",
+            "Click a particle: pin · drag it: move · drag elsewhere: orbit · Tab: hide panel · F1 or ?: all keys",
         )
         .small(),
     );
@@ -238,7 +269,8 @@ fn divergence(
     ui.label(RichText::new(&d.message).small());
 }
 
-/// The panel below the status box, section by section.
+/// The panel below the status box, section by section; each folds away and
+/// stays folded (egui keeps a header's state by its name).
 fn contents(
     ui: &mut Ui,
     state: &mut PanelState,
@@ -247,15 +279,23 @@ fn contents(
     adapter: &str,
     actions: &mut Vec<Action>,
 ) {
-    scene_and_integrator(ui, session, actions);
-    run_buttons(ui, session, actions);
-    outputs(ui, state, session, actions);
-    speed(ui, session, actions);
-    ui.separator();
-    pin_presets(ui, session.settings().layout, session.pins().len(), actions);
-    ui.separator();
+    egui::CollapsingHeader::new("Scene and run")
+        .default_open(true)
+        .show(ui, |ui| {
+            scene_and_integrator(ui, session, actions);
+            run_buttons(ui, session, actions);
+            speed(ui, session, actions);
+        });
+    egui::CollapsingHeader::new("Pins")
+        .default_open(true)
+        .show(ui, |ui| {
+            pin_presets(ui, session.settings().layout, session.pins().len(), actions);
+        });
     parameters(ui, session, actions);
     colliders::colliders(ui, session, actions);
+    egui::CollapsingHeader::new("Files: save, export, record")
+        .default_open(false)
+        .show(ui, |ui| outputs(ui, state, session, actions));
     egui::CollapsingHeader::new("Plots")
         .default_open(false)
         .show(ui, |ui| state.history.show(ui))
