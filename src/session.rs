@@ -23,6 +23,7 @@ pub use crate::scene::Edit;
 use glam::DVec3;
 
 mod diverged;
+mod history;
 mod parts;
 mod sliders;
 
@@ -131,9 +132,9 @@ pub struct Session {
     /// own ([`Resolved::display_surface`]).
     display_surface: Vec<[u32; 3]>,
     /// Setups before each change, oldest first, for undo.
-    undo: Vec<Scene>,
+    undo: Vec<history::Change>,
     /// Setups undone, most recent last, for redo.
-    redo: Vec<Scene>,
+    redo: Vec<history::Change>,
     /// The key of the edit the last undo entry was made for while the same
     /// gesture goes on (a slider being dragged), so that it makes one entry.
     edit_group: Option<&'static str>,
@@ -626,71 +627,6 @@ impl Session {
         self.commit(scene, settings, self.needs_rebuild(key));
         self.remember(before, None, format!("{key} = {value}"));
         Ok(())
-    }
-
-    /// Records `before`, the setup before a change, for [`Self::undo`], and forgets
-    /// what was undone. A change of the same `group` (edit key) as the last one,
-    /// within one gesture, adds no entry.
-    fn remember(&mut self, before: Scene, group: Option<&'static str>, what: String) {
-        self.last_edit = Some((what, self.system.time()));
-        if group.is_some() && group == self.edit_group {
-            return;
-        }
-        if self.undo.len() >= MAX_UNDO {
-            self.undo.remove(0);
-        }
-        self.undo.push(before);
-        self.redo.clear();
-        self.edit_group = group;
-    }
-
-    /// Ends the gesture that groups edits of one key into one undo step: the next
-    /// edit makes a new one.
-    pub fn end_edit_group(&mut self) {
-        self.edit_group = None;
-    }
-
-    /// Whether there is a change to undo.
-    pub fn can_undo(&self) -> bool {
-        !self.undo.is_empty()
-    }
-
-    /// Whether there is an undone change to redo.
-    pub fn can_redo(&self) -> bool {
-        !self.redo.is_empty()
-    }
-
-    /// Takes back the last change of parameters or pins (Ctrl+Z): the setup before
-    /// it comes back, applied in place as edits are, or by a rebuild where the
-    /// layout differs. Returns whether there was anything to undo.
-    pub fn undo(&mut self) -> Result<bool, SceneError> {
-        let Some(scene) = self.undo.pop() else {
-            return Ok(false);
-        };
-        let current = self.scene.clone();
-        if let Err(e) = self.restore(scene.clone()) {
-            self.undo.push(scene);
-            return Err(e);
-        }
-        self.redo.push(current);
-        self.edit_group = None;
-        Ok(true)
-    }
-
-    /// Does again the last change undone (Ctrl+Shift+Z). Returns whether there was
-    /// anything to redo.
-    pub fn redo(&mut self) -> Result<bool, SceneError> {
-        let Some(scene) = self.redo.pop() else {
-            return Ok(false);
-        };
-        let current = self.scene.clone();
-        if let Err(e) = self.restore(scene.clone()) {
-            self.redo.push(scene);
-            return Err(e);
-        }
-        self.undo.push(current);
-        self.edit_group = None;
-        Ok(true)
     }
 
     /// Restores the scene's own parameters and pins as it was loaded ("Defaults"),

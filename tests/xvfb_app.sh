@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
 # another, resize the window, press R, F1 twice (help), Ctrl+S (save), F12
-# (screenshot), Ctrl+Z and Ctrl+Shift+Z (undo, redo), Esc, then Shift + drag a
+# (screenshot), Ctrl+Z and Ctrl+Shift+Z (undo, redo), Tab twice (panel), Ctrl +
+# drag (cut) and Ctrl+Z, Esc, then Shift + drag a
 # collider in the slide scene; passes when the app
 # logged each action, exited 0 and its log holds no error or panic.
 #
@@ -55,6 +56,23 @@ WID=$(timeout 30 xdotool search --sync --name "cloth-sandbox" | head -1) || true
 [[ -n $WID ]] || fail "no window titled cloth-sandbox appeared"
 sleep 3
 shot() { [[ -n ${SHOT_DIR:-} ]] && mkdir -p "$SHOT_DIR" && import -window root "$SHOT_DIR/$1.png" || true; }
+# Esc quits; the app must exit 0 with a clean log: no ERROR-level line, panic,
+# wgpu validation error or error message. (Mesa's XDG_RUNTIME_DIR notice and
+# winit's WARN-level notes about Xvfb's missing XSETTINGS are not errors.)
+quit_cleanly() {
+    xdotool windowfocus --sync "$WID"
+    xdotool key Escape
+    set +e
+    timeout 20 tail --pid="$APP_PID" -f /dev/null
+    wait "$APP_PID"
+    local status=$?
+    set -e
+    APP_PID=""
+    [[ $status -eq 0 ]] || fail "$1: the app exited with status $status"
+    if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
+        fail "$1: the log has errors"
+    fi
+}
 shot 1-default
 
 # The window sits at (0, 0) (no window manager); the panel takes the left
@@ -129,21 +147,37 @@ xdotool key ctrl+shift+z
 sleep 0.5
 grep -q "Redo done" "$LOG" || fail "Ctrl+Shift+Z redid nothing"
 
+# Tab hides the panel and shows it again.
 xdotool windowfocus --sync "$WID"
-xdotool key Escape
-set +e
-timeout 20 tail --pid="$APP_PID" -f /dev/null
-wait "$APP_PID"
-STATUS=$?
-set -e
-APP_PID=""
-[[ $STATUS -eq 0 ]] || fail "the app exited with status $STATUS"
-# Errors: ERROR-level log lines, panics, wgpu validation errors, or an error
-# message from the app. (Mesa's XDG_RUNTIME_DIR notice and winit's WARN-level
-# notes about Xvfb's missing XSETTINGS are not errors.)
-if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
-    fail "the log has errors"
-fi
+xdotool key Tab
+sleep 1
+grep -q "panel hidden" "$LOG" || fail "Tab did not hide the panel"
+shot 8-panel-hidden
+xdotool key Tab
+sleep 0.5
+grep -q "panel shown" "$LOG" || fail "Tab again did not show the panel"
+
+# Ctrl + drag across the cloth cuts it; Ctrl+Z mends the cut.
+xdotool mousemove --window "$WID" 600 470
+xdotool keydown ctrl
+sleep 0.2
+xdotool mousedown 1
+for step in 1 2 3 4 5 6 7 8 9 10; do
+    xdotool mousemove --window "$WID" $((600 + step * 30)) 470
+    sleep 0.1
+done
+xdotool mouseup 1
+sleep 0.2
+xdotool keyup ctrl
+sleep 0.5
+shot 9-cut
+grep -q "cut [0-9]* springs" "$LOG" || fail "Ctrl + drag across the cloth cut nothing"
+xdotool windowfocus --sync "$WID"
+xdotool key ctrl+z
+sleep 0.5
+[[ $(grep -c "Undo done" "$LOG") -ge 2 ]] || fail "Ctrl+Z after the cut undid nothing"
+
+quit_cleanly "the default scene"
 # The slide scene: Shift + drag on its box (framed in the middle of the view)
 # moves it, and letting go keeps it where it was left.
 LOG=$WORK/slide.log
@@ -171,16 +205,5 @@ xdotool keyup shift
 sleep 0.5
 grep -q "moving collider 0 (box)" "$LOG" || fail "Shift + drag on the box took no collider"
 grep -q "released collider 0" "$LOG" || fail "letting go did not release the collider"
-xdotool windowfocus --sync "$WID"
-xdotool key Escape
-set +e
-timeout 20 tail --pid="$APP_PID" -f /dev/null
-wait "$APP_PID"
-STATUS=$?
-set -e
-APP_PID=""
-[[ $STATUS -eq 0 ]] || fail "the slide scene's app exited with status $STATUS"
-if grep -E "^\[[^]]* ERROR |panicked|Validation Error|^error" "$LOG" | grep -q .; then
-    fail "the slide scene's log has errors"
-fi
-echo "xvfb_app: ok (pin, drag, resize, reset, help, save, screenshot, undo, redo, quit, Shift + drag a collider; exit 0, clean logs)"
+quit_cleanly "the slide scene"
+echo "xvfb_app: ok (pin, drag, resize, reset, help, save, screenshot, undo, redo, Tab, cut and undo, quit, Shift + drag a collider; exit 0, clean logs)"

@@ -380,7 +380,8 @@ impl App {
                 // The path's last few points: a spring the moving cloth carried
                 // across a joint between two moves is still cut.
                 const CUT_PATH_POINTS: usize = 8;
-                if self.cut_path.last() != Some(&from) {
+                let continues = self.cut_path.last() == Some(&from);
+                if !continues {
                     self.cut_path.clear();
                     self.cut_path.push(from);
                 }
@@ -397,7 +398,7 @@ impl App {
                 let (positions, viewport) = (&self.frame_data.positions, self.viewport());
                 let crossed = springs_crossed(&self.camera, viewport, &path, positions, springs);
                 if !crossed.is_empty() {
-                    let cut = self.session.system_mut().cut(&crossed);
+                    let cut = self.session.cut(&crossed, continues);
                     log::info!("cut {cut} springs");
                 }
             }
@@ -892,8 +893,15 @@ impl App {
     /// One window event; what reads or edits the session takes it first
     /// ([`Self::redraw`], [`Self::apply`], [`Self::apply_mouse`]).
     fn handle(&mut self, event_loop: &ActiveEventLoop, event: WindowEvent) {
+        // Tab is the panel's key unless a text field is being typed in: egui
+        // would take it to move its focus to a widget, which then holds the keys.
+        let panel_key = matches!(&event, WindowEvent::KeyboardInput { event, .. }
+            if event.physical_key == PhysicalKey::Code(KeyCode::Tab))
+            && !self.egui_ctx.egui_wants_keyboard_input();
         let consumed = match (&mut self.egui_state, &self.gfx) {
-            (Some(state), Some(gfx)) => state.on_window_event(&gfx.window, &event).consumed,
+            (Some(state), Some(gfx)) if !panel_key => {
+                state.on_window_event(&gfx.window, &event).consumed
+            }
             _ => false,
         };
         let over_ui = self.over_ui();
@@ -921,11 +929,7 @@ impl App {
             }
             WindowEvent::KeyboardInput { event, .. } => {
                 let released = event.state == ElementState::Released;
-                // egui-winit reports Tab consumed (its focus key) even with no
-                // text field: Tab is the panel's key unless one is being typed in.
-                let tab = event.physical_key == PhysicalKey::Code(KeyCode::Tab);
-                let typing = self.egui_ctx.egui_wants_keyboard_input();
-                if released || !(typing || consumed && !tab) {
+                if released || !(consumed || self.egui_ctx.egui_wants_keyboard_input()) {
                     self.key(&event, event_loop);
                 }
             }

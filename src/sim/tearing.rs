@@ -65,21 +65,59 @@ impl System {
         if pairs.is_empty() {
             return 0;
         }
+        model.broken_springs += pairs.len();
+        self.springs_replaced();
+        pairs.len()
+    }
+
+    /// Puts back springs that a cut or a tear removed, and the surface triangles
+    /// along them, as they were (an undo of a cut). Springs already present, and
+    /// springs or triangles joining particles the system lacks, are left out, so
+    /// that a system rebuilt since takes nothing twice. Returns how many springs
+    /// came back.
+    pub fn mend(&mut self, springs: &[Spring], triangles: &[[u32; 3]]) -> usize {
+        let model = &mut self.model;
+        let n = model.mass.len() as u64;
+        let within = |i: u32| u64::from(i) < n;
+        let mut mended = 0;
+        for s in springs.iter().filter(|s| within(s.a) && within(s.b)) {
+            // Canonical springs are sorted by their ends: they go back in place.
+            if let Err(at) = (model.springs).binary_search_by_key(&(s.a, s.b), |t| (t.a, t.b)) {
+                model.springs.insert(at, *s);
+                mended += 1;
+            }
+        }
+        if mended == 0 {
+            return 0;
+        }
+        let present: std::collections::HashSet<[u32; 3]> =
+            model.triangles.iter().copied().collect();
+        let back = triangles.iter().filter(|t| t.iter().all(|&i| within(i)));
+        let back: Vec<[u32; 3]> = back.filter(|t| !present.contains(*t)).copied().collect();
+        model.triangles.extend(back);
+        model.broken_springs = model.broken_springs.saturating_sub(mended);
+        self.springs_replaced();
+        self.mark_edited();
+        mended
+    }
+
+    /// Rebuilds what depends on the spring list after springs left or came back
+    /// (adjacency, constraint order, scratch, the fast engines' view of the grid).
+    fn springs_replaced(&mut self) {
+        let model = &mut self.model;
         let n = model.mass.len();
         model.adjacency = Adjacency::new(n, &model.springs);
         model.constraint_order =
             springs::constraint_order(&model.springs, model.grid, model.lattice);
-        model.broken_springs += pairs.len();
         model.refresh_terms();
         let m = model.springs.len();
-        self.work.spring_forces.truncate(m);
+        self.work.spring_forces.resize(m, glam::DVec3::ZERO);
         if self.model.params.integrator == super::Integrator::ImplicitEuler {
             self.work.implicit.resize(n, m);
         }
         self.engines.stencil_springs = fast_path::StencilSprings::of(&self.model);
         self.engines.springs_changed();
         self.forget_rest_drag_areas();
-        pairs.len()
     }
 }
 

@@ -7,6 +7,7 @@
 mod common;
 
 mod clock;
+mod cut_undo;
 mod divergence_report;
 mod save_load;
 mod session_params;

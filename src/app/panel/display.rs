@@ -65,13 +65,15 @@ pub(super) fn display(
                     .on_hover_text("Draw every particle as a dot");
                 ui.checkbox(&mut view.pins, "pins")
                     .on_hover_text("Mark the pinned particles in red");
+                ui.checkbox(&mut view.shadows, "shadows")
+                    .on_hover_text("Soft shadows from the key light, on the floor, the colliders and the cloth itself");
             });
             ui.add(egui::Slider::new(&mut view.particle_px, 2.0..=20.0).text("particle size (px)"))
                 .on_hover_text("Diameter of the particle dots in screen pixels, 2 to 20");
             ui.horizontal(|ui| {
-                ui.label("background");
+                ui.label("horizon");
                 ui.color_edit_button_srgb(&mut view.background)
-                    .on_hover_text("Background colour of the view");
+                    .on_hover_text("Colour of the sky at the horizon (the zenith follows it)");
                 if ui
                     .button("Reset view")
                     .on_hover_text("Frame the scene with the default camera (F or Home)")
