@@ -62,6 +62,7 @@ const REBUILD_KEYS: &[&str] = &[
     "stretch",
     "shear_scale",
     "bend_scale",
+    "material",
     "seed",
     "mesh",
     "pin_above",

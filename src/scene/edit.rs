@@ -5,6 +5,7 @@
 
 use glam::DVec3;
 
+use super::Material;
 use crate::sim::Integrator;
 
 /// Where a typed edit's value comes from, in error messages.
@@ -61,6 +62,9 @@ pub enum Edit {
     Height(u32),
     /// Particles deep in a lattice (`depth`): rebuilds.
     Depth(u32),
+    /// A cloth's material (`material`), replacing the scene's own mass, stiffness,
+    /// damping, shear and bend scales and drag: rebuilds.
+    Material(&'static Material),
 }
 
 impl Edit {
@@ -89,13 +93,17 @@ impl Edit {
             Self::Width(_) => "width",
             Self::Height(_) => "height",
             Self::Depth(_) => "depth",
+            Self::Material(_) => "material",
         }
     }
 
     /// Whether the edit changes the layout, so that the system is rebuilt (keeping
     /// every other setting) rather than changed in place.
     pub fn rebuilds(self) -> bool {
-        matches!(self, Self::Width(_) | Self::Height(_) | Self::Depth(_))
+        matches!(
+            self,
+            Self::Width(_) | Self::Height(_) | Self::Depth(_) | Self::Material(_)
+        )
     }
 }
 
@@ -126,6 +134,7 @@ impl std::fmt::Display for Edit {
             Self::Integrator(i) => i.to_string(),
             Self::StretchLimit(o) | Self::TearStrain(o) | Self::MaxSpeed(o) => option(o),
             Self::SelfCollision(on) => on.to_string(),
+            Self::Material(m) => m.name.to_string(),
         };
         write!(f, "{key} = {value}")
     }

@@ -6,6 +6,7 @@
 
 pub(crate) mod build;
 mod edit;
+mod material;
 pub mod mesh;
 mod values;
 
@@ -21,6 +22,7 @@ use build::{
 };
 pub(crate) use edit::EDIT_ORIGIN;
 pub use edit::Edit;
+pub use material::{MATERIALS, Material};
 pub use values::{PinPreset, Pins, Vector};
 // (`ColliderSpec` is defined below, with `SceneSpec`.)
 
@@ -109,12 +111,21 @@ pub struct SceneSpec {
     /// Width of the grid in m (spacing = size / (width - 1)), instead of `rest_length`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub size: Option<f64>,
+    /// A built-in material (`"silk"`, `"cotton"`, `"denim"`, `"leather"`,
+    /// `"rubber"`): its mass per area, stiffness, damping, shear and bend scales
+    /// and drag where the scene gives none of its own.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
     /// Mass of each particle in kg.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub particle_mass: Option<f64>,
     /// Mass of all particles together in kg, instead of `particle_mass`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub total_mass: Option<f64>,
+    /// Mass per area of a grid or mesh cloth in kg/m², shared by its particles,
+    /// instead of `particle_mass`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub areal_density: Option<f64>,
     /// Spring stiffness k in N/m.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stiffness: Option<f64>,
@@ -287,7 +298,7 @@ pub struct ColliderSpec {
 /// Keys that give the same quantity: setting one clears the others.
 const ALTERNATIVES: &[&[&str]] = &[
     &["rest_length", "size"],
-    &["particle_mass", "total_mass"],
+    &["particle_mass", "total_mass", "areal_density"],
     &["stiffness", "stiffness_per_mass"],
     &["damping", "damping_ratio", "damping_per_mass"],
 ];
@@ -680,7 +691,7 @@ impl Scene {
         } else {
             table.insert(key.to_string(), parsed);
         }
-        let spec: SceneSpec = table.try_into().map_err(|e: toml::de::Error| {
+        let mut spec: SceneSpec = table.try_into().map_err(|e: toml::de::Error| {
             let mut message = plain_words(e.message().trim(), Some(key), self.spec.layout);
             // Only `--set` takes `none` (a scene file leaves the key out).
             if OFF_WHEN_ABSENT.contains(&key) {
@@ -691,6 +702,14 @@ impl Scene {
                 message,
             }
         })?;
+        // A material chosen replaces the scene's own values of what it sets.
+        if let Some(m) = (key == "material")
+            .then_some(spec.material.as_deref())
+            .flatten()
+            .and_then(Material::named)
+        {
+            spec.take_material(m);
+        }
         let candidate = Self {
             spec,
             origin: self.origin.clone(),
@@ -771,6 +790,7 @@ impl Scene {
             Edit::ParticleMass(m) => {
                 spec.particle_mass = Some(PARTICLE_MASS.check(o, m)?);
                 spec.total_mass = None;
+                spec.areal_density = None;
             }
             Edit::Gravity(g) => spec.gravity = Some(Vector(GRAVITY.check(o, g)?)),
             Edit::Force(f) => spec.force = Some(Vector(FORCE.check(o, f)?)),
@@ -800,6 +820,7 @@ impl Scene {
             Edit::Width(n) => spec.width = Some(side(0, n)?),
             Edit::Height(n) => spec.height = Some(side(1, n)?),
             Edit::Depth(n) => spec.depth = Some(side(2, n)?),
+            Edit::Material(m) => spec.take_material(m),
         }
         Ok(())
     }

@@ -12,6 +12,7 @@ mod common;
 mod bad_scenes;
 mod export_obj;
 mod input_validation;
+mod materials;
 mod mesh_import;
 mod scene_messages;
 mod scene_proptest;

@@ -2,7 +2,7 @@
 //! is an [`Edit`]; dt keeps the speed. Ranges and scales come from the
 //! session's table ([`Session::sliders`]).
 
-use cloth_sandbox::scene::{Layout, Resolved};
+use cloth_sandbox::scene::{Layout, MATERIALS, Resolved};
 use cloth_sandbox::session::{Edit, Session, Slider};
 use cloth_sandbox::sim::Params;
 use egui::Ui;
@@ -76,11 +76,15 @@ pub(super) fn parameters(ui: &mut Ui, session: &Session, actions: &mut Vec<Actio
     egui::CollapsingHeader::new("Parameters")
         .default_open(true)
         .show(ui, |ui| {
+            if has_springs && system.bars().is_empty() {
+                material(ui, session, &mut edit);
+            }
             let mut draw = |ui: &mut Ui, id: &str| slider_of(ui, &table, id, r, &mut edit);
             for id in ["stiffness", "damping", "rest_length"] {
                 draw(ui, id);
             }
-            size_sliders(ui, r, &mut edit);
+            let keeps_size = session.scene().spec.size.is_some();
+            size_sliders(ui, r, keeps_size, &mut edit);
             for id in ["particle_mass", "gravity_y"] {
                 slider_of(ui, &table, id, r, &mut edit);
             }
@@ -123,8 +127,57 @@ pub(super) fn parameters(ui: &mut Ui, session: &Session, actions: &mut Vec<Actio
     }
 }
 
-/// The particles across, down, deep or along, as the layout has them.
-fn size_sliders(ui: &mut Ui, r: &Resolved, edit: &mut impl FnMut(Edit)) {
+/// The material presets of a grid or mesh cloth; the scene's own values until
+/// one is chosen, and "edited" once a slider changes one of its values.
+fn material(ui: &mut Ui, session: &Session, edit: &mut impl FnMut(Edit)) {
+    let spec = &session.scene().spec;
+    if !matches!(spec.layout, Layout::Grid | Layout::Mesh) {
+        return;
+    }
+    let chosen = spec.material.as_deref();
+    let own = [
+        spec.particle_mass,
+        spec.stiffness,
+        spec.damping,
+        spec.total_mass,
+    ];
+    let text = match chosen {
+        Some(name) if own.iter().any(Option::is_some) => format!("{name} (edited)"),
+        Some(name) => name.to_string(),
+        None => "the scene's own".to_string(),
+    };
+    egui::ComboBox::from_label("material")
+        .selected_text(text)
+        .show_ui(ui, |ui| {
+            for m in &MATERIALS {
+                let tip = format!(
+                    "{}\n{} kg/m², k = {} N/m, b = {} N·s/m, bend {} k, drag {}",
+                    m.about,
+                    m.areal_density,
+                    m.stiffness,
+                    m.damping,
+                    m.bend_scale,
+                    m.drag_coefficient
+                );
+                if ui
+                    .selectable_label(chosen == Some(m.name), m.name)
+                    .on_hover_text(tip)
+                    .clicked()
+                {
+                    edit(Edit::Material(m));
+                }
+            }
+        })
+        .response
+        .on_hover_text(
+            "A fabric's mass per area, stiffness, damping, bending and drag. It holds at \
+             any spacing: the width slider then refines the same cloth over the same size",
+        );
+}
+
+/// The particles across, down, deep or along, as the layout has them. A grid
+/// that keeps its size in m (`size`, as a material does) refines with its width.
+fn size_sliders(ui: &mut Ui, r: &Resolved, keeps_size: bool, edit: &mut impl FnMut(Edit)) {
     match r.layout {
         Layout::Grid | Layout::Lattice => {
             // Grids up to 512 x 512 run in real time on the grid kernel; a
@@ -140,7 +193,11 @@ fn size_sliders(ui: &mut Ui, r: &Resolved, edit: &mut impl FnMut(Edit)) {
                 &mut w,
                 side.clone(),
                 "width (particles)",
-                "Particles across; rebuilds the scene keeping the other settings",
+                if keeps_size {
+                    "Particles across the cloth's width in m: more refine the same cloth; rebuilds the scene keeping the other settings"
+                } else {
+                    "Particles across; rebuilds the scene keeping the other settings"
+                },
             ) {
                 edit(Edit::Width(w));
             }

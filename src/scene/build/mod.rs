@@ -8,6 +8,7 @@ mod layout;
 mod parts;
 mod ranges;
 
+use std::borrow::Cow;
 use std::sync::Arc;
 
 use glam::DVec3;
@@ -15,7 +16,7 @@ use glam::DVec3;
 use super::edit::EDIT_ORIGIN;
 use super::mesh::{self, Mesh};
 use super::values::Pins;
-use super::{Edit, Layout, Orientation, Scene, SceneError, SceneSpec};
+use super::{Edit, Layout, Material, Orientation, Scene, SceneError, SceneSpec};
 use crate::limits::number as shown;
 use crate::sim::{Params, SpringKind};
 use anchors::{anchor, default_pins, pin_indices, rotation_matrix};
@@ -161,15 +162,48 @@ fn layout_mesh(spec: &SceneSpec, o: &str) -> Result<Option<Arc<Mesh>>, SceneErro
     Ok(Some(mesh))
 }
 
+/// `spec` with its material's values filled in ([`SceneSpec::with_material`]),
+/// or `spec` itself when it names none. An unknown material, or one on a layout
+/// that is not a cloth, is refused with the names allowed.
+pub(crate) fn filled<'a>(spec: &'a SceneSpec, o: &str) -> Result<Cow<'a, SceneSpec>, SceneError> {
+    let Some(name) = &spec.material else {
+        return Ok(Cow::Borrowed(spec));
+    };
+    let Some(material) = Material::named(name) else {
+        return Err(invalid(
+            o,
+            "material",
+            format!(
+                "= \"{}\" is not a material: give one of {}",
+                crate::limits::echo(name),
+                Material::names()
+            ),
+        ));
+    };
+    if !matches!(spec.layout, Layout::Grid | Layout::Mesh) {
+        return Err(invalid(
+            o,
+            "material",
+            format!(
+                "does not apply to a {} layout: only a grid or mesh cloth is made of a material",
+                spec.layout.name()
+            ),
+        ));
+    }
+    Ok(Cow::Owned(spec.with_material(material)))
+}
+
 /// Fills in defaults and checks ranges.
 pub fn resolve(spec: &SceneSpec, origin: &str) -> Result<Resolved, SceneError> {
     let o = origin;
+    let spec = &*filled(spec, o)?;
     let layout = spec.layout;
     let mesh = layout_mesh(spec, o)?;
     let [width, height, depth] = sides(spec, o, mesh.as_deref())?;
     let particles = (width as usize) * (height as usize) * (depth as usize);
     let rest_length = rest_length(spec, o, width, mesh.as_deref())?;
-    let particle_mass = particle_mass(spec, o, particles)?;
+    let area = cloth_area(layout, [width, height], rest_length, mesh.as_deref());
+    let particle_mass = particle_mass(spec, o, particles, area)?;
     let (stiffness, damping) = spring_constants(spec, o, particle_mass)?;
     let bars = bars(spec, o)?;
     let shear_scale = ranged(
@@ -312,38 +346,81 @@ fn rest_length(
     )
 }
 
+/// The area in m² of a grid cloth (its cells) or a mesh (its triangles); `None`
+/// for the layouts that are not a cloth.
+fn cloth_area(layout: Layout, [w, h]: [u32; 2], rest: f64, mesh: Option<&Mesh>) -> Option<f64> {
+    match (layout, mesh) {
+        (Layout::Grid, _) => Some(f64::from(w - 1) * f64::from(h - 1) * rest * rest),
+        (Layout::Mesh, Some(m)) => Some(
+            (m.triangles.iter())
+                .map(|t| {
+                    let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                    0.5 * (b - a).cross(c - a).length()
+                })
+                .sum(),
+        ),
+        _ => None,
+    }
+}
+
 /// The mass of each particle in kg: `particle_mass`, or `total_mass` shared by
-/// `particles`.
-fn particle_mass(spec: &SceneSpec, o: &str, particles: usize) -> Result<f64, SceneError> {
+/// `particles`, or `areal_density` times the cloth's `area` shared by them.
+fn particle_mass(
+    spec: &SceneSpec,
+    o: &str,
+    particles: usize,
+    area: Option<f64>,
+) -> Result<f64, SceneError> {
     Ok(
         match one_of(
             o,
             &[
                 ("particle_mass", spec.particle_mass),
                 ("total_mass", spec.total_mass),
+                ("areal_density", spec.areal_density),
             ],
         )? {
+            Some((k, v)) if k == "areal_density" => {
+                let density = ranged(o, "areal_density", v, 0.0, true, 1e6)?;
+                let Some(area) = area else {
+                    return Err(invalid(
+                        o,
+                        "areal_density",
+                        format!(
+                            "does not apply to a {} layout: only a grid or mesh cloth has an area; give `particle_mass`",
+                            spec.layout.name()
+                        ),
+                    ));
+                };
+                per_particle(o, "areal_density", density * area, particles)?
+            }
             Some((k, v)) if k == "total_mass" => {
                 let total = ranged(o, "total_mass", v, 0.0, true, 1e9)?;
-                let each = total / particles as f64;
-                PARTICLE_MASS.check(o, each).map_err(|_| {
-                    invalid(
-                        o,
-                        "total_mass",
-                        format!(
-                            "= {} kg over {particles} particles is {} kg each, out of range: each particle must have a mass in [{}, {}] kg",
-                            shown(total),
-                            shown(each),
-                            shown(PARTICLE_MASS.lo),
-                            shown(PARTICLE_MASS.hi)
-                        ),
-                    )
-                })?
+                per_particle(o, "total_mass", total, particles)?
             }
             Some((_, v)) => PARTICLE_MASS.check(o, v)?,
             None => 0.01,
         },
     )
+}
+
+/// A mass of `total` kg (from `key`) shared by `particles`, each within the
+/// particle mass's range.
+fn per_particle(o: &str, key: &str, total: f64, particles: usize) -> Result<f64, SceneError> {
+    let each = total / particles as f64;
+    PARTICLE_MASS.check(o, each).map_err(|_| {
+        invalid(
+            o,
+            key,
+            format!(
+                "gives {} kg over {particles} particles, {} kg each, out of range: each particle must have a mass in [{}, {}] kg",
+                shown(total),
+                shown(each),
+                shown(PARTICLE_MASS.lo),
+                shown(PARTICLE_MASS.hi)
+            ),
+        )
+    })
 }
 
 /// Whether a grid is made of bars; only a grid can be.
@@ -381,7 +458,8 @@ impl Resolved {
     /// [`Edit::rebuilds`]) changes pins, spacing and masses given in total, and
     /// resolves the scene. On error the settings are unchanged.
     pub fn follow(&mut self, edit: Edit, scene: &Scene) -> Result<(), SceneError> {
-        let (spec, o) = (&scene.spec, EDIT_ORIGIN);
+        let o = EDIT_ORIGIN;
+        let spec = &*filled(&scene.spec, o)?;
         let p = &mut self.params;
         match edit {
             Edit::Stiffness(_) | Edit::Damping(_) => {
@@ -391,6 +469,8 @@ impl Resolved {
                 (self.stiffness, self.damping) = spring_constants(spec, o, m)?;
                 self.particle_mass = m;
             }
+            // A mass per area gives particles a mass that follows the spacing.
+            Edit::RestLength(_) if spec.areal_density.is_some() => *self = scene.resolve()?,
             Edit::RestLength(l) => {
                 // A grid's default anchor depends on its spacing.
                 self.origin = anchor(spec, o, [self.width, self.height], l)?;
@@ -426,7 +506,9 @@ impl Resolved {
                 }
                 p.thickness = t;
             }
-            Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) => *self = scene.resolve()?,
+            Edit::Width(_) | Edit::Height(_) | Edit::Depth(_) | Edit::Material(_) => {
+                *self = scene.resolve()?
+            }
         }
         // Colliders without their own friction or thickness take the scene's.
         if matches!(edit, Edit::Friction(_) | Edit::Thickness(_)) {
