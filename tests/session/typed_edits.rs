@@ -93,6 +93,10 @@ fn assert_applied(s: &Session, edit: Edit) {
         Edit::Width(w) => assert_eq!(r.width, w),
         Edit::Height(h) => assert_eq!(r.height, h),
         Edit::Depth(d) => assert_eq!(r.depth, d),
+        Edit::Material(m) => {
+            assert_eq!((r.stiffness, r.damping), (m.stiffness, m.damping));
+            assert_eq!(p.drag_coefficient, m.drag_coefficient);
+        }
     }
 }
 
@@ -294,6 +298,7 @@ fn as_text(edit: Edit) -> (&'static str, String) {
         | Edit::Depth(n) => n.to_string(),
         Edit::Integrator(i) => i.name().to_string(),
         Edit::SelfCollision(on) => on.to_string(),
+        Edit::Material(m) => m.name.to_string(),
         // Off is the key's absence, which `none` asks for.
         Edit::StretchLimit(x) | Edit::TearStrain(x) | Edit::MaxSpeed(x) => {
             x.map_or("none".to_string(), |x| x.to_string())
@@ -338,6 +343,7 @@ fn a_typed_edit_matches_the_same_value_set_as_text_in_every_scene() {
         Edit::TearStrain(None),
         Edit::MaxSpeed(Some(5.0)),
         Edit::MaxSpeed(None),
+        Edit::Material(cloth_sandbox::scene::Material::named("leather").unwrap()),
         Edit::Width(9),
         Edit::Height(5),
         Edit::Depth(3),
@@ -500,4 +506,55 @@ fn the_stretch_limit_turns_on_and_off_in_place_as_if_the_scene_had_it() {
             "{scene}: no effect"
         );
     }
+}
+
+/// The panel's material choice: the cloth takes the material's values and keeps
+/// its size, so a width edit after it refines the same cloth (spacing and particle
+/// mass follow, stiffness stays); a stiffness edit then overrides the material;
+/// undo goes back to the scene's own values.
+#[test]
+fn a_material_keeps_the_size_as_the_width_changes() {
+    use cloth_sandbox::scene::Material;
+    let mut s = Session::load_with("cloth", &[]).expect("the cloth loads");
+    let own = s.settings().stiffness;
+    let cotton = Material::named("cotton").unwrap();
+    s.apply(Edit::Material(cotton)).expect("applies");
+    let r = s.settings();
+    assert_eq!((r.stiffness, r.damping), (cotton.stiffness, cotton.damping));
+    assert_eq!(s.scene().spec.material.as_deref(), Some("cotton"));
+    let (l32, m32) = (r.rest_length, r.particle_mass);
+    assert!((l32 - 0.05).abs() < 1e-15);
+    s.apply(Edit::Width(63)).expect("applies");
+    s.apply(Edit::Height(63)).expect("applies");
+    let r = s.settings();
+    assert!(
+        (r.rest_length - l32 * 31.0 / 62.0).abs() < 1e-15,
+        "{}",
+        r.rest_length
+    );
+    // The same mass per area: 62² cells of a quarter the area over 63² particles.
+    let expected = m32 * 1024.0 / (31.0 * 31.0) * (62.0 * 62.0 * 0.25) / (63.0 * 63.0);
+    assert!(
+        (r.particle_mass - expected).abs() < 1e-15,
+        "{} vs {expected}",
+        r.particle_mass
+    );
+    assert_eq!(r.stiffness, cotton.stiffness);
+    let extent = |s: &Session| {
+        let xs = s.system().positions().iter().map(|p| p.x);
+        xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min)
+    };
+    assert!((extent(&s) - 1.55).abs() < 1e-9, "{}", extent(&s));
+    s.apply(Edit::Stiffness(120.0)).expect("applies");
+    assert_eq!(s.settings().stiffness, 120.0);
+    assert_eq!(
+        s.settings().damping,
+        cotton.damping,
+        "the rest of the material holds"
+    );
+    for _ in 0..4 {
+        s.undo().expect("undoes");
+    }
+    assert_eq!(s.settings().stiffness, own);
+    assert_eq!(s.scene().spec.material, None);
 }
