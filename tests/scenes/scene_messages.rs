@@ -43,7 +43,7 @@ fn a_misspelt_key_gets_the_nearest_real_one() {
         ("mass", "`particle_mass` or `total_mass`"),
         ("k", "`stiffness`?"),
         ("b", "`damping`?"),
-        ("density", "`air_density`?"),
+        ("density", "`areal_density` or `air_density`?"),
     ];
     for (typed, guess) in guessed {
         let message = set_error(typed, "1");
