@@ -557,8 +557,8 @@ impl Session {
     /// Applies a typed edit (a panel slider): records it in the scene spec, so that
     /// a reset or a rebuild keeps it, and changes the running system in place
     /// through its setters without disturbing its state (positions, velocities,
-    /// time). Width, height and depth rebuild the system with every other setting
-    /// kept. A value out of range (or not finite) is refused with an error naming
+    /// time). Width, height, depth and a material rebuild the system with every
+    /// other setting kept. A value out of range (or not finite) is refused with an error naming
     /// the field and the allowed range, and nothing changes.
     ///
     /// The change can be undone; edits of the same key in a row make one undo

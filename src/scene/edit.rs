@@ -11,8 +11,8 @@ use crate::sim::Integrator;
 /// Where a typed edit's value comes from, in error messages.
 pub(crate) const EDIT_ORIGIN: &str = "live edit";
 
-/// One changed setting. Every edit but [`Edit::Width`], [`Edit::Height`] and
-/// [`Edit::Depth`] applies to a running system in place.
+/// One changed setting. Every edit but [`Edit::Width`], [`Edit::Height`],
+/// [`Edit::Depth`] and [`Edit::Material`] applies to a running system in place.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Edit {
     /// Spring stiffness k in N/m (`stiffness`). On a grid, shear and bend springs

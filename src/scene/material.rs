@@ -98,6 +98,19 @@ impl Material {
         MATERIALS.iter().find(|m| m.name == name)
     }
 
+    /// Its mass per area, stiffness, damping, shear and bend scales and drag
+    /// coefficient, in the order of the keys that give them.
+    fn values(&self) -> [f64; 6] {
+        [
+            self.areal_density,
+            self.stiffness,
+            self.damping,
+            self.shear_scale,
+            self.bend_scale,
+            self.drag_coefficient,
+        ]
+    }
+
     /// The names of the built-in materials, for error messages.
     pub fn names() -> String {
         let names: Vec<_> = MATERIALS
@@ -109,34 +122,51 @@ impl Material {
 }
 
 impl SceneSpec {
+    /// The keys of each of a material's quantities, in [`Material::values`]'
+    /// order: first the material's own key, then those that give the same
+    /// quantity in other terms.
+    fn material_keys(&mut self) -> [Vec<&mut Option<f64>>; 6] {
+        [
+            vec![
+                &mut self.areal_density,
+                &mut self.particle_mass,
+                &mut self.total_mass,
+            ],
+            vec![&mut self.stiffness, &mut self.stiffness_per_mass],
+            vec![
+                &mut self.damping,
+                &mut self.damping_ratio,
+                &mut self.damping_per_mass,
+            ],
+            vec![&mut self.shear_scale],
+            vec![&mut self.bend_scale],
+            vec![&mut self.drag_coefficient],
+        ]
+    }
+
     /// `self` with its material's properties filled in where the scene gives none
     /// of the keys for that quantity (a scene file's own `stiffness` next to
     /// `material` holds); `shear_scale` only on a grid, the one layout with shear
     /// springs.
     pub(crate) fn with_material(&self, material: &Material) -> SceneSpec {
         let mut spec = self.clone();
-        if [spec.areal_density, spec.particle_mass, spec.total_mass]
-            .iter()
-            .all(Option::is_none)
-        {
-            spec.areal_density = Some(material.areal_density);
+        let grid = spec.layout == super::Layout::Grid;
+        let keys = spec.material_keys();
+        for (i, (mut group, value)) in keys.into_iter().zip(material.values()).enumerate() {
+            let shear = i == 3;
+            if group.iter().all(|k| k.is_none()) && (grid || !shear) {
+                *group[0] = Some(value);
+            }
         }
-        if spec.stiffness.is_none() && spec.stiffness_per_mass.is_none() {
-            spec.stiffness = Some(material.stiffness);
-        }
-        if [spec.damping, spec.damping_ratio, spec.damping_per_mass]
-            .iter()
-            .all(Option::is_none)
-        {
-            spec.damping = Some(material.damping);
-        }
-        if spec.layout == super::Layout::Grid {
-            spec.shear_scale.get_or_insert(material.shear_scale);
-        }
-        spec.bend_scale.get_or_insert(material.bend_scale);
-        spec.drag_coefficient
-            .get_or_insert(material.drag_coefficient);
         spec
+    }
+
+    /// Whether the scene gives one of its material's quantities itself (a slider
+    /// moved after the material was chosen).
+    pub fn overrides_material(&self) -> bool {
+        let mut spec = self.clone();
+        spec.material.is_some()
+            && (spec.material_keys().iter()).any(|group| group.iter().any(|k| k.is_some()))
     }
 
     /// Makes `material` the scene's, dropping every key that gives one of its
@@ -145,17 +175,11 @@ impl SceneSpec {
     /// cloth.
     pub(crate) fn take_material(&mut self, material: &Material) {
         self.material = Some(material.name.to_string());
-        self.areal_density = None;
-        self.particle_mass = None;
-        self.total_mass = None;
-        self.stiffness = None;
-        self.stiffness_per_mass = None;
-        self.damping = None;
-        self.damping_ratio = None;
-        self.damping_per_mass = None;
-        self.shear_scale = None;
-        self.bend_scale = None;
-        self.drag_coefficient = None;
+        for group in self.material_keys() {
+            for key in group {
+                *key = None;
+            }
+        }
         if let (super::Layout::Grid, Some(rest), Some(width)) =
             (self.layout, self.rest_length, self.width)
         {

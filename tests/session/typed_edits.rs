@@ -545,7 +545,12 @@ fn a_material_keeps_the_size_as_the_width_changes() {
         xs.clone().fold(f64::MIN, f64::max) - xs.fold(f64::MAX, f64::min)
     };
     assert!((extent(&s) - 1.55).abs() < 1e-9, "{}", extent(&s));
+    assert!(!s.scene().spec.overrides_material());
     s.apply(Edit::Stiffness(120.0)).expect("applies");
+    assert!(
+        s.scene().spec.overrides_material(),
+        "the panel shows \"cotton (edited)\""
+    );
     assert_eq!(s.settings().stiffness, 120.0);
     assert_eq!(
         s.settings().damping,

@@ -135,14 +135,8 @@ fn material(ui: &mut Ui, session: &Session, edit: &mut impl FnMut(Edit)) {
         return;
     }
     let chosen = spec.material.as_deref();
-    let own = [
-        spec.particle_mass,
-        spec.stiffness,
-        spec.damping,
-        spec.total_mass,
-    ];
     let text = match chosen {
-        Some(name) if own.iter().any(Option::is_some) => format!("{name} (edited)"),
+        Some(name) if spec.overrides_material() => format!("{name} (edited)"),
         Some(name) => name.to_string(),
         None => "the scene's own".to_string(),
     };
