@@ -7,7 +7,8 @@
 //!
 //! Features: `app` (default) builds the `cloth` binary with its command line,
 //! window, renderer and panel; `report` (default, and enabled by `app`) adds the
-//! `report` module and its plotting. With `default-features = false` the library
+//! `report` module and its plotting; `gpu` (enabled by `app`) adds the GPU
+//! engine ([`gpu`], wgpu compute shaders). With `default-features = false` the library
 //! depends on no window, GPU, command-line or plotting crate.
 //!
 //! Building a built-in scene, stepping it and reading the positions:
@@ -32,6 +33,8 @@
 //! ```
 
 pub mod export;
+#[cfg(feature = "gpu")]
+pub mod gpu;
 pub mod limits;
 #[cfg(feature = "report")]
 pub mod report;

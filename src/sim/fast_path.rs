@@ -34,6 +34,8 @@ use super::mesh_kernel::MeshParams;
 use super::{Divergence, Ground, Sphere, SpringKind, System};
 
 mod chunks;
+#[cfg(feature = "gpu")]
+pub(crate) use chunks::Stepped;
 mod grid;
 mod lattice;
 mod mesh;

@@ -54,6 +54,8 @@ pub use clock::Clock;
 pub use colliders::{Collider, ColliderMesh, Pose, Shape};
 pub use divergence::{Divergence, RUNAWAY_EXTENT, RUNAWAY_SPEED, bounding_sphere, max_speed};
 pub use energy_budget::EnergyBudget;
+#[cfg(feature = "gpu")]
+pub(crate) use fast_path::Stepped;
 pub use fast_path::{Engine, GridShape, PrecisionRule};
 pub use forces::ForceTerms;
 pub use grab::{Grab, HAND_REACH};

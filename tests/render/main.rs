@@ -22,6 +22,7 @@ mod frame;
 mod render;
 
 mod gpu_buffer_limits;
+mod gpu_engine;
 mod offscreen;
 mod record;
 mod staging;

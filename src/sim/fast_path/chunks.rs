@@ -196,7 +196,7 @@ impl System {
 
     /// Position Verlet's update velocities `(x - x_prev) / h` for a fast engine
     /// (`None` for the other integrators).
-    pub(super) fn verlet_update_velocities(&self) -> Option<Vec<DVec3>> {
+    pub(crate) fn verlet_update_velocities(&self) -> Option<Vec<DVec3>> {
         if self.model.params.integrator != Integrator::Verlet {
             return None;
         }
@@ -206,7 +206,7 @@ impl System {
 
     /// The f64 Verlet history from a fast engine's update velocities (which `fill`
     /// writes).
-    pub(super) fn set_verlet_history(&mut self, fill: impl FnOnce(&mut [DVec3])) {
+    pub(crate) fn set_verlet_history(&mut self, fill: impl FnOnce(&mut [DVec3])) {
         if self.model.params.integrator != Integrator::Verlet {
             return;
         }
@@ -214,6 +214,52 @@ impl System {
         let h = self.model.params.dt;
         (state.verlet).set_from_update_velocities(&state.positions, &state.velocities, h, fill);
     }
+}
+
+#[cfg(feature = "gpu")]
+impl System {
+    /// Runs `n` steps on an engine outside the CPU's (the GPU engine): `advance`
+    /// takes the system at the run's start and returns the state `n` steps of `dt`
+    /// later. The held particles stay exactly where the f64 state has them, time
+    /// advances by whole steps as in the general path, and the state is checked in
+    /// full (the energy budget from the start state). Divergence is found at the
+    /// end of the run, not at its step: the caller runs a frame at a time.
+    pub(crate) fn run_outside<E>(
+        &mut self,
+        n: u64,
+        advance: impl FnOnce(&System) -> Result<Stepped, E>,
+    ) -> Result<Result<(), Divergence>, E> {
+        self.mark_changed();
+        self.budget();
+        let stepped = advance(self)?;
+        let dt = self.model.params.dt;
+        for _ in 0..n {
+            self.state.time += dt;
+        }
+        self.state.steps += n;
+        let held: Vec<(usize, DVec3)> = self.held(|_, _| {});
+        self.state.positions = stepped.positions;
+        self.state.velocities = stepped.velocities;
+        for (i, position) in held {
+            self.state.positions[i] = position;
+        }
+        if let Some(u) = stepped.update_velocities {
+            self.set_verlet_history(|out| out.copy_from_slice(&u));
+        }
+        self.engines.unchecked = 0;
+        Ok(self.check())
+    }
+}
+
+#[cfg(feature = "gpu")]
+/// The state an outside engine's run ends in ([`System::run_outside`]).
+pub(crate) struct Stepped {
+    /// Positions in m.
+    pub positions: Vec<DVec3>,
+    /// Velocities in m/s.
+    pub velocities: Vec<DVec3>,
+    /// Position Verlet's update velocities `(x - x_prev) / h` (Verlet only).
+    pub update_velocities: Option<Vec<DVec3>>,
 }
 
 /// What [`System::run_in_chunks`] needs of a fast engine.

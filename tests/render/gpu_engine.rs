@@ -1,0 +1,222 @@
+//! The GPU engine (`cloth_sandbox::gpu`) against independent references: the
+//! peers' float64 NumPy bench cloth, and the f64 engine (`--exact`'s) on the
+//! built-in scenes it steps, within f32 tolerances stated per test; two runs give
+//! the same bits; what it cannot step it refuses with its reasons.
+//!
+//! Without any adapter the tests print a note and pass, unless
+//! `CLOTH_REQUIRE_ADAPTER` is set (CI sets it), in which case they fail.
+
+use cloth_sandbox::gpu::{GpuEngine, GpuError};
+use cloth_sandbox::scene::Scene;
+use cloth_sandbox::sim::System;
+use glam::DVec3;
+
+use crate::common::build;
+
+/// An engine for `system`, or `None` (with a note) where the machine has no adapter.
+fn engine(system: &System) -> Option<GpuEngine> {
+    match GpuEngine::new(system) {
+        Ok(engine) => Some(engine),
+        Err(GpuError::NoAdapter) if std::env::var_os("CLOTH_REQUIRE_ADAPTER").is_none() => {
+            eprintln!("note: no GPU adapter here; the GPU engine is not tested");
+            None
+        }
+        Err(e) => panic!("the GPU engine would not start: {e}"),
+    }
+}
+
+/// `system` run `steps` on the GPU (unchanged without an adapter).
+fn on_gpu(mut system: System, steps: u64) -> Option<System> {
+    let mut gpu = engine(&system)?;
+    gpu.run(&mut system, steps)
+        .expect("the GPU ran")
+        .expect("no divergence");
+    Some(system)
+}
+
+/// The same scene run `steps` on the f64 engine.
+fn on_f64(mut system: System, steps: u64) -> System {
+    system.set_fast_path(false);
+    system.run(steps).expect("no divergence");
+    system
+}
+
+fn mean_y(system: &System) -> f64 {
+    let p = system.positions();
+    p.iter().map(|p| p.y).sum::<f64>() / p.len() as f64
+}
+
+/// The largest distance between the two systems' particles, in m, and their
+/// largest velocity difference, in m/s.
+fn apart(a: &System, b: &System) -> (f64, f64) {
+    let most = |x: &[DVec3], y: &[DVec3]| {
+        x.iter()
+            .zip(y)
+            .map(|(p, q)| p.distance(*q))
+            .fold(0.0, f64::max)
+    };
+    (
+        most(a.positions(), b.positions()),
+        most(a.velocities(), b.velocities()),
+    )
+}
+
+/// The peers' bench cloth (32², symplectic Euler, 960 steps of 1/960 s): the mean
+/// y after 1 s is the NumPy float64 reference's -0.064685755 m (a drop of
+/// -0.5646856 m from 0.5) to f32 accuracy: the cloth's 1,024 particles each
+/// rounded at about 6e-8 of their 1 m span a step, well under 1e-5 m.
+#[test]
+fn bench_cloth_drops_as_the_float64_reference() {
+    let Some(system) = on_gpu(Scene::load("bench").unwrap().build().unwrap(), 960) else {
+        return;
+    };
+    let mean = mean_y(&system);
+    assert!((mean - -0.064685755).abs() < 1e-5, "mean y {mean}");
+    assert_eq!(system.steps_taken(), 960);
+    assert!((system.time() - 1.0).abs() < 1e-9);
+}
+
+/// The bounding box's diagonal of `system`, in m.
+fn span(system: &System) -> f64 {
+    let (lo, hi) = (system.positions().iter())
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(a, b), &q| {
+            (a.min(q), b.max(q))
+        });
+    (hi - lo).length()
+}
+
+/// `name` with `set` run `seconds` on the GPU and on the f64 engine: the largest
+/// distance between their particles in m, the cloth's span and both energies.
+fn compare(name: &str, set: &[&str], seconds: f64) -> Option<(f64, f64, f64, f64)> {
+    let system = build(name, set);
+    let steps = (seconds / system.params().dt).round() as u64;
+    let reference = on_f64(system.clone(), steps);
+    let gpu = on_gpu(system, steps)?;
+    let (dx, _) = apart(&gpu, &reference);
+    let energies = (gpu.energy().total(), reference.energy().total());
+    eprintln!("{name} {set:?}: {dx:.3e} m apart after {seconds} s, energy {energies:?} J");
+    Some((dx, span(&reference), energies.0, energies.1))
+}
+
+/// Scenes without contact, where f32 rounding stays small: every particle within
+/// 2e-4 of the cloth's span of the f64 engine's after 0.5 s (measured on
+/// lavapipe: 5e-5 at most, explicit Euler's 5,000 steps), and the energy within
+/// 1e-4 of it (or of 1 J).
+#[test]
+fn smooth_scenes_agree_with_the_f64_engine() {
+    let cases: &[(&str, &[&str])] = &[
+        ("cloth", &[]),
+        ("cloth", &["integrator=\"verlet\""]),
+        ("cloth", &["integrator=\"explicit-euler\"", "dt=1e-4"]),
+        ("corners", &[]),
+        ("bench-wind", &[]),
+        ("spring", &[]),
+        ("chain", &[]),
+        ("jelly", &[]),
+        ("hanging", &[]),
+    ];
+    for &(name, set) in cases {
+        let Some((dx, span, e_gpu, e_f64)) = compare(name, set, 0.5) else {
+            return;
+        };
+        assert!(
+            dx <= 2e-4 * span,
+            "{name} {set:?}: {dx} m apart (span {span} m)"
+        );
+        let de = (e_gpu - e_f64).abs();
+        assert!(
+            de <= 1e-4 * e_f64.abs().max(1.0),
+            "{name} {set:?}: energy {e_gpu} against {e_f64} J"
+        );
+    }
+}
+
+/// Contact and strong gusts amplify rounding (the CPU's own f32 grid engine
+/// ends 6.6 mm from the f64 engine on the drape): after 0.5 s on the sphere the
+/// particles stay within 3 cm of the f64 engine's (measured 1.3 cm; the gusty
+/// flag within 10 cm, measured 4.6 cm), the energy within 2e-3 (measured 1e-3 at
+/// most, the flag), and no particle is inside the sphere by more
+/// than 1e-5 m (f32's rounding of a 0.5 m radius is 3e-8 m).
+#[test]
+fn contact_and_gusts_agree_with_the_f64_engine_in_the_large() {
+    let cases: &[(&str, &[&str], f64)] = &[
+        ("drape", &["self_collision=false"], 0.03),
+        ("drape", &["self_collision=false", "friction=0"], 0.03),
+        ("tablecloth", &[], 0.03),
+        ("flag", &[], 0.1),
+    ];
+    for &(name, set, most) in cases {
+        let Some((dx, _, e_gpu, e_f64)) = compare(name, set, 0.5) else {
+            return;
+        };
+        assert!(dx <= most, "{name} {set:?}: {dx} m apart");
+        let de = (e_gpu - e_f64).abs();
+        assert!(
+            de <= 2e-3 * e_f64.abs(),
+            "{name} {set:?}: energy {e_gpu} against {e_f64} J"
+        );
+    }
+    let system = build("drape", &["self_collision=false"]);
+    let steps = (0.5 / system.params().dt).round() as u64;
+    let sphere = system.params().sphere.expect("the drape has a sphere");
+    let system = on_gpu(system, steps).unwrap();
+    let deepest = (system.positions().iter())
+        .map(|p| sphere.radius - p.distance(sphere.center))
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        deepest <= 1e-5,
+        "a particle is {deepest} m inside the sphere"
+    );
+}
+
+/// The stiff flag (k = 3e6 N/m at a step under half the critical one): its
+/// energy after 0.05 s (5,000 steps) within 1% of the f64 engine's. Measured on
+/// lavapipe: 0.33% over it, f32 velocities' rounding heating the stiff springs.
+#[test]
+fn the_stiff_flag_keeps_the_f64_engines_energy_within_one_percent() {
+    let Some((_, _, e_gpu, e_f64)) = compare("flag", &["stiffness=3e6", "dt=1e-5"], 0.05) else {
+        return;
+    };
+    assert!(
+        (e_gpu - e_f64).abs() <= 0.01 * e_f64.abs(),
+        "energy {e_gpu} against {e_f64} J"
+    );
+}
+
+/// No atomics and no shared writes: two runs of the gusty flag give the same bits.
+#[test]
+fn two_runs_give_the_same_bits() {
+    let system = build("flag", &[]);
+    let Some(a) = on_gpu(system.clone(), 200) else {
+        return;
+    };
+    let b = on_gpu(system, 200).unwrap();
+    assert_eq!(a.positions(), b.positions());
+    assert_eq!(a.velocities(), b.velocities());
+}
+
+/// What the engine does not step yet is refused, naming it, before any GPU work.
+#[test]
+fn scenes_it_cannot_step_are_refused_with_the_reason() {
+    let cases = [
+        ("sheet", "stretch limit"),
+        ("fold", "self-collision"),
+        ("tear", "tearing"),
+        ("bars", "bars"),
+        ("table", "colliders"),
+        ("cloth", "rk4"),
+    ];
+    for (name, reason) in cases {
+        let set: &[&str] = if name == "cloth" {
+            &["integrator=\"rk4\""]
+        } else {
+            &[]
+        };
+        let system = build(name, set);
+        match GpuEngine::new(&system) {
+            Err(GpuError::Unsupported(why)) => assert!(why.contains(reason), "{name}: {why}"),
+            Err(e) => panic!("{name}: {e}"),
+            Ok(_) => panic!("{name} was not refused"),
+        }
+    }
+}
