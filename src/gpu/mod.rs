@@ -1,7 +1,7 @@
 //! The GPU engine: a cloth stepped by wgpu compute shaders
-//! (`shaders/gpu/laws.wgsl`, the laws of [`crate::sim::laws`] in WGSL, and
+//! (`shaders/gpu/laws.wgsl`, the laws of `sim::laws` in WGSL, and
 //! `shaders/gpu/step.wgsl`, one step of every particle). Each particle gathers
-//! its own springs and triangles from a compressed adjacency ([`layout`]), with
+//! its own springs and triangles from a compressed adjacency (`layout.rs`), with
 //! no atomics and no shared writes, so two runs give the same bits.
 //!
 //! The engine is a schedule, not a second state: [`GpuEngine::run`] takes the
