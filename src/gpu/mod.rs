@@ -7,9 +7,9 @@
 //! The engine is a schedule, not a second state: [`GpuEngine::run`] takes the
 //! [`System`]'s f64 state, runs `n` steps in as few submissions as the uniform
 //! records allow (nothing read back between them), and puts the result back into
-//! the system, which checks it as any run's end. Positions are f32 from an origin
-//! at the cloth's centre, taken again at every run, so a cloth that travels keeps
-//! its precision.
+//! the system, which checks it as any run's end. Positions are two f32 (`x +
+//! low`) from an origin at the cloth's centre, taken again at every run, so a
+//! cloth that travels keeps its precision; velocities are f32.
 //!
 //! It steps symplectic Euler, explicit Euler and position Verlet with gravity,
 //! the applied force, damped springs, aero drag with wind and gusts, air
@@ -348,7 +348,7 @@ impl GpuEngine {
     }
 }
 
-/// The mean of `positions` (the origin of the engine's f32 positions), or 0.
+/// The mean of `positions` (the origin of the engine's positions), or 0.
 fn centroid(positions: &[DVec3]) -> DVec3 {
     let sum: DVec3 = positions.iter().sum();
     let mean = sum / positions.len().max(1) as f64;
