@@ -25,6 +25,7 @@ use glam::DVec3;
 mod diverged;
 mod history;
 mod parts;
+pub mod reference;
 mod sliders;
 
 pub use diverged::DivergenceReport;
@@ -142,6 +143,11 @@ pub struct Session {
     /// The simulated time per frame a dt drag keeps (see
     /// [`Session::apply_dt_keeping_speed`]).
     dt_drag_frame_time: Option<f64>,
+    /// How many times the system was built: with its edits, what the live
+    /// reference started from.
+    builds: u64,
+    /// The live reference, while it is on ([`reference`]).
+    reference: Option<reference::Live>,
 }
 
 /// What safe stepping chose for the running system.
@@ -266,6 +272,8 @@ impl Session {
             stored_wind: None,
             pace: PaceMeter::default(),
             display_surface: Vec::new(),
+            builds: 0,
+            reference: None,
         };
         session.built();
         Ok(session)
@@ -279,6 +287,7 @@ impl Session {
 
     /// Starts a system just built from the settings.
     fn built(&mut self) {
+        self.builds += 1;
         self.system.set_fast_path(true);
         self.spring_kinds = SpringKind::ALL
             .into_iter()
@@ -825,11 +834,13 @@ impl Session {
             Ok(()) => {}
             Err(d) => self.diverged(d),
         }
+        self.follow_reference();
     }
 
     /// Runs `steps` steps in one call (so that a grid cloth runs on a fast engine);
     /// `settle`: checked in full at the end, with the state brought up to date.
     fn run_steps(&mut self, steps: u32, settle: bool) -> FrameReport {
+        self.restart_reference_if_edited();
         let start = Instant::now();
         let before = self.system.steps_taken();
         let outcome = match settle {
@@ -841,6 +852,7 @@ impl Session {
             Ok(()) if settle => {
                 self.last_good.clone_from(self.system.state());
                 self.recheck_step();
+                self.follow_reference();
             }
             Ok(()) => {}
             Err(d) => self.diverged(d),

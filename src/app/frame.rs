@@ -30,6 +30,8 @@ pub struct FrameData {
     sphere: Option<(Vec3, f32)>,
     colliders: Vec<cloth_sandbox::sim::Collider>,
     time: f64,
+    /// The live reference's positions, empty when it is off.
+    ghost: Vec<Vec3>,
 }
 
 /// Colour index of a spring kind (see `kind_color`).
@@ -131,6 +133,14 @@ impl FrameData {
         }
     }
 
+    /// Takes the live reference's positions to draw as a ghost (`None` or empty:
+    /// no ghost).
+    pub fn set_ghost(&mut self, ghost: Option<&[glam::DVec3]>) {
+        self.ghost.clear();
+        self.ghost
+            .extend(ghost.unwrap_or_default().iter().map(|p| p.as_vec3()));
+    }
+
     /// The renderer's view of the frame last built.
     pub fn scene_frame(&self, highlight: Option<usize>) -> SceneFrame<'_> {
         SceneFrame {
@@ -146,6 +156,7 @@ impl FrameData {
             sphere: self.sphere,
             colliders: &self.colliders,
             time: self.time,
+            ghost: &self.ghost,
         }
     }
 }

@@ -515,6 +515,11 @@ impl App {
             }
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::SlowMotion(factor) => self.session.set_slow_motion(factor),
+            Action::Reference(on) => {
+                if let Err(e) = self.session.set_reference(on) {
+                    self.panel.error = Some(format!("Could not start the reference: {e}"));
+                }
+            }
             Action::Step => {
                 self.session.step_frame();
             }
@@ -668,6 +673,7 @@ impl App {
             &self.view,
             self.panel.strain_colors,
         );
+        (self.frame_data).set_ghost(self.session.reference().map(|r| r.ghost()));
         let frame = self.frame_data.scene_frame(None);
         let pixels = offscreen.render(&frame, &self.camera, &self.view)?;
         // The name is taken first (never replacing a file), then the picture is
@@ -791,6 +797,7 @@ impl App {
             &self.view,
             self.panel.strain_colors,
         );
+        (self.frame_data).set_ghost(self.session.reference().map(|r| r.ghost()));
         self.follow_the_scene(now);
         let pace = self.session.pace();
         if pace.behind && pace.real_time_factor < 0.97 * pace.target {

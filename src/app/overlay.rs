@@ -23,7 +23,7 @@ pub fn show(ctx: &egui::Context, view: egui::Rect, session: &Session, frame_time
     } else {
         (format!("{:.2}x real time", pace.real_time_factor), plain)
     };
-    let lines = [
+    let mut lines = vec![
         (
             format!(
                 "{:.0} frames/s · {:.1} ms",
@@ -43,6 +43,15 @@ pub fn show(ctx: &egui::Context, view: egui::Rect, session: &Session, frame_time
         ),
         (format!("energy {:.4} J", system.energy().total()), plain),
     ];
+    let error =
+        (session.reference()).and_then(|r| r.samples().back().filter(|_| r.stopped().is_none()));
+    if let Some(e) = error {
+        let ghost = Color32::from_rgb(240, 110, 220);
+        lines.push((
+            format!("error {:.3} mm RMS vs reference", 1e3 * e.rms),
+            ghost,
+        ));
+    }
     egui::Area::new(egui::Id::unique("corner readout"))
         .order(egui::Order::Foreground)
         .interactable(false)

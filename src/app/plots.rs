@@ -78,7 +78,7 @@ impl History {
             ),
         ];
         ui.label("Kinetic and elastic energy (J)");
-        plot(ui, &motion, None);
+        plot(ui, &motion, None, &[]);
         let whole = [
             (
                 "gravity",
@@ -92,14 +92,14 @@ impl History {
             ),
         ];
         ui.label("Gravity's and total energy (J)");
-        plot(ui, &whole, None);
+        plot(ui, &whole, None, &[]);
         let margin = self.series(|s| s.margin);
         if margin.iter().all(|(_, m)| *m == 0.0) {
             ui.label("dt / dt_crit: no step limit for this integrator.");
         } else {
             ui.label("Stability dt / dt_crit (unstable above 1)");
             let series = [("dt / dt_crit", Color32::from_rgb(255, 200, 60), margin)];
-            plot(ui, &series, Some(1.0));
+            plot(ui, &series, Some(1.0), &[]);
         }
     }
 
@@ -116,8 +116,9 @@ const PLOT_HEIGHT: f32 = 70.0;
 
 /// Draws `series` (name, colour, (time, value) points) in one frame sharing its
 /// axes, with the value range written at the left and a legend below; `line`
-/// draws a dashed level (e.g. the stability limit 1) when in range or near it.
-fn plot(ui: &mut Ui, series: &[Series<'_>], line: Option<f64>) {
+/// draws a dashed level (e.g. the stability limit 1) when in range or near it,
+/// and `marks` thin vertical lines at those times.
+fn plot(ui: &mut Ui, series: &[Series<'_>], line: Option<f64>, marks: &[f64]) {
     let finite = |v: &f64| v.is_finite();
     let points = series.iter().flat_map(|(_, _, p)| p.iter());
     let (mut t0, mut t1) = (f64::INFINITY, f64::NEG_INFINITY);
@@ -156,6 +157,11 @@ fn plot(ui: &mut Ui, series: &[Series<'_>], line: Option<f64>) {
             3.0,
         ));
     }
+    for &t in marks.iter().filter(|t| (t0..=t1).contains(*t)) {
+        let x = to_screen(t, lo).x;
+        let ends = [Pos2::new(x, rect.top()), Pos2::new(x, rect.bottom())];
+        painter.line_segment(ends, Stroke::new(1.0, Color32::from_gray(90)));
+    }
     for (_, color, points) in series {
         let line: Vec<Pos2> = points
             .iter()
@@ -184,6 +190,26 @@ fn plot(ui: &mut Ui, series: &[Series<'_>], line: Option<f64>) {
         format!("t = {t0:.1} to {t1:.1} s"),
     );
     legend(ui, series.iter().map(|(name, color, _)| (*name, *color)));
+}
+
+/// The live reference's RMS and largest position error (mm) over simulated
+/// time, a thin line at each restart after an edit.
+pub fn error_plot(ui: &mut Ui, live: &cloth_sandbox::session::reference::Live) {
+    let samples = live.samples();
+    if samples.len() < 2 {
+        ui.label("The error plot fills in as the simulation runs.");
+        return;
+    }
+    let of = |value: fn(&cloth_sandbox::session::reference::ErrorSample) -> f64| {
+        samples.iter().map(|s| (s.time, 1e3 * value(s))).collect()
+    };
+    let series = [
+        ("RMS error", Color32::from_rgb(90, 170, 255), of(|s| s.rms)),
+        ("max error", Color32::from_rgb(255, 110, 200), of(|s| s.max)),
+    ];
+    ui.label("Position error against the reference (mm)");
+    let restarts: Vec<f64> = live.restarts().iter().copied().collect();
+    plot(ui, &series, None, &restarts);
 }
 
 fn legend<'a>(ui: &mut Ui, entries: impl Iterator<Item = (&'a str, Color32)>) {

@@ -55,6 +55,9 @@ pub const WIRE_COLOR: [f32; 4] = [0.08, 0.09, 0.12, 1.0];
 /// Colour of the triangle edges drawn alone, without the surface: dark slate
 /// on the light sky and floor (linear RGBA).
 pub const WIRE_ALONE_COLOR: [f32; 4] = [0.14, 0.18, 0.27, 1.0];
+/// Colour of the live reference's ghost wireframe: a magenta apart from the
+/// warm front, the cool back, the sky and the colliders (linear RGBA).
+pub const GHOST_COLOR: [f32; 4] = [0.85, 0.10, 0.75, 1.0];
 /// Free particle colour.
 pub const PARTICLE_COLOR: [f32; 4] = [0.95, 0.95, 0.98, 1.0];
 /// Pinned particle colour.

@@ -63,6 +63,9 @@ pub struct SceneFrame<'a> {
     pub colliders: &'a [cloth_sandbox::sim::Collider],
     /// Simulated time (s) of the frame.
     pub time: f64,
+    /// The live reference's positions (m), drawn as a ghost wireframe over the
+    /// same edges as the cloth; empty when it is off.
+    pub ghost: &'a [Vec3],
 }
 
 /// Display toggles and colours.

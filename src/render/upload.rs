@@ -195,8 +195,25 @@ impl Renderer {
             };
             geometry::push_lines(positions, valid, &self.edges, |_| color, &mut lines);
         }
+        self.push_ghost(frame, &mut lines);
         self.lines.write(device, queue, &lines);
         self.scratch_lines = lines;
+    }
+
+    /// The live reference's ghost: the cloth's edges (a surfaceless scene's
+    /// springs) between the reference's positions, when it has one per particle.
+    fn push_ghost(&self, frame: &SceneFrame<'_>, lines: &mut Vec<geometry::LineVertex>) {
+        if frame.ghost.is_empty() || frame.ghost.len() != frame.positions.len() {
+            return;
+        }
+        let (mut ghost, mut valid) = (Vec::new(), Vec::new());
+        geometry::sanitize_all(frame.ghost, &mut ghost, &mut valid);
+        let edges = match frame.triangles.is_empty() {
+            true => frame.lines,
+            false => &self.edges,
+        };
+        let color = |_| geometry::GHOST_COLOR;
+        geometry::push_lines(&ghost, &valid, edges, color, lines);
     }
 
     /// Points: free particles, then pins and the highlight on top.

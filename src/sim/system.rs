@@ -76,6 +76,8 @@ pub struct System {
     rest_drag_areas: OnceLock<Vec<f64>>,
     /// The spectrum behind [`Self::stability`], scaled on a stiffness or mass edit.
     spectrum: super::spectrum::Cache,
+    /// [`Self::edits`].
+    edits: u64,
 }
 
 impl System {
@@ -152,6 +154,7 @@ impl System {
             stability: OnceLock::new(),
             rest_drag_areas: OnceLock::new(),
             spectrum: Default::default(),
+            edits: 0,
         };
         system.engines.stencil_springs = fast_path::StencilSprings::of(&system.model);
         system.prepare_integrator();
@@ -224,6 +227,13 @@ impl System {
             self.restart_verlet_history();
         }
     }
+    /// How many changes were made to the system from outside its steps since it
+    /// was built (an edit, a pin, a grab or a move of the hand, a collider moved,
+    /// a state put back): whoever mirrors the run, as the live reference does,
+    /// starts again from the state when this changes.
+    pub fn edits(&self) -> u64 {
+        self.edits
+    }
     /// Simulated time in s.
     pub fn time(&self) -> f64 {
         self.state.time
@@ -289,6 +299,7 @@ impl System {
     /// The hand holding the particle moved to `target` (the mouse moved): the
     /// particle follows it ([`Self::follow_hand`]).
     fn move_grab(&mut self, target: DVec3) {
+        self.edits += 1;
         if let Some(grab) = self.grab.as_mut() {
             grab.target = target;
         }
@@ -381,6 +392,7 @@ impl System {
         if center.is_finite() && velocity.is_finite() {
             collider.move_to(center, velocity, t);
             self.budget = None;
+            self.edits += 1;
         }
     }
 
@@ -660,6 +672,7 @@ impl System {
     /// the engines must take the new state, and the energy budget starts again from
     /// it, so that the edit's own work is not counted against the run.
     pub(super) fn mark_edited(&mut self) {
+        self.edits += 1;
         self.mark_changed();
         self.budget = None;
         self.stability = OnceLock::new();
@@ -669,6 +682,7 @@ impl System {
     /// stays, the engines take the new coefficients in place, and the energy
     /// budget and stability estimate start again.
     fn coefficients_edited(&mut self) {
+        self.edits += 1;
         self.catch_up();
         self.budget = None;
         self.stability = OnceLock::new();

@@ -9,6 +9,7 @@ mod common;
 mod clock;
 mod cut_undo;
 mod divergence_report;
+mod live_reference;
 mod save_load;
 mod session_params;
 mod session_safe_stepping;

@@ -4,6 +4,7 @@
 //! change to the simulation as an `Action` for the app to apply; parameter changes
 //! are typed [`Edit`]s.
 
+mod accuracy;
 mod colliders;
 mod controls;
 mod display;
@@ -45,6 +46,8 @@ pub enum Action {
     SafeStepping(bool),
     /// Set the slow-motion factor.
     SlowMotion(f64),
+    /// Turn the live reference (the error against RK4 at a finer step) on or off.
+    Reference(bool),
     /// Pin exactly these particles (a preset, or none to unpin all).
     Pins(Pins),
     /// Turn the wind (and gusts) on or off.
@@ -291,6 +294,7 @@ fn contents(
         .show(ui, |ui| {
             pin_presets(ui, session.settings().layout, session.pins().len(), actions);
         });
+    accuracy::accuracy(ui, session, actions);
     parameters(ui, session, actions);
     colliders::colliders(ui, session, actions);
     egui::CollapsingHeader::new("Files: save, export, record")
