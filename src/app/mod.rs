@@ -520,6 +520,11 @@ impl App {
                     self.panel.error = Some(format!("Could not start the reference: {e}"));
                 }
             }
+            Action::RestartReference => {
+                if let Err(e) = self.session.restart_reference() {
+                    self.panel.error = Some(format!("Could not start the reference: {e}"));
+                }
+            }
             Action::Step => {
                 self.session.step_frame();
             }

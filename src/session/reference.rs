@@ -190,6 +190,8 @@ pub struct Live {
     stopped: Option<String>,
     /// Whether shown states were passed over since the last answer.
     behind: bool,
+    /// Whether it stopped for falling [`MAX_LAG`] behind.
+    fell_behind: bool,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -219,6 +221,7 @@ impl Live {
             cost: 0.0,
             stopped: None,
             behind: false,
+            fell_behind: false,
             thread: Some(thread),
         })
     }
@@ -237,6 +240,7 @@ impl Live {
         }
         let answered = self.samples.back().map_or(shown.time(), |s| s.time);
         if shown.time() - answered > MAX_LAG {
+            self.fell_behind = true;
             self.stopped = Some(format!(
                 "The reference fell {MAX_LAG} s of simulated time behind: it needs {:.2} s of \
                  wall time per simulated second. Slow the run down or make the cloth smaller, \
@@ -279,6 +283,7 @@ impl Live {
         self.ghost.clear();
         self.cost = 0.0;
         self.behind = false;
+        self.fell_behind = false;
         let time = shown.time();
         // A time gone back (a reset, an undo) starts the plot again.
         if self.samples.back().is_some_and(|s| s.time > time) {
@@ -366,9 +371,13 @@ impl Live {
         &self.restarts
     }
 
-    /// The reference's positions at its last comparison (the ghost drawn).
+    /// The reference's positions at its last comparison (the ghost drawn);
+    /// none while it is stopped, when they would be stale.
     pub fn ghost(&self) -> &[DVec3] {
-        &self.ghost
+        match self.stopped {
+            Some(_) => &[],
+            None => &self.ghost,
+        }
     }
 
     /// Wall-clock seconds the reference spends per simulated second, measured
@@ -381,6 +390,11 @@ impl Live {
     /// run diverged (until the next edit starts it again).
     pub fn stopped(&self) -> Option<&str> {
         self.stopped.as_deref()
+    }
+
+    /// Whether it stopped for falling [`MAX_LAG`] behind the shown run.
+    pub fn fell_behind(&self) -> bool {
+        self.fell_behind
     }
 
     /// Whether shown states went by uncompared since the last answer: the
@@ -490,6 +504,25 @@ impl super::Session {
         if let Some(live) = &mut self.reference {
             live.restart_if_edited(self.builds, &self.system);
         }
+    }
+
+    /// The slow-motion factor at which the reference, stopped for falling behind,
+    /// would keep up with room to spare (at 80 % of its measured speed), when
+    /// that is slower than now and within [`super::SLOW_MOTION`].
+    pub fn slow_motion_for_reference(&self) -> Option<f64> {
+        let live = self.reference.as_ref().filter(|l| l.fell_behind())?;
+        let asked = self.speed() / self.slow_motion;
+        let factor = 0.8 / (live.cost() * asked);
+        let factor = (factor * 100.0).floor() / 100.0;
+        let range = super::SLOW_MOTION;
+        (factor.is_finite() && factor < self.slow_motion).then(|| factor.max(*range.start()))
+    }
+
+    /// Starts the reference again from the state now (after a change of speed,
+    /// which is no edit of the run).
+    pub fn restart_reference(&mut self) -> std::io::Result<()> {
+        self.set_reference(false)?;
+        self.set_reference(true)
     }
 
     /// Hands the settled state to the reference, which starts again after an edit.

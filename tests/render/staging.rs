@@ -414,3 +414,42 @@ fn empty_huge_and_tiny_frames_draw() {
     render(&mut off, &frame, &camera, &options);
     render(&mut tiny, &frame, &camera, &options);
 }
+
+/// The live reference's ghost: a cloth's edges drawn in the ghost's magenta
+/// between the reference's positions. A ghost moved 12 cm aside of a 35 cm sheet
+/// puts magenta pixels where the sheet is not, and none without a ghost, or
+/// with a ghost that does not have one position per particle.
+#[test]
+fn the_reference_is_drawn_as_a_ghost_wireframe() {
+    let Some(mut off) = offscreen(200, 120, None) else {
+        return;
+    };
+    let session = Session::load_with("cloth", &["width=8".into(), "height=8".into()]).unwrap();
+    let mut data = FrameData::default();
+    let options = ViewOptions::default();
+    data.build(session.system(), session.surface(), &options, false);
+    let camera = framed_camera(&session, None, None);
+    let aside: Vec<glam::DVec3> = (session.system().positions().iter())
+        .map(|p| *p + glam::DVec3::new(0.12, 0.0, 0.0))
+        .collect();
+    let mut magenta = |ghost: Option<&[glam::DVec3]>| {
+        data.set_ghost(ghost);
+        let pic = render(&mut off, &data.scene_frame(None), &camera, &options);
+        let ghost = crate::render::geometry::GHOST_COLOR.map(|c| 255.0 * c.powf(1.0 / 2.2));
+        (0..pic.height)
+            .flat_map(|y| (0..pic.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| colour_distance(pic.px(x, y), [ghost[0], ghost[1], ghost[2]]) < 90.0)
+            .count()
+    };
+    let (none, shown, wrong) = (
+        magenta(None),
+        magenta(Some(&aside)),
+        magenta(Some(&aside[1..])),
+    );
+    eprintln!("ghost pixels: none {none}, aside {shown}, wrong length {wrong}");
+    assert!(
+        shown > 100 && shown > 20 * none.max(1),
+        "{none} then {shown}"
+    );
+    assert_eq!(wrong, none);
+}

@@ -31,15 +31,23 @@ pub(super) fn accuracy(ui: &mut Ui, session: &Session, actions: &mut Vec<Action>
                 actions.push(Action::Reference(on));
             }
             if let Some(live) = session.reference() {
-                readings(ui, session, live);
+                readings(ui, session, live, actions);
             }
         });
 }
 
 /// The error now, the two costs, why the reference stopped or lags, and the plot.
-fn readings(ui: &mut Ui, session: &Session, live: &reference::Live) {
+fn readings(ui: &mut Ui, session: &Session, live: &reference::Live, actions: &mut Vec<Action>) {
     if let Some(why) = live.stopped() {
         ui.colored_label(Color32::from_rgb(255, 170, 60), why);
+        if let Some(factor) = session.slow_motion_for_reference() {
+            let button = ui.button(format!("Run at {factor:.2}x and compare again"));
+            let hover = "Slow motion to a speed the reference keeps up with, then start it again";
+            if button.on_hover_text(hover).clicked() {
+                actions.push(Action::SlowMotion(factor));
+                actions.push(Action::RestartReference);
+            }
+        }
         return;
     }
     if let Some(last) = live.samples().back() {

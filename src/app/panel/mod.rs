@@ -48,6 +48,8 @@ pub enum Action {
     SlowMotion(f64),
     /// Turn the live reference (the error against RK4 at a finer step) on or off.
     Reference(bool),
+    /// Start the live reference again from the state now.
+    RestartReference,
     /// Pin exactly these particles (a preset, or none to unpin all).
     Pins(Pins),
     /// Turn the wind (and gusts) on or off.
