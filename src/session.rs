@@ -402,9 +402,18 @@ impl Session {
     pub fn load_scene(&mut self, name: &str) -> Result<(), SceneError> {
         let (paused, safe_stepping) = (self.paused, self.safe_stepping);
         let slow_motion = self.slow_motion;
-        *self = Self::load_with(name, &[])?;
+        let loaded = Self::load_with(name, &[])?;
+        let reference = self.reference.take();
+        *self = loaded;
         (self.paused, self.slow_motion) = (paused, slow_motion);
         self.set_safe_stepping(safe_stepping);
+        // The reference stays on, and starts on the new scene (its builds count
+        // anew, so it is told to).
+        self.reference = reference.map(|mut live| {
+            live.forget();
+            live
+        });
+        self.follow_reference();
         Ok(())
     }
 

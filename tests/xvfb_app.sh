@@ -2,7 +2,7 @@
 # Drives the real app under Xvfb: start it, click a particle (pin), drag
 # another, resize the window, press R, F1 twice (help), Ctrl+S (save), F12
 # (screenshot), Ctrl+Z and Ctrl+Shift+Z (undo, redo), Tab twice (panel), Ctrl +
-# drag (cut) and Ctrl+Z, Esc, then Shift + drag a
+# drag (cut) and Ctrl+Z, G twice (reference), Esc, then Shift + drag a
 # collider in the slide scene; passes when the app
 # logged each action, exited 0 and its log holds no error or panic.
 #
@@ -108,6 +108,17 @@ xdotool windowfocus --sync "$WID"
 xdotool key r
 sleep 1
 grep -q "scene reset" "$LOG" || fail "R did not reset the scene"
+
+# G compares with a reference (a ghost wireframe and the error), G again stops.
+xdotool windowfocus --sync "$WID"
+xdotool key g
+sleep 3
+shot 4b-reference
+xdotool windowfocus --sync "$WID"
+xdotool key g
+sleep 1
+grep -q "reference on" "$LOG" || fail "G did not turn the reference on"
+grep -q "reference off" "$LOG" || fail "G again did not turn the reference off"
 shot 5-reset
 
 # F1 shows the help overlay and hides it again.

@@ -27,6 +27,10 @@ pub const BINDINGS: &[(&str, &str)] = &[
     ("Space", "pause / resume"),
     (". (period)", "one frame (the steps of 1/60 s) while paused"),
     ("R", "reset the scene (keeps your edits and pins)"),
+    (
+        "G",
+        "compare with a reference: error against RK4 at dt/2, drawn as a ghost",
+    ),
     ("Ctrl+S", "save the setup as saved-<scene>-N.toml"),
     ("F12", "save the view as screenshot-N.png"),
     (

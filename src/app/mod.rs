@@ -515,11 +515,10 @@ impl App {
             }
             Action::SafeStepping(on) => self.session.set_safe_stepping(on),
             Action::SlowMotion(factor) => self.session.set_slow_motion(factor),
-            Action::Reference(on) => {
-                if let Err(e) = self.session.set_reference(on) {
-                    self.panel.error = Some(format!("Could not start the reference: {e}"));
-                }
-            }
+            Action::Reference(on) => match self.session.set_reference(on) {
+                Ok(()) => log::info!("reference {}", if on { "on" } else { "off" }),
+                Err(e) => self.panel.error = Some(format!("Could not start the reference: {e}")),
+            },
             Action::RestartReference => {
                 if let Err(e) = self.session.restart_reference() {
                     self.panel.error = Some(format!("Could not start the reference: {e}"));
@@ -741,6 +740,11 @@ impl App {
             // Seed 000 quits on P as well as Esc.
             KeyCode::Escape | KeyCode::KeyP => self.apply(Action::Quit, event_loop),
             KeyCode::KeyR => self.apply(Action::Reset, event_loop),
+            KeyCode::KeyG => {
+                self.session.hold();
+                let on = self.session.reference().is_none();
+                self.apply(Action::Reference(on), event_loop);
+            }
             KeyCode::Space => self.apply(Action::TogglePause, event_loop),
             KeyCode::KeyF | KeyCode::Home => self.apply(Action::ResetView, event_loop),
             KeyCode::Period => self.apply(Action::Step, event_loop),

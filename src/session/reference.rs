@@ -263,6 +263,12 @@ impl Live {
         self.in_flight += 1;
     }
 
+    /// Starts again at the next [`Self::follow`], whatever it follows then (a
+    /// new scene, whose builds and edits count from the start again).
+    pub fn forget(&mut self) {
+        self.key = None;
+    }
+
     /// Starts the reference again from `shown` if it was edited since the
     /// reference last started; `shown` must be settled, as it is after an edit.
     /// Whoever steps the shown run calls this first, so that the reference
