@@ -1,6 +1,7 @@
 // The physical laws of `src/sim/laws` in WGSL, for the GPU engine. Each function
 // carries the name of its Rust law and computes it in the same order, in f32;
-// `src/gpu/conformance.rs` runs them on random inputs against the f64 laws.
+// `src/gpu/conformance.rs` runs them (through `probe.wgsl`) on random inputs
+// against the f64 laws.
 // `mul_add` is `fma` here, as in the CPU's vector kernels.
 
 // `EPSILON_LENGTH²`: below it a spring or a sphere offset has no direction.

@@ -77,6 +77,8 @@ pub struct RecordArgs {
     /// the same names (without it, such a folder is refused before the recording).
     #[arg(long)]
     pub force: bool,
+    #[command(flatten)]
+    pub engine: crate::cli::EngineArg,
     /// Camera yaw in degrees (0 looks along -z).
     #[arg(long, allow_negative_numbers = true)]
     pub yaw: Option<f32>,
@@ -394,7 +396,7 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
 /// on the drag's areas after each frame, as the app does ([`follow_areas`]).
 /// A divergence stops it with [`Diverged`], which says at which frame.
 pub fn render_frames(
-    system: &mut System,
+    (system, stepper): (&mut System, &mut cloth_sandbox::gpu::Stepper),
     scene_dt: Option<f64>,
     view: &View,
     fps: u32,
@@ -411,7 +413,7 @@ pub fn render_frames(
     for i in 0..frames {
         let target = from.1 + (step_at(i, fps, dt) - step_at(from.0, fps, dt)).max(0.0) as u64;
         let due = target.saturating_sub(system.steps_taken());
-        if let Err(d) = system.run(due) {
+        if let Err(d) = stepper.run(system, due).map_err(|e| anyhow!(e))? {
             return Err(Diverged {
                 steps: target,
                 frame: i,
@@ -453,7 +455,7 @@ pub fn record_gif(
     let size = offscreen.size();
     let mut sink = Sink::gif(path, size, fps)?;
     render_frames(
-        &mut system,
+        (&mut system, &mut cloth_sandbox::gpu::Stepper::Cpu),
         scene_dt,
         view,
         fps,
@@ -623,6 +625,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     check_steps(session.system(), args.fps, frames).map_err(|e| anyhow!("--seconds: {e}"))?;
     // The output and the adapter before the simulation: whatever is missing is
     // said before any work.
+    let mut stepper = args.engine.stepper(session.system())?;
     let inputs = session.scene().inputs(&args.scene);
     let mut sink = Sink::open(&output, args, frames, &inputs)?;
     let mut offscreen = Offscreen::new(width, height)?;
@@ -642,7 +645,7 @@ pub fn run(args: &RecordArgs) -> anyhow::Result<()> {
     };
     let scene_dt = session.safe_scene_step();
     let outcome = render_frames(
-        session.system_mut(),
+        (session.system_mut(), &mut stepper),
         scene_dt,
         &view,
         args.fps,

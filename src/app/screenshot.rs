@@ -29,6 +29,8 @@ pub struct ScreenshotArgs {
     /// Output PNG file.
     #[arg(long)]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub engine: crate::cli::EngineArg,
     /// Draw the triangle edges.
     #[arg(long)]
     pub wireframe: bool,
@@ -99,17 +101,25 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     (session.scene().inputs(&args.scene))
         .check("--out", &args.out)
         .map_err(|e| anyhow::anyhow!(e))?;
+    let mut stepper = args.engine.stepper(session.system())?;
     let out = PendingFile::create(&args.out)
         .map_err(|e| anyhow::anyhow!("--out {}: {e}", args.out.display()))?;
-    for _ in 0..args.steps {
+    let diverged = |message| Diverged {
+        steps: args.steps,
+        frame: 0,
+        message,
+    };
+    if stepper.adapter().is_some() {
+        // The GPU engine runs the steps in one go, the session's dt and all.
+        let run = stepper.run(session.system_mut(), args.steps);
+        if let Err(d) = run.map_err(|e| anyhow::anyhow!(e))? {
+            return Err(diverged(d.to_string()).into());
+        }
+    }
+    for _ in session.system().steps_taken()..args.steps {
         session.single_step();
         if let Some(d) = session.divergence() {
-            return Err(Diverged {
-                steps: args.steps,
-                frame: 0,
-                message: d.message.clone(),
-            }
-            .into());
+            return Err(diverged(d.message.clone()).into());
         }
     }
     // Scenes without a surface (spring, chain, rope) draw as springs and particles.
@@ -130,8 +140,11 @@ pub fn run(args: &ScreenshotArgs) -> anyhow::Result<()> {
     let pixels = off.render(&frame, &camera, &options)?;
     write_png(out, width, height, &pixels)
         .with_context(|| format!("writing the screenshot to {}", args.out.display()))?;
+    let engine = (stepper.adapter()).map_or("the CPU engines".into(), |a| {
+        format!("the GPU engine on {a}")
+    });
     eprintln!(
-        "wrote {} ({width}x{height}, adapter {})",
+        "wrote {} ({width}x{height}, adapter {}, stepped by {engine})",
         args.out.display(),
         off.adapter_name()
     );

@@ -18,10 +18,14 @@
 //! self-collision, tearing, colliders, the other integrators) is refused with
 //! its reasons ([`GpuEngine::refusal`]).
 
+mod choice;
+#[cfg(test)]
+mod conformance;
 mod device;
 mod layout;
 mod pipeline;
 
+pub use choice::{AUTO_GPU_PARTICLES, EngineChoice, Refused, Stepper};
 pub use device::Adapter;
 
 use glam::DVec3;

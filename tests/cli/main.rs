@@ -13,6 +13,7 @@ mod command_line;
 mod crash_hang_memory;
 mod divergence_diagnostics;
 mod dump_output;
+mod engine_choice;
 mod limiters_hide_no_blow_up;
 mod messages;
 mod outputs_never_overwrite;

@@ -17,13 +17,18 @@ use cloth_sandbox::sim::safe::{
     safe_step_below,
 };
 use cloth_sandbox::sim::{
-    Divergence, Engine, Integrator, PrecisionRule, SpringKind, System, bounding_sphere, max_speed,
+    Divergence, Integrator, PrecisionRule, SpringKind, System, bounding_sphere,
 };
-use glam::DVec3;
 use serde_json::json;
+
+mod summary;
+use cloth_sandbox::gpu::{EngineChoice, Refused, Stepper};
+use summary::Summary;
 
 /// Exit code for bad input.
 pub const EXIT_BAD_INPUT: u8 = 2;
+/// Exit code when no graphics adapter or display can be had.
+pub const EXIT_NO_ADAPTER: u8 = 1;
 /// Exit code for a diverged simulation.
 pub const EXIT_DIVERGED: u8 = 3;
 
@@ -158,6 +163,59 @@ pub struct RunArgs {
     /// level it lacks is refused).
     #[arg(long, value_name = "LEVEL")]
     simd: Option<String>,
+    #[command(flatten)]
+    engine: EngineArg,
+}
+
+/// `--engine`, on `cloth run`, `cloth info`, `cloth screenshot` and `cloth record`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct EngineArg {
+    /// Engine: cpu (the CPU engines), gpu (wgpu compute shaders; refused in one
+    /// line where there is no adapter or the scene needs what it does not step),
+    /// or auto (the GPU on a hardware adapter from 65,536 particles, else the CPU).
+    #[arg(long, value_name = "ENGINE", default_value = "auto")]
+    pub engine: String,
+}
+
+impl EngineArg {
+    /// The engine asked for, or the message that names the choices.
+    pub fn choice(&self) -> Result<EngineChoice, String> {
+        self.engine.parse().map_err(|e| format!("--engine: {e}"))
+    }
+
+    /// The stepper for `system`, saying on stderr when `auto` fell back; a
+    /// refusal is an error with its exit code.
+    pub fn stepper(&self, system: &System) -> Result<Stepper, EngineRefused> {
+        let refused = |message, code| EngineRefused { message, code };
+        let choice = self.choice().map_err(|e| refused(e, EXIT_BAD_INPUT))?;
+        match Stepper::choose(choice, system) {
+            Ok((stepper, note)) => {
+                if let Some(note) = note {
+                    eprintln!("{note}");
+                }
+                Ok(stepper)
+            }
+            Err(Refused::Input(e)) => Err(refused(e, EXIT_BAD_INPUT)),
+            Err(Refused::Machine(e)) => Err(refused(e, EXIT_NO_ADAPTER)),
+        }
+    }
+}
+
+/// `--engine` refused: the message, and the exit code (2 for the scene, 1 for
+/// the machine).
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct EngineRefused {
+    message: String,
+    code: u8,
+}
+
+impl EngineRefused {
+    /// Says it and gives its exit code.
+    fn exit(&self) -> ExitCode {
+        eprintln!("error: {}", self.message);
+        ExitCode::from(self.code)
+    }
 }
 
 /// `cloth info`.
@@ -170,6 +228,8 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    engine: EngineArg,
 }
 
 /// Runs a subcommand and returns the process exit code.
@@ -183,6 +243,11 @@ pub fn run_command(command: Command) -> ExitCode {
         }
         Command::Screenshot(args) => match crate::app::screenshot::run(&args) {
             Ok(()) => Ok(ExitCode::SUCCESS),
+            Err(e) if e.is::<EngineRefused>() => {
+                return e
+                    .downcast_ref::<EngineRefused>()
+                    .map_or(ExitCode::FAILURE, EngineRefused::exit);
+            }
             Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
                 eprintln!("error: {e:#}");
                 return ExitCode::from(EXIT_DIVERGED);
@@ -191,6 +256,11 @@ pub fn run_command(command: Command) -> ExitCode {
         },
         Command::Record(args) => match crate::app::record::run(&args) {
             Ok(()) => Ok(ExitCode::SUCCESS),
+            Err(e) if e.is::<EngineRefused>() => {
+                return e
+                    .downcast_ref::<EngineRefused>()
+                    .map_or(ExitCode::FAILURE, EngineRefused::exit);
+            }
             Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
                 eprintln!("error: {e:#}");
                 return ExitCode::from(EXIT_DIVERGED);
@@ -243,6 +313,7 @@ fn scenes() {
 /// state before a divergence, which takes the same steps). The error is a run that
 /// its new steps would make longer than [`limits::total_steps`] allows.
 fn run_checked(
+    stepper: &mut Stepper,
     system: &mut System,
     steps: u64,
     recheck: Option<f64>,
@@ -250,7 +321,10 @@ fn run_checked(
 ) -> Result<Result<(), Divergence>, String> {
     let until = until.unwrap_or(u64::MAX);
     let Some(scene_dt) = recheck else {
-        return Ok(system.run(steps.min(until.saturating_sub(system.steps_taken()))));
+        return stepper.run(
+            system,
+            steps.min(until.saturating_sub(system.steps_taken())),
+        );
     };
     let end = system.time() + steps as f64 * system.params().dt;
     let work = limits::StepWork::of(system.model());
@@ -263,7 +337,7 @@ fn run_checked(
             return Ok(Ok(()));
         }
         let frame = ((1.0 / 60.0) / dt).ceil().max(1.0) as u64;
-        if let Err(d) = system.run(left.min(frame)) {
+        if let Err(d) = stepper.run(system, left.min(frame))? {
             return Ok(Err(d));
         }
         if let Some(choice) = follow_areas(system, &mut watch, scene_dt) {
@@ -343,6 +417,16 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     };
     system.set_fast_path(!args.exact);
     let engine = system.engine();
+    if args.exact && args.engine.choice()? == EngineChoice::Gpu {
+        return Err("--exact runs the f64 reference engine, not --engine gpu: give one".into());
+    }
+    let mut stepper = match args.exact {
+        true => Stepper::Cpu,
+        false => match args.engine.stepper(&system) {
+            Ok(stepper) => stepper,
+            Err(refused) => return Ok(refused.exit()),
+        },
+    };
     // Setup is not timed: warm-up steps build the engine's buffers (and thread
     // pool) and run from the start state, which is then put back; then a run of no
     // steps sets the energy budget from it and copies it into the engine. (Timed,
@@ -354,7 +438,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     let start_state = (args.warmup > 0 || replay).then(|| system.state().clone());
     if let Some(start) = start_state.as_ref().filter(|_| args.warmup > 0) {
         // A warm-up that diverges has served its purpose: the run starts over.
-        let _ = system.run(args.warmup);
+        let _ = stepper.run(&mut system, args.warmup)?;
         system.set_state(start.clone());
     }
     system.run(0).map_err(|e| e.to_string())?;
@@ -362,9 +446,9 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     // Safe stepping on a cloth in the air checks its step as the app does.
     let recheck = (args.safe && system.model().terms.aero).then_some(dt);
     let start = Instant::now();
-    let outcome = run_checked(&mut system, steps, recheck, None)?;
+    let outcome = run_checked(&mut stepper, &mut system, steps, recheck, None)?;
     let wall = start.elapsed().as_secs_f64();
-    let summary = Summary::of(&system, wall, engine);
+    let summary = Summary::of(&system, wall, engine).on_gpu(stepper.adapter());
     let mut dumped = None;
     if let (Err(d), Some(start_state)) = (&outcome, start_state) {
         // The state at the divergence is not finite (or ran away): the CSV and
@@ -372,6 +456,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         system.set_params(start_params);
         system.set_state(start_state);
         let _ = run_checked(
+            &mut stepper,
             &mut system,
             steps,
             recheck,
@@ -655,156 +740,6 @@ fn write_csv(system: &System, mut file: PendingFile) -> std::io::Result<()> {
     file.commit()
 }
 
-/// What `cloth run` prints.
-struct Summary {
-    steps: u64,
-    time: f64,
-    wall: f64,
-    particles: usize,
-    springs: usize,
-    /// Springs broken (torn or cut) during the run.
-    broken_springs: usize,
-    energy: cloth_sandbox::sim::Energy,
-    min: DVec3,
-    max: DVec3,
-    max_speed: f64,
-    engine: Engine,
-    threads: usize,
-    integrator: Integrator,
-    /// The step the run ended on (safe stepping may have split the scene's).
-    dt: f64,
-    /// Conjugate-gradient iterations of the last step, for implicit Euler.
-    solver_iterations: Option<usize>,
-    /// What the limiters hold at the end, where the scene has any.
-    limiters: Option<cloth_sandbox::sim::limiters::Activity>,
-}
-
-impl Summary {
-    fn of(system: &System, wall: f64, engine: Engine) -> Self {
-        let positions = system.positions();
-        let (min, max) = positions
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-        // A state with a non-finite value has no finite maximum or bounds: NaN
-        // (JSON null), never a number that looks like one.
-        let max_speed = max_speed(system.velocities());
-        let (min, max) = if positions.iter().all(|p| p.is_finite()) {
-            (min, max)
-        } else {
-            (DVec3::NAN, DVec3::NAN)
-        };
-        Self {
-            steps: system.steps_taken(),
-            time: system.time(),
-            wall,
-            particles: system.particle_count(),
-            springs: system.springs().len(),
-            broken_springs: system.broken_springs(),
-            energy: system.energy(),
-            min,
-            max,
-            max_speed,
-            engine,
-            threads: system.engine_threads(),
-            integrator: system.params().integrator,
-            dt: system.params().dt,
-            solver_iterations: (system.params().integrator == Integrator::ImplicitEuler)
-                .then(|| system.solver_iterations()),
-            limiters: {
-                let p = system.params();
-                (p.max_speed.is_some() || p.stretch_limit.is_some() || p.tear_strain.is_some())
-                    .then(|| system.limiter_activity())
-            },
-        }
-    }
-
-    fn steps_per_second(&self) -> f64 {
-        if self.wall > 0.0 {
-            self.steps as f64 / self.wall
-        } else {
-            0.0
-        }
-    }
-
-    fn to_json(&self) -> serde_json::Value {
-        let sps = self.steps_per_second();
-        json!({
-            "steps": self.steps,
-            "simulated_time": self.time,
-            "wall_time": self.wall,
-            "steps_per_second": sps,
-            "particle_steps_per_second": sps * self.particles as f64,
-            "spring_steps_per_second": sps * self.springs as f64,
-            "particles": self.particles,
-            "springs": self.springs,
-            "broken_springs": self.broken_springs,
-            "energy": {
-                "kinetic": self.energy.kinetic,
-                "gravity": self.energy.gravity,
-                "elastic": self.energy.elastic,
-                "total": self.energy.total(),
-            },
-            "bounding_box": { "min": [self.min.x, self.min.y, self.min.z], "max": [self.max.x, self.max.y, self.max.z] },
-            "max_speed": self.max_speed,
-            "engine": self.engine.name(),
-            "simd": self.engine.simd_level().name(),
-            "threads": self.threads,
-            "integrator": self.integrator.name(),
-            "dt": self.dt,
-            "cg_iterations_last_step": self.solver_iterations,
-            "limiters": self.limiters.map(|a| {
-                let pair = |(n, of): (usize, usize)| json!({ "holding": n, "of": of });
-                json!({
-                    "torn_springs": pair(a.torn),
-                    "particles_at_speed_cap": pair(a.at_speed_cap),
-                    "springs_at_stretch_limit": pair(a.at_stretch_limit),
-                    "warning": a.warning(),
-                })
-            }),
-        })
-    }
-
-    fn print(&self) {
-        let sps = self.steps_per_second();
-        println!("steps           {}", self.steps);
-        println!("simulated time  {:.6} s", self.time);
-        println!("wall time       {:.6} s", self.wall);
-        println!(
-            "steps/s         {sps:.1}  ({:.3e} particle-steps/s, {:.3e} spring-steps/s)",
-            sps * self.particles as f64,
-            sps * self.springs as f64
-        );
-        println!(
-            "energy          {:.6e} J  (kinetic {:.6e}, gravity {:.6e}, elastic {:.6e})",
-            self.energy.total(),
-            self.energy.kinetic,
-            self.energy.gravity,
-            self.energy.elastic
-        );
-        println!(
-            "bounding box    ({:.4}, {:.4}, {:.4}) to ({:.4}, {:.4}, {:.4}) m",
-            self.min.x, self.min.y, self.min.z, self.max.x, self.max.y, self.max.z
-        );
-        println!("max speed       {:.4} m/s", self.max_speed);
-        println!("engine          {}", self.engine.label(self.threads));
-        println!("integrator      {}, dt {:.4e} s", self.integrator, self.dt);
-        if let Some(n) = self.solver_iterations {
-            println!("cg iterations   {n} (last step)");
-        }
-        if self.broken_springs > 0 {
-            println!("broken springs  {}", self.broken_springs);
-        }
-        if let Some(a) = &self.limiters {
-            let held: Vec<String> = a.working().map(|(l, n, of)| l.holding(n, of)).collect();
-            if !held.is_empty() {
-                println!("limiters        hold {}", held.join(", "));
-            }
-        }
-    }
-}
-
 /// The precision rule's reasons, as `cloth info` shows them: the positions the
 /// kernel keeps, and the float32 noise on each kind of positions against the limit.
 fn precision_json(rule: PrecisionRule) -> serde_json::Value {
@@ -834,6 +769,11 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
     // The engine `cloth run` uses (without `--exact`).
     system.set_fast_path(true);
     let engine = system.engine();
+    let stepper = match args.engine.stepper(&system) {
+        Ok(stepper) => stepper,
+        Err(refused) => return Ok(refused.exit()),
+    };
+    let adapter = stepper.adapter().map(ToString::to_string);
     let p = system.params();
     let mut per_kind = serde_json::Map::new();
     for kind in SpringKind::ALL {
@@ -854,9 +794,10 @@ fn info(args: InfoArgs) -> Result<ExitCode, String> {
         "triangles": system.triangles().len(),
         "force_terms": system.force_terms().names(),
         "constraints": constraints,
-        "engine": engine.name(),
-        "simd": engine.simd_level().name(),
-        "precision": system.precision_rule().map(precision_json),
+        "engine": if adapter.is_some() { "gpu" } else { engine.name() },
+        "adapter": adapter,
+        "simd": adapter.is_none().then(|| engine.simd_level().name()),
+        "precision": system.precision_rule().filter(|_| adapter.is_none()).map(precision_json),
         "parameters": {
             "layout": format!("{:?}", resolved.layout).to_lowercase(),
             "width": resolved.width,
