@@ -389,7 +389,7 @@ pub fn check_steps(system: &System, fps: u32, frames: u64) -> Result<(), String>
     limits::total_steps(last as u64, 1, limits::StepWork::of(system.model())).map(|_| ())
 }
 
-/// Steps `system` from its state and renders `frames` frames at `fps` (frame i
+/// Steps `system` with `stepper` from its state and renders `frames` frames at `fps` (frame i
 /// at `i / fps` seconds after the start), handing each to `each` as RGBA8 rows.
 /// With `scene_dt` (the session it came from steps safely, splitting its scene's
 /// step of that many seconds: [`Session::safe_scene_step`]) it keeps safe stepping's watch

@@ -1,5 +1,5 @@
 //! The error against run time, live: a switch that runs the scene again beside
-//! the one shown with RK4 at a finer step ([`reference`]), the error between
+//! the one shown with RK4 at a finer step (`session::reference`), the error between
 //! the two and what each costs per simulated second.
 
 use cloth_sandbox::session::Session;
