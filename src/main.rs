@@ -29,6 +29,7 @@ fn run() -> ExitCode {
         None => app::main(app::AppOptions {
             scene: args.scene,
             set: args.set,
+            engine: args.engine,
         }),
     }
 }

@@ -23,6 +23,8 @@ pub use crate::scene::Edit;
 use glam::DVec3;
 
 mod diverged;
+#[cfg(feature = "gpu")]
+mod gpu;
 mod history;
 mod parts;
 pub mod reference;
@@ -148,6 +150,9 @@ pub struct Session {
     builds: u64,
     /// The live reference, while it is on ([`reference`]).
     reference: Option<reference::Live>,
+    /// The GPU engine, while the session steps on it.
+    #[cfg(feature = "gpu")]
+    gpu: Option<gpu::OnGpu>,
 }
 
 /// What safe stepping chose for the running system.
@@ -274,6 +279,8 @@ impl Session {
             display_surface: Vec::new(),
             builds: 0,
             reference: None,
+            #[cfg(feature = "gpu")]
+            gpu: None,
         };
         session.built();
         Ok(session)
@@ -852,9 +859,14 @@ impl Session {
         self.restart_reference_if_edited();
         let start = Instant::now();
         let before = self.system.steps_taken();
-        let outcome = match settle {
-            true => self.system.run(u64::from(steps)),
-            false => self.system.run_ahead(u64::from(steps)),
+        #[cfg(feature = "gpu")]
+        let on_gpu = self.run_on_gpu(steps);
+        #[cfg(not(feature = "gpu"))]
+        let on_gpu = None;
+        let outcome = match (on_gpu, settle) {
+            (Some(outcome), _) => outcome,
+            (None, true) => self.system.run(u64::from(steps)),
+            (None, false) => self.system.run_ahead(u64::from(steps)),
         };
         let done = (self.system.steps_taken() - before) as u32;
         match outcome {

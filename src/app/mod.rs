@@ -59,25 +59,44 @@ const OUT_OF_VIEW_S: f64 = 1.0;
 const PICK_RADIUS: f32 = 12.0;
 
 /// Options for the desktop app.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct AppOptions {
     /// Scene to open (built-in name or file); the default cloth when `None`.
     pub scene: Option<String>,
     /// `key=value` overrides applied to the scene.
     pub set: Vec<String>,
+    /// `--engine`: the GPU engine, the CPU's, or the GPU where it gains.
+    pub engine: crate::cli::EngineArg,
 }
 
 /// Runs the desktop app; on failure prints one `error:` line and returns 1.
 pub fn main(options: AppOptions) -> std::process::ExitCode {
     // Bad input exits 2, as on the command line; a missing display or adapter, 1.
     let scene = options.scene.as_deref().unwrap_or("cloth");
-    let session = match Session::load_with(scene, &options.set) {
+    let mut session = match Session::load_with(scene, &options.set) {
         Ok(session) => session,
         Err(err) => {
             eprintln!("error: {err}");
             return std::process::ExitCode::from(2);
         }
     };
+    // `auto` takes the GPU where `cloth run` would; `gpu` asks for it whatever
+    // the adapter, and a machine without one is refused as on the command line.
+    let gpu = match options.engine.choice() {
+        Ok(cloth_sandbox::gpu::EngineChoice::Cpu) => false,
+        Ok(cloth_sandbox::gpu::EngineChoice::Gpu) => true,
+        Ok(cloth_sandbox::gpu::EngineChoice::Auto) => {
+            matches!(options.engine.stepper(session.system()), Ok(s) if s.adapter().is_some())
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            return std::process::ExitCode::from(2);
+        }
+    };
+    if gpu && let Err(e) = session.set_gpu(true) {
+        eprintln!("error: --engine gpu: {e}");
+        return std::process::ExitCode::from(1);
+    }
     match run(session) {
         Ok(()) => std::process::ExitCode::SUCCESS,
         Err(err) => {
@@ -518,6 +537,10 @@ impl App {
             Action::Reference(on) => match self.session.set_reference(on) {
                 Ok(()) => log::info!("reference {}", if on { "on" } else { "off" }),
                 Err(e) => self.panel.error = Some(format!("Could not start the reference: {e}")),
+            },
+            Action::Gpu(on) => match self.session.set_gpu(on) {
+                Ok(()) => log::info!("engine {}", if on { "gpu" } else { "cpu" }),
+                Err(e) => self.panel.error = Some(format!("No GPU engine: {e}")),
             },
             Action::RestartReference => {
                 if let Err(e) = self.session.restart_reference() {

@@ -38,7 +38,7 @@ pub fn show(ctx: &egui::Context, view: egui::Rect, session: &Session, frame_time
             plain,
         ),
         (
-            format!("engine {}", system.engine().label(system.engine_threads())),
+            format!("engine {}", super::panel::engine_label(session)),
             plain,
         ),
         (format!("energy {:.4} J", system.energy().total()), plain),

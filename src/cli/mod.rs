@@ -46,6 +46,8 @@ pub struct Args {
     /// Override a scene parameter in the desktop app, e.g. `--set width=48`.
     #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    #[command(flatten)]
+    pub engine: EngineArg,
 }
 
 /// Scene selection and overrides shared by the subcommands.

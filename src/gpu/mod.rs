@@ -79,7 +79,7 @@ pub struct GpuEngine {
     adapter: Adapter,
     device: wgpu::Device,
     queue: wgpu::Queue,
-    pipeline: wgpu::ComputePipeline,
+    pipelines: pipeline::Pipelines,
     /// Particles in and out, ping-pong: step `k` reads `state[k % 2]`.
     state: [wgpu::Buffer; 2],
     /// Verlet's update velocities, likewise (16-byte stand-ins otherwise).
@@ -131,11 +131,38 @@ impl GpuEngine {
 
     /// An engine for `system`'s model on the best adapter there is.
     pub fn new(system: &System) -> Result<Self, GpuError> {
-        let model = system.model();
-        if let Some(reason) = Self::refusal(model) {
+        if let Some(reason) = Self::refusal(system.model()) {
             return Err(GpuError::Unsupported(reason));
         }
         let (adapter, device, queue) = device::open()?;
+        let pipelines = pipeline::Pipelines::new(&device);
+        Self::build((adapter, device, queue, pipelines), system)
+    }
+
+    /// An engine for `system`'s model (edited, or another) on this one's device
+    /// and pipeline: only the buffers are made again.
+    pub fn rebuilt(&self, system: &System) -> Result<Self, GpuError> {
+        if let Some(reason) = Self::refusal(system.model()) {
+            return Err(GpuError::Unsupported(reason));
+        }
+        let gpu = (
+            self.adapter.clone(),
+            self.device.clone(),
+            self.queue.clone(),
+        );
+        Self::build((gpu.0, gpu.1, gpu.2, self.pipelines.clone()), system)
+    }
+
+    fn build(
+        (adapter, device, queue, pipelines): (
+            Adapter,
+            wgpu::Device,
+            wgpu::Queue,
+            pipeline::Pipelines,
+        ),
+        system: &System,
+    ) -> Result<Self, GpuError> {
+        let model = system.model();
         let adjacency = layout::Adjacency::of(model);
         let n = model.mass.len();
         let verlet = model.params.integrator == Integrator::Verlet;
@@ -199,14 +226,13 @@ impl GpuEngine {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let pipelines = pipeline::Pipelines::new(&device);
         let bind = [0, 1].map(|k| pipelines.step_group(&device, &records, &state, &u, k));
         let topology = pipelines.topology_group(&device, [&offsets, &links, &triangle_links]);
         Ok(Self {
             adapter,
             device,
             queue,
-            pipeline: pipelines.pipeline,
+            pipelines,
             state,
             u,
             bind,
@@ -281,7 +307,7 @@ impl GpuEngine {
                     label: Some("step particles"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&self.pipeline);
+                pass.set_pipeline(&self.pipelines.pipeline);
                 pass.set_bind_group(1, &self.topology, &[]);
                 let (x, y) = dispatch_size(self.particles);
                 for k in 0..chunk {

@@ -11,7 +11,8 @@ pub(super) const STEP_SHADER: &str = concat!(
     include_str!("../../shaders/gpu/step.wgsl")
 );
 
-/// The pipeline and its two bind group layouts.
+/// The pipeline and its two bind group layouts (handles: a clone shares them).
+#[derive(Clone)]
 pub(super) struct Pipelines {
     pub pipeline: wgpu::ComputePipeline,
     step: wgpu::BindGroupLayout,

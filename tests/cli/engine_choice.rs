@@ -57,6 +57,14 @@ fn gpu_without_an_adapter_is_refused_in_one_line() {
         assert!(stdout(&o).is_empty(), "{args:?}");
     }
     assert!(!png.exists(), "a refused screenshot left a file");
+    // The app, before any window.
+    let o = without_adapter(&["--engine", "gpu"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let line = one_line(&o);
+    assert!(
+        line.contains("--engine gpu") && line.contains("no GPU adapter"),
+        "{line}"
+    );
 }
 
 #[test]

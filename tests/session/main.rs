@@ -9,6 +9,7 @@ mod common;
 mod clock;
 mod cut_undo;
 mod divergence_report;
+mod gpu_session;
 mod live_reference;
 mod save_load;
 mod session_params;

@@ -107,6 +107,22 @@ pub(super) fn scene_and_integrator(ui: &mut Ui, session: &Session, actions: &mut
 }
 
 /// Play/pause, step, reset and save; undo, redo and defaults.
+/// The engine choice: the GPU engine (wgpu compute) or the CPU's, and why the
+/// GPU engine steps on the CPU where it cannot step the scene.
+pub(super) fn engine(ui: &mut Ui, session: &Session, actions: &mut Vec<Action>) {
+    let mut on = session.on_gpu();
+    let hover = "Step on the GPU engine (wgpu compute shaders), built again after every edit; \
+                 scenes it does not step yet run on the CPU, saying why.";
+    let toggle = ui.checkbox(&mut on, "GPU engine").on_hover_text(hover);
+    if toggle.changed() {
+        actions.push(Action::Gpu(on));
+    }
+    if let Some(problem) = session.gpu_problem() {
+        let text = format!("{problem}: running on the CPU.");
+        ui.colored_label(Color32::from_rgb(255, 200, 60), text);
+    }
+}
+
 pub(super) fn run_buttons(ui: &mut Ui, session: &Session, actions: &mut Vec<Action>) {
     ui.horizontal(|ui| {
         let label = if session.paused() { "Play" } else { "Pause" };

@@ -21,6 +21,7 @@ use crate::render::ViewOptions;
 use controls::{outputs, pin_presets, run_buttons, scene_and_integrator, speed};
 use display::display;
 use parameters::parameters;
+pub(crate) use stats::engine_label;
 use stats::stats;
 
 /// Something the user asked for in the panel (or by key).
@@ -50,6 +51,8 @@ pub enum Action {
     Reference(bool),
     /// Start the live reference again from the state now.
     RestartReference,
+    /// Step on the GPU engine (or the CPU's).
+    Gpu(bool),
     /// Pin exactly these particles (a preset, or none to unpin all).
     Pins(Pins),
     /// Turn the wind (and gusts) on or off.
@@ -288,6 +291,7 @@ fn contents(
         .default_open(true)
         .show(ui, |ui| {
             scene_and_integrator(ui, session, actions);
+            controls::engine(ui, session, actions);
             run_buttons(ui, session, actions);
             speed(ui, session, actions);
         });

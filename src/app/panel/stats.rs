@@ -89,10 +89,24 @@ pub(super) fn stats(ui: &mut Ui, state: &PanelState, session: &Session, adapter:
                     system.self_collision_contacts()
                 ));
             }
-            let engine = system.engine().label(system.engine_threads());
-            ui.label(format!("engine {engine}"));
+            ui.label(format!("engine {}", engine_label(session)));
             ui.label(RichText::new(format!("adapter: {adapter}")).small());
         });
+}
+
+/// The engine stepping the session: the GPU engine and its adapter, or the CPU
+/// engine with its threads.
+pub(crate) fn engine_label(session: &Session) -> String {
+    match session
+        .gpu_adapter()
+        .filter(|_| session.gpu_problem().is_none())
+    {
+        Some(adapter) => format!("gpu on {}", adapter.name),
+        None => {
+            let system = session.system();
+            system.engine().label(system.engine_threads())
+        }
+    }
 }
 
 /// dt / dt_crit, coloured by how close it is to 1, or why there is no limit.
