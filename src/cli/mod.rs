@@ -234,6 +234,22 @@ pub struct InfoArgs {
     engine: EngineArg,
 }
 
+/// A screenshot's or a recording's end as an exit code: an engine refused and a
+/// divergence say their own line; any other error is bad input.
+fn offscreen(result: anyhow::Result<()>) -> Result<ExitCode, String> {
+    let Err(e) = result else {
+        return Ok(ExitCode::SUCCESS);
+    };
+    if let Some(refused) = e.downcast_ref::<EngineRefused>() {
+        return Ok(refused.exit());
+    }
+    if e.is::<crate::app::screenshot::Diverged>() {
+        eprintln!("error: {e:#}");
+        return Ok(ExitCode::from(EXIT_DIVERGED));
+    }
+    Err(format!("{e:#}"))
+}
+
 /// Runs a subcommand and returns the process exit code.
 pub fn run_command(command: Command) -> ExitCode {
     let result = match command {
@@ -243,32 +259,8 @@ pub fn run_command(command: Command) -> ExitCode {
             scenes();
             Ok(ExitCode::SUCCESS)
         }
-        Command::Screenshot(args) => match crate::app::screenshot::run(&args) {
-            Ok(()) => Ok(ExitCode::SUCCESS),
-            Err(e) if e.is::<EngineRefused>() => {
-                return e
-                    .downcast_ref::<EngineRefused>()
-                    .map_or(ExitCode::FAILURE, EngineRefused::exit);
-            }
-            Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
-                eprintln!("error: {e:#}");
-                return ExitCode::from(EXIT_DIVERGED);
-            }
-            Err(e) => Err(format!("{e:#}")),
-        },
-        Command::Record(args) => match crate::app::record::run(&args) {
-            Ok(()) => Ok(ExitCode::SUCCESS),
-            Err(e) if e.is::<EngineRefused>() => {
-                return e
-                    .downcast_ref::<EngineRefused>()
-                    .map_or(ExitCode::FAILURE, EngineRefused::exit);
-            }
-            Err(e) if e.is::<crate::app::screenshot::Diverged>() => {
-                eprintln!("error: {e:#}");
-                return ExitCode::from(EXIT_DIVERGED);
-            }
-            Err(e) => Err(format!("{e:#}")),
-        },
+        Command::Screenshot(args) => offscreen(crate::app::screenshot::run(&args)),
+        Command::Record(args) => offscreen(crate::app::record::run(&args)),
         Command::Report(args) => report(args),
     };
     result.unwrap_or_else(|message| {

@@ -192,8 +192,10 @@ fn at(slot: usize, v: DVec3) -> [(usize, f64); 3] {
     [(4 * slot, v.x), (4 * slot + 1, v.y), (4 * slot + 2, v.z)]
 }
 
+/// The forces: the damped spring, aero drag, air damping, the ground's
+/// penalty and the acceleration.
 #[test]
-fn the_wgsl_laws_agree_with_the_f64_laws() {
+fn the_wgsl_forces_agree_with_the_f64_laws() {
     let Some(probe) = Probe::open() else {
         return;
     };
@@ -325,6 +327,15 @@ fn the_wgsl_laws_agree_with_the_f64_laws() {
             scale: force.length() * w + g.length(),
         }
     });
+}
+
+/// Symplectic Euler, explicit Euler and Verlet, pinned particles among them.
+#[test]
+fn the_wgsl_update_rules_agree_with_the_f64_laws() {
+    let Some(probe) = Probe::open() else {
+        return;
+    };
+    let f = f64::from;
     let update = cases(6, |r| {
         let w = if r.random_bool(0.1) {
             0.0
@@ -359,6 +370,16 @@ fn the_wgsl_laws_agree_with_the_f64_laws() {
             scale: u.length() + h * a.length(),
         }
     });
+}
+
+/// The sphere's surface point and contact with friction, the ground's
+/// friction and the speed limit.
+#[test]
+fn the_wgsl_contact_and_speed_limit_agree_with_the_f64_laws() {
+    let Some(probe) = Probe::open() else {
+        return;
+    };
+    let f = f64::from;
     let offset = cases(7, |r| {
         let d = if r.random_bool(0.02) {
             [0.0; 3]
