@@ -102,11 +102,17 @@ impl Stepper {
         if let Some(why) = GpuEngine::refusal(system.model()) {
             return cpu(format!("as the GPU engine cannot step this scene: {why}"));
         }
-        match GpuEngine::new(system) {
-            Ok(engine) if engine.adapter().software => cpu(format!(
-                "as the only adapter, {}, is a CPU adapter and no faster",
-                engine.adapter()
-            )),
+        // The adapter first: no buffers are made for one that is not taken.
+        let opened = match super::device::open() {
+            Ok((adapter, ..)) if adapter.software => {
+                return cpu(format!(
+                    "as the only adapter, {adapter}, is a CPU adapter and no faster"
+                ));
+            }
+            Ok(opened) => opened,
+            Err(e) => return cpu(format!("as no GPU engine could start: {e}")),
+        };
+        match GpuEngine::on(opened, system) {
             Ok(engine) => (Self::Gpu(Box::new(engine)), None),
             Err(e) => cpu(format!("as no GPU engine could start: {e}")),
         }

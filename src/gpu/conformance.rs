@@ -187,6 +187,11 @@ fn v4(v: [f32; 3], w: f32) -> [f32; 4] {
     [v[0], v[1], v[2], w]
 }
 
+/// A law of one axis applied to each of x, y and z.
+fn per_axis(law: impl Fn(usize) -> f64) -> DVec3 {
+    DVec3::new(law(0), law(1), law(2))
+}
+
 /// The three components of a vec3 result in vec4 number `slot`.
 fn at(slot: usize, v: DVec3) -> [(usize, f64); 3] {
     [(4 * slot, v.x), (4 * slot + 1, v.y), (4 * slot + 2, v.z)]
@@ -273,11 +278,7 @@ fn the_wgsl_forces_agree_with_the_f64_laws() {
     });
     conform(&probe, "air_damped", 2, 4.0, &damped, |c| {
         let (force, neg_c, v) = (d3(c[0]), f(c[1][0]), d3(c[2]));
-        let damped = DVec3::new(
-            laws::air_damped(force.x, neg_c, v.x),
-            laws::air_damped(force.y, neg_c, v.y),
-            laws::air_damped(force.z, neg_c, v.z),
-        );
+        let damped = per_axis(|i| laws::air_damped(force[i], neg_c, v[i]));
         Expected {
             values: at(0, damped).to_vec(),
             scale: force.length() - neg_c * v.length(),
@@ -317,11 +318,7 @@ fn the_wgsl_forces_agree_with_the_f64_laws() {
     });
     conform(&probe, "acceleration", 4, 4.0, &acceleration, |c| {
         let (force, w, g) = (d3(c[0]), f(c[1][0]), d3(c[2]));
-        let a = DVec3::new(
-            laws::acceleration(force.x, w, g.x),
-            laws::acceleration(force.y, w, g.y),
-            laws::acceleration(force.z, w, g.z),
-        );
+        let a = per_axis(|i| laws::acceleration(force[i], w, g[i]));
         Expected {
             values: at(0, a).to_vec(),
             scale: force.length() * w + g.length(),

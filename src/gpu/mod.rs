@@ -134,7 +134,17 @@ impl GpuEngine {
         if let Some(reason) = Self::refusal(system.model()) {
             return Err(GpuError::Unsupported(reason));
         }
-        let (adapter, device, queue) = device::open()?;
+        Self::on(device::open()?, system)
+    }
+
+    /// An engine for `system`'s model on a device [`device::open`] gave.
+    fn on(
+        (adapter, device, queue): (Adapter, wgpu::Device, wgpu::Queue),
+        system: &System,
+    ) -> Result<Self, GpuError> {
+        if let Some(reason) = Self::refusal(system.model()) {
+            return Err(GpuError::Unsupported(reason));
+        }
         let pipelines = pipeline::Pipelines::new(&device);
         Self::build((adapter, device, queue, pipelines), system)
     }

@@ -103,19 +103,17 @@ impl super::Session {
     pub(super) fn run_on_gpu(&mut self, steps: u32) -> Option<Result<(), Divergence>> {
         let build = self.builds;
         let engine = self.gpu.as_mut()?.engine_for(build, &self.system)?;
-        match engine.run(&mut self.system, u64::from(steps)) {
-            Ok(outcome) => Some(outcome),
-            Err(e @ (GpuError::Changed | GpuError::Unsupported(_))) => {
-                let gpu = self.gpu.as_mut()?;
-                gpu.key = None;
-                gpu.problem = Some(e.to_string());
-                None
-            }
-            Err(e) => {
-                let gpu = self.gpu.as_mut()?;
-                gpu.problem = Some(e.to_string());
-                None
-            }
+        let e = match engine.run(&mut self.system, u64::from(steps)) {
+            Ok(outcome) => return Some(outcome),
+            Err(e) => e,
+        };
+        let gpu = self.gpu.as_mut()?;
+        // A model the engine no longer fits is built for again at the next
+        // steps; a device that failed stays failed until an edit.
+        if matches!(e, GpuError::Changed | GpuError::Unsupported(_)) {
+            gpu.key = None;
         }
+        gpu.problem = Some(e.to_string());
+        None
     }
 }

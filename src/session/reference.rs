@@ -25,7 +25,7 @@ use crate::sim::{Integrator, System};
 pub const REFINE: u32 = 2;
 
 /// Most particles the reference takes: beyond this it cannot keep up with the
-/// shown run on one core at the scenes' steps (see `docs/physics.md`).
+/// shown run on one core at the scenes' steps (`docs/accuracy.md`).
 pub const MAX_PARTICLES: usize = 4096;
 
 /// Shown states sent that the reference has not compared yet, at most: a slower
@@ -188,8 +188,6 @@ pub struct Live {
     cost: f64,
     /// Why it does not compare now.
     stopped: Option<String>,
-    /// Whether shown states were passed over since the last answer.
-    behind: bool,
     /// Whether it stopped for falling [`MAX_LAG`] behind.
     fell_behind: bool,
     thread: Option<JoinHandle<()>>,
@@ -220,7 +218,6 @@ impl Live {
             ghost: Vec::new(),
             cost: 0.0,
             stopped: None,
-            behind: false,
             fell_behind: false,
             thread: Some(thread),
         })
@@ -249,8 +246,7 @@ impl Live {
             ));
             return;
         }
-        if self.in_flight >= MAX_IN_FLIGHT {
-            self.behind = true;
+        if self.behind() {
             return;
         }
         let job = Job::Compare {
@@ -288,7 +284,6 @@ impl Live {
         self.in_flight = 0;
         self.ghost.clear();
         self.cost = 0.0;
-        self.behind = false;
         self.fell_behind = false;
         let time = shown.time();
         // A time gone back (a reset, an undo) starts the plot again.
@@ -403,10 +398,10 @@ impl Live {
         self.fell_behind
     }
 
-    /// Whether shown states went by uncompared since the last answer: the
-    /// reference is slower than the shown run.
+    /// Whether it has as many states to compare as it takes: the next shown
+    /// states go by uncompared, the reference being slower than the shown run.
     pub fn behind(&self) -> bool {
-        self.behind && self.in_flight >= MAX_IN_FLIGHT
+        self.in_flight >= MAX_IN_FLIGHT
     }
 }
 
