@@ -131,6 +131,7 @@ macro_rules! forward {
 
 // After `forward!`, which the facade and the lattice kernel use.
 mod cloth;
+mod colliders;
 #[cfg(test)]
 mod conformance;
 mod contact;

@@ -149,6 +149,17 @@ impl ColliderMesh {
         self.bounding_radius
     }
 
+    /// The box (m, in its own frame) outside which no query finds a surface: its
+    /// grid's.
+    pub fn bounds(&self) -> (DVec3, DVec3) {
+        let size = DVec3::new(
+            self.cells[0] as f64,
+            self.cells[1] as f64,
+            self.cells[2] as f64,
+        );
+        (self.origin, self.origin + size * self.cell)
+    }
+
     /// How far a query reaches from the surface: the least half size that a move
     /// in one step may take without passing a particle.
     pub fn smallest_half_size(&self) -> f64 {

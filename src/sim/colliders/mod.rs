@@ -14,7 +14,7 @@ mod shapes;
 
 use std::sync::Arc;
 
-use glam::{DQuat, DVec3};
+use glam::{DMat3, DQuat, DVec3};
 
 pub use mesh::ColliderMesh;
 
@@ -63,6 +63,29 @@ impl Shape {
             Self::Box { half_extents } => half_extents.length(),
             Self::Capsule { a, b, radius } => a.length().max(b.length()) + radius,
             Self::Mesh(mesh) => mesh.bounding_radius(),
+        }
+    }
+
+    /// A box on the world's axes that holds the shape turned by `rotation`: its
+    /// least and greatest corners (m) as offsets from the frame's origin.
+    pub fn bounds(&self, rotation: DQuat) -> (DVec3, DVec3) {
+        // The half extents on the world's axes of a box of half extents `h`.
+        let turned = |h: DVec3| {
+            let m = DMat3::from_quat(rotation);
+            m.x_axis.abs() * h.x + m.y_axis.abs() * h.y + m.z_axis.abs() * h.z
+        };
+        let about = |centre: DVec3, half: DVec3| (centre - half, centre + half);
+        match self {
+            Self::Sphere { radius } => about(DVec3::ZERO, DVec3::splat(*radius)),
+            Self::Box { half_extents } => about(DVec3::ZERO, turned(*half_extents)),
+            Self::Capsule { a, b, radius } => {
+                let (a, b) = (rotation * *a, rotation * *b);
+                (a.min(b) - *radius, a.max(b) + *radius)
+            }
+            Self::Mesh(mesh) => {
+                let (lo, hi) = mesh.bounds();
+                about(rotation * (0.5 * (lo + hi)), turned(0.5 * (hi - lo)))
+            }
         }
     }
 
@@ -204,6 +227,17 @@ impl Collider {
     /// surface.
     pub fn touch(&self, x: DVec3, t: f64) -> Option<Touch> {
         self.touch_at(&self.pose(t), x)
+    }
+
+    /// A box on the world's axes (its least and greatest corners, m) outside
+    /// which no point touches it at `pose` ([`Self::touch_at`] is `None`): the
+    /// shape's bounds grown by the thickness, and by a billionth of their size
+    /// for the rounding of the turn.
+    pub fn bounds_at(&self, pose: &Pose) -> (DVec3, DVec3) {
+        let (lo, hi) = self.shape.bounds(pose.rotation);
+        let size = (hi - lo).max_element() + pose.center.abs().max_element();
+        let grow = DVec3::splat(self.thickness + 1e-9 * (1.0 + size));
+        (pose.center + lo - grow, pose.center + hi + grow)
     }
 
     /// [`Self::touch`] with the collider at `pose`.

@@ -208,3 +208,61 @@ fn rays_hit_the_solids() {
             .is_none()
     );
 }
+
+/// Every point a collider touches lies in its bounds (`Collider::bounds_at`),
+/// for each shape turned at random; and the bounds of a box on the world's axes
+/// are the box grown by the thickness, no looser.
+#[test]
+fn what_a_collider_touches_lies_in_its_bounds() {
+    let mut rng_state = 11u64;
+    let mut next = || {
+        rng_state = rng_state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng_state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let shapes = [
+        Shape::Sphere { radius: 0.3 },
+        Shape::Box {
+            half_extents: DVec3::new(0.4, 0.1, 0.2),
+        },
+        Shape::Capsule {
+            a: DVec3::new(-0.3, 0.1, 0.0),
+            b: DVec3::new(0.4, -0.1, 0.1),
+            radius: 0.1,
+        },
+        Shape::Mesh(std::sync::Arc::new(cube_mesh(0.05))),
+    ];
+    for shape in shapes {
+        let mut touched = 0;
+        for _ in 0..200 {
+            let mut collider =
+                Collider::at_rest(shape.clone(), DVec3::new(1.0, -2.0, 0.5), 0.5, 0.05);
+            let axis = DVec3::new(next(), next(), next()).normalize_or(DVec3::Y);
+            collider.rotation = DQuat::from_axis_angle(axis, 8.0 * next());
+            let pose = collider.pose(0.0);
+            let (lo, hi) = collider.bounds_at(&pose);
+            for _ in 0..100 {
+                let x = pose.center + DVec3::new(next(), next(), next()) * 2.0;
+                if collider.touch_at(&pose, x).is_some() {
+                    touched += 1;
+                    assert!(
+                        x.cmpge(lo).all() && x.cmple(hi).all(),
+                        "{}: {x} out of {lo}..{hi}",
+                        shape.name()
+                    );
+                }
+            }
+        }
+        assert!(
+            touched > 100,
+            "{}: only {touched} points touched",
+            shape.name()
+        );
+    }
+    let half = DVec3::new(0.4, 0.1, 0.2);
+    let flat = Collider::at_rest(Shape::Box { half_extents: half }, DVec3::ZERO, 0.5, 0.05);
+    let (lo, hi) = flat.bounds_at(&flat.pose(0.0));
+    assert!((hi - (half + 0.05)).abs().max_element() < 1e-8, "{hi}");
+    assert!((lo + (half + 0.05)).abs().max_element() < 1e-8, "{lo}");
+}

@@ -137,6 +137,15 @@ impl GridCloth {
             Kernels::Double(k) => k.steps_in_wind(dt, n, Some((start_time, wind))),
         }
     }
+    /// Sets the colliders besides the ground and the scene's sphere, as they are
+    /// at simulated time `time` (s), the start of the next step: each step
+    /// resolves their contact after the others' (`laws::collide`).
+    pub fn set_colliders(&mut self, colliders: &[crate::sim::Collider], time: f64) {
+        match &mut self.0 {
+            Kernels::Single(k) => k.solids.set(colliders, time),
+            Kernels::Double(k) => k.solids.set(colliders, time),
+        }
+    }
     forward!(
         /// Copy the positions (m) of particles `0..out.len()` into `out`.
         fn positions_into(&self, out: &mut [DVec3])

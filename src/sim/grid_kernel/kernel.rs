@@ -4,6 +4,7 @@
 
 use glam::DVec3;
 
+use super::colliders::Solids;
 use super::frame::{self, Frame};
 use super::{
     Band, Buf, Grid, GridCloth, GridSpec, PARALLEL_MIN_PARTICLES, Params, Real, SimdLevel, State,
@@ -44,6 +45,8 @@ pub(super) struct Kernel<E: Real> {
     pub(super) torn_log: Vec<(usize, usize)>,
     /// The tear scan's verdict per stencil direction and row (scratch).
     pub(super) tear_rows: Vec<bool>,
+    /// The colliders besides the ground and the sphere, and the time.
+    pub(super) solids: Solids<E>,
 }
 
 impl<E: Real> std::fmt::Debug for Kernel<E> {
@@ -135,6 +138,7 @@ impl<E: Real> Kernel<E> {
             torn: None,
             torn_log: Vec::new(),
             tear_rows: Vec::new(),
+            solids: Solids::default(),
             grid,
             spec,
         }

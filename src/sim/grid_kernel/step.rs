@@ -63,6 +63,7 @@ impl<E: Real> Kernel<E> {
                 }
                 self.one_step(dt, parallel, duo);
                 self.constrain(dt, parallel, duo);
+                self.solids.time += dt;
             }
         };
         run_in_pool(pool.as_ref(), spin, run);
@@ -185,6 +186,7 @@ impl<E: Real> Kernel<E> {
         if contact.is_active() && self.params.sphere.is_none() && !self.contact_in_step() {
             self.resolve_contact(&contact, parallel, duo);
         }
+        self.collide_pass(dt, parallel, duo);
         if let Some(max_speed) = self.spec.max_speed {
             self.limit_speed(max_speed);
         }

@@ -1,0 +1,237 @@
+//! The colliders of [`crate::sim::colliders`] (boxes, capsules, meshes, moving
+//! spheres) on the grid kernel, after the scene's ground and sphere as in the
+//! f64 engine: each free particle within a collider's bounds is decoded to
+//! metres and given [`laws::collide`], the law every engine calls. A vectorised
+//! scan of each block of a row against the bounds, in the stored coordinates,
+//! skips the others: a particle outside every collider's bounds comes back from
+//! the law unchanged ([`Collider::bounds_at`]).
+
+use glam::DVec3;
+
+use super::frame::{COLLIDER_RANGE, RANGE, whole_units};
+use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real};
+use crate::sim::colliders::{Collider, Pose, poses_at};
+use crate::sim::duo::Duo;
+use crate::sim::laws::collide;
+
+/// Particles tested against the bounds together, one per lane.
+const LANES: usize = 16;
+
+/// The kernel's colliders and where they are, kept between steps (nothing
+/// allocates once their number stops growing).
+#[derive(Debug, Default)]
+pub(super) struct Solids<E> {
+    colliders: Vec<Collider>,
+    poses: Vec<Pose>,
+    bounds: Vec<Bounds<E>>,
+    /// Simulated time (s) at the start of the next step.
+    pub(super) time: f64,
+}
+
+/// A collider's bounds on the world's axes, as stored.
+#[derive(Clone, Copy, Debug)]
+struct Bounds<E> {
+    lo: [E; 3],
+    hi: [E; 3],
+}
+
+impl<E: Real> Solids<E> {
+    /// Takes `colliders` as they are at simulated time `time` (s), the start of
+    /// the next step (reusing the vector's room and the meshes' `Arc`s).
+    pub(super) fn set(&mut self, colliders: &[Collider], time: f64) {
+        self.colliders.truncate(colliders.len());
+        let kept = self.colliders.len();
+        self.colliders.clone_from_slice(&colliders[..kept]);
+        self.colliders.extend_from_slice(&colliders[kept..]);
+        self.time = time;
+    }
+}
+
+impl<E: Real> Kernel<E> {
+    /// The colliders' contact after a step of `dt`, at their poses at its end, on
+    /// the pool's two threads for a large grid (each particle's contact is its
+    /// own: the same result).
+    pub(super) fn collide_pass(&mut self, dt: f64, parallel: bool, duo: Option<&Duo>) {
+        let solids = &mut self.solids;
+        if solids.colliders.is_empty() {
+            return;
+        }
+        poses_at(&solids.colliders, solids.time + dt, &mut solids.poses);
+        let frame = self.frame;
+        solids.bounds.clear();
+        let mut everywhere = false;
+        for (collider, pose) in solids.colliders.iter().zip(&solids.poses) {
+            match stored_bounds(&frame, collider.bounds_at(pose)) {
+                Some(Some(b)) => solids.bounds.push(b),
+                Some(None) => {}
+                None => everywhere = true,
+            }
+        }
+        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
+        let ctx = CollideRows {
+            width: w,
+            stride: st,
+            inv_mass: self.inv_mass.as_slice(),
+            frame,
+            verlet: self.params.verlet,
+            colliders: &solids.colliders,
+            poses: &solids.poses,
+            bounds: &solids.bounds,
+            everywhere,
+            h: dt,
+        };
+        let out = self.cur.rows();
+        let split = h / 2;
+        if (parallel || duo.is_some()) && w * h >= PARALLEL_MIN_PARTICLES {
+            let (mut first, mut second) = out.split_at(split * st);
+            let mut second_half = || ctx.resolve(&mut second, split, split..h);
+            let first_half = || ctx.resolve(&mut first, 0, 0..split);
+            match duo {
+                Some(duo) => duo.fork(&mut second_half, first_half),
+                None => {
+                    rayon::join(first_half, second_half);
+                }
+            }
+        } else {
+            ctx.resolve(&mut { out }, 0, 0..h);
+        }
+    }
+}
+
+/// The bounds `(lo, hi)` (m) as stored, each coordinate rounded outwards or
+/// not at all (encoding is monotonic, so a particle inside in metres is inside
+/// as stored): `Some(None)` when no particle the frame holds can be inside,
+/// `None` when the bounds cannot be compared in fixed point (every particle is
+/// then tested).
+fn stored_bounds<E: Real>(frame: &Frame, (lo, hi): (DVec3, DVec3)) -> Option<Option<Bounds<E>>> {
+    if !frame.fixed {
+        return Some(Some(Bounds {
+            lo: std::array::from_fn(|a| E::of(lo[a])),
+            hi: std::array::from_fn(|a| E::of(hi[a])),
+        }));
+    }
+    let (held, range) = (RANGE * frame.unit, COLLIDER_RANGE);
+    let mut bounds = Bounds {
+        lo: [E::ZERO; 3],
+        hi: [E::ZERO; 3],
+    };
+    for a in 0..3 {
+        let (l, h) = (lo[a] - frame.centre[a], hi[a] - frame.centre[a]);
+        if !(l.is_finite() && h.is_finite()) {
+            return None;
+        }
+        if l > held || h < -held {
+            return Some(None);
+        }
+        // In whole units, outwards, clamped within the colliders' range: there a
+        // particle's difference from them is exact, and they are still outside
+        // every particle the frame holds.
+        let units = |q: f64| whole_units(q.clamp(-range, range));
+        bounds.lo[a] = units((l / frame.unit).floor());
+        bounds.hi[a] = units((h / frame.unit).ceil());
+    }
+    Some(Some(bounds))
+}
+
+/// What the colliders' pass over rows reads ([`Kernel::collide_pass`]).
+struct CollideRows<'a, E> {
+    width: usize,
+    stride: usize,
+    inv_mass: &'a [E],
+    frame: Frame,
+    verlet: bool,
+    colliders: &'a [Collider],
+    poses: &'a [Pose],
+    bounds: &'a [Bounds<E>],
+    /// Test every free particle (bounds that fixed point cannot compare).
+    everywhere: bool,
+    h: f64,
+}
+
+impl<E: Real> CollideRows<'_, E> {
+    /// The contact of the particles of rows `rows`, whose arrays `out` holds from
+    /// row `first` on. A row's last block reads past its last column, into the
+    /// grid's ghost columns; lanes past it are never inside.
+    fn resolve(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>) {
+        if self.frame.fixed {
+            self.resolve_in::<true>(out, first, rows);
+        } else {
+            self.resolve_in::<false>(out, first, rows);
+        }
+    }
+
+    fn resolve_in<const FIXED: bool>(
+        &self,
+        out: &mut Out<E>,
+        first: usize,
+        rows: impl Iterator<Item = usize>,
+    ) {
+        for r in rows {
+            let at = (r - first) * self.stride;
+            for c in (0..self.width).step_by(LANES) {
+                let inside = self.inside::<FIXED>(out, r * self.stride + c, at + c);
+                for (l, &inside) in inside.iter().enumerate() {
+                    if inside && c + l < self.width {
+                        self.collide_one(out, at + c + l);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Which of the `LANES` particles from array index `i` (written at `j` in
+    /// `out`) are free and inside some collider's bounds.
+    #[inline(always)]
+    fn inside<const FIXED: bool>(&self, out: &Out<E>, i: usize, j: usize) -> [bool; LANES] {
+        let w = &self.inv_mass[i..i + LANES];
+        let mut inside = [self.everywhere; LANES];
+        for b in self.bounds {
+            let mut each = [true; LANES];
+            for a in 0..3 {
+                let p = &out.0[a][j..j + LANES];
+                for l in 0..LANES {
+                    each[l] &= if FIXED {
+                        (E::fixed_sub(p[l], b.lo[a]) >= E::ZERO)
+                            & (E::fixed_sub(b.hi[a], p[l]) >= E::ZERO)
+                    } else {
+                        (p[l] >= b.lo[a]) & (p[l] <= b.hi[a])
+                    };
+                }
+            }
+            for l in 0..LANES {
+                inside[l] |= each[l];
+            }
+        }
+        std::array::from_fn(|l| inside[l] & (w[l] > E::ZERO))
+    }
+
+    /// The law on one particle (at `j` in `out`), decoded to
+    /// metres: the push moves its stored position (rounded to a whole unit in
+    /// fixed point), and its velocity (and Verlet's update velocity) gets the
+    /// change as computed.
+    fn collide_one(&self, out: &mut Out<E>, j: usize) {
+        let frame = &self.frame;
+        let x = DVec3::from_array(std::array::from_fn(|a| frame.decode(out.0[a][j], a)));
+        let v = DVec3::from_array(std::array::from_fn(|a| out.0[3 + a][j].f64()));
+        let (x_new, v_new) = collide(self.colliders, self.poses, x, v, self.h);
+        if x_new == x && v_new == v {
+            return;
+        }
+        for a in 0..3 {
+            let push = x_new[a] - x[a];
+            if push != 0.0 {
+                let p = out.0[a][j];
+                out.0[a][j] = if frame.fixed {
+                    whole_units(p.fixed_value() + (push / frame.unit).round())
+                } else {
+                    E::of(x_new[a])
+                };
+            }
+            let dv = E::of(v_new[a] - v[a]);
+            out.0[3 + a][j] += dv;
+            if self.verlet {
+                out.0[6 + a][j] += dv;
+            }
+        }
+    }
+}
