@@ -15,6 +15,9 @@ pub struct ColliderMesh {
     triangles: Vec<[u32; 3]>,
     /// Unit normal of each triangle.
     normals: Vec<DVec3>,
+    /// A ball (centre, radius in m) holding each triangle: a query skips the
+    /// triangles whose ball is farther than its nearest so far.
+    balls: Vec<(DVec3, f64)>,
     /// The grid's lowest corner (m), its cell size (m) and its cells per axis.
     origin: DVec3,
     cell: f64,
@@ -68,11 +71,22 @@ impl ColliderMesh {
         while count(cell).iter().product::<usize>() > MAX_CELLS {
             cell *= 1.25;
         }
+        let balls = triangles
+            .iter()
+            .map(|t| {
+                let centre = (corner(t, 0) + corner(t, 1) + corner(t, 2)) / 3.0;
+                let radius = (0..3)
+                    .map(|k| corner(t, k).distance(centre))
+                    .fold(0.0, f64::max);
+                (centre, radius)
+            })
+            .collect();
         let bounding_radius = positions.iter().map(|p| p.length()).fold(0.0, f64::max);
         let mut mesh = Self {
             positions,
             triangles,
             normals,
+            balls,
             origin: lo,
             cell,
             cells: count(cell),
@@ -176,8 +190,19 @@ impl ColliderMesh {
         // The nearest triangle; among those as near (an edge or a corner), the one
         // whose plane is farthest, which tells the side.
         let mut best: Option<(f64, f64, DVec3, usize)> = None;
+        // Past the cells' reach no triangle changes the answer (the nearest that
+        // far gives none); the margins are far above the rounding of the gap.
+        let far2 = self.reach * self.reach * (1.0 + 1e-9);
         for &t in list {
             let t = t as usize;
+            // A triangle whose ball is farther than the nearest so far (or than
+            // the reach) has no point as near: skipped, the answer unchanged.
+            let limit2 = best.map_or(far2, |(b2, ..)| b2.min(far2)) * (1.0 + 1e-9);
+            let (centre, radius) = self.balls[t];
+            let gap = p.distance(centre) - radius;
+            if gap > 0.0 && gap * gap > limit2 {
+                continue;
+            }
             let [a, b, c] = self.triangles[t].map(|i| self.positions[i as usize]);
             let q = closest_on_triangle(p, a, b, c);
             let d2 = (p - q).length_squared();
