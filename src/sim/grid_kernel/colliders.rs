@@ -8,6 +8,7 @@
 
 use glam::DVec3;
 
+use super::contact::in_halves;
 use super::frame::{COLLIDER_RANGE, RANGE, whole_units};
 use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real};
 use crate::sim::colliders::{Collider, Pose, poses_at};
@@ -80,21 +81,10 @@ impl<E: Real> Kernel<E> {
             everywhere,
             h: dt,
         };
-        let out = self.cur.rows();
-        let split = h / 2;
-        if (parallel || duo.is_some()) && w * h >= PARALLEL_MIN_PARTICLES {
-            let (mut first, mut second) = out.split_at(split * st);
-            let mut second_half = || ctx.resolve(&mut second, split, split..h);
-            let first_half = || ctx.resolve(&mut first, 0, 0..split);
-            match duo {
-                Some(duo) => duo.fork(&mut second_half, first_half),
-                None => {
-                    rayon::join(first_half, second_half);
-                }
-            }
-        } else {
-            ctx.resolve(&mut { out }, 0, 0..h);
-        }
+        let split = (parallel || duo.is_some()) && w * h >= PARALLEL_MIN_PARTICLES;
+        in_halves(self.cur.rows(), (h, st), split, duo, |out, first, rows| {
+            ctx.resolve(out, first, rows)
+        });
     }
 }
 

@@ -28,11 +28,7 @@ impl<E: Real> Kernel<E> {
         parallel: bool,
         duo: Option<&Duo>,
     ) {
-        let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
-        let large = w * h >= PARALLEL_MIN_PARTICLES;
-        let split = h / 2;
-        // In two halves of the rows on two threads when allowed (each particle's
-        // resolution is its own: the same results).
+        let (w, h) = (self.grid.w, self.grid.h);
         let ctx = ContactRows::new(
             contact,
             (self.grid, self.inv_mass.as_slice()),
@@ -40,19 +36,39 @@ impl<E: Real> Kernel<E> {
             self.simd,
             (self.params.verlet, false),
         );
-        let out = self.cur.rows();
-        if (parallel || duo.is_some()) && large {
-            let (mut first, mut second) = out.split_at(split * st);
-            let mut second_half = || ctx.resolve(&mut second, split, split..h);
-            let first_half = || ctx.resolve(&mut first, 0, 0..split);
-            match duo {
-                Some(duo) => duo.fork(&mut second_half, first_half),
-                None => {
-                    rayon::join(first_half, second_half);
-                }
-            }
-        } else {
-            ctx.resolve(&mut { out }, 0, 0..h);
+        let split = (parallel || duo.is_some()) && w * h >= PARALLEL_MIN_PARTICLES;
+        let stride = self.grid.stride;
+        in_halves(
+            self.cur.rows(),
+            (h, stride),
+            split,
+            duo,
+            |out, first, rows| ctx.resolve(out, first, rows),
+        );
+    }
+}
+
+/// `resolve(out, first, rows)` over all `h` rows (of `stride` array indices) of
+/// `out`: with `split`, in two halves of the rows on two threads (the pool's, or
+/// `duo`'s), for passes in which each particle's result is its own.
+pub(super) fn in_halves<E: Send>(
+    out: Out<E>,
+    (h, stride): (usize, usize),
+    split: bool,
+    duo: Option<&Duo>,
+    resolve: impl Fn(&mut Out<E>, usize, std::ops::Range<usize>) + Sync,
+) {
+    if !split {
+        return resolve(&mut { out }, 0, 0..h);
+    }
+    let half = h / 2;
+    let (mut first, mut second) = out.split_at(half * stride);
+    let mut second_half = || resolve(&mut second, half, half..h);
+    let first_half = || resolve(&mut first, 0, 0..half);
+    match duo {
+        Some(duo) => duo.fork(&mut second_half, first_half),
+        None => {
+            rayon::join(first_half, second_half);
         }
     }
 }
