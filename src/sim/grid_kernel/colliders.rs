@@ -63,9 +63,9 @@ impl<E: Real> Kernel<E> {
         let mut everywhere = false;
         for (collider, pose) in solids.colliders.iter().zip(&solids.poses) {
             match stored_bounds(&frame, collider.bounds_at(pose)) {
-                Some(Some(b)) => solids.bounds.push(b),
-                Some(None) => {}
-                None => everywhere = true,
+                Stored::Bounds(b) => solids.bounds.push(b),
+                Stored::OutOfReach => {}
+                Stored::Everywhere => everywhere = true,
             }
         }
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
@@ -88,17 +88,24 @@ impl<E: Real> Kernel<E> {
     }
 }
 
+/// A collider's bounds as the pass tests them.
+enum Stored<E> {
+    Bounds(Bounds<E>),
+    /// No particle the frame holds can be inside.
+    OutOfReach,
+    /// Not comparable in fixed point (not finite): every particle is tested.
+    Everywhere,
+}
+
 /// The bounds `(lo, hi)` (m) as stored, each coordinate rounded outwards or
 /// not at all (encoding is monotonic, so a particle inside in metres is inside
-/// as stored): `Some(None)` when no particle the frame holds can be inside,
-/// `None` when the bounds cannot be compared in fixed point (every particle is
-/// then tested).
-fn stored_bounds<E: Real>(frame: &Frame, (lo, hi): (DVec3, DVec3)) -> Option<Option<Bounds<E>>> {
+/// as stored).
+fn stored_bounds<E: Real>(frame: &Frame, (lo, hi): (DVec3, DVec3)) -> Stored<E> {
     if !frame.fixed {
-        return Some(Some(Bounds {
+        return Stored::Bounds(Bounds {
             lo: std::array::from_fn(|a| E::of(lo[a])),
             hi: std::array::from_fn(|a| E::of(hi[a])),
-        }));
+        });
     }
     let (held, range) = (RANGE * frame.unit, COLLIDER_RANGE);
     let mut bounds = Bounds {
@@ -108,10 +115,10 @@ fn stored_bounds<E: Real>(frame: &Frame, (lo, hi): (DVec3, DVec3)) -> Option<Opt
     for a in 0..3 {
         let (l, h) = (lo[a] - frame.centre[a], hi[a] - frame.centre[a]);
         if !(l.is_finite() && h.is_finite()) {
-            return None;
+            return Stored::Everywhere;
         }
         if l > held || h < -held {
-            return Some(None);
+            return Stored::OutOfReach;
         }
         // In whole units, outwards, clamped within the colliders' range: there a
         // particle's difference from them is exact, and they are still outside
@@ -120,7 +127,7 @@ fn stored_bounds<E: Real>(frame: &Frame, (lo, hi): (DVec3, DVec3)) -> Option<Opt
         bounds.lo[a] = units((l / frame.unit).floor());
         bounds.hi[a] = units((h / frame.unit).ceil());
     }
-    Some(Some(bounds))
+    Stored::Bounds(bounds)
 }
 
 /// What the colliders' pass over rows reads ([`Kernel::collide_pass`]).
