@@ -20,7 +20,7 @@
 use glam::DVec3;
 
 use super::colliders::poses_at;
-use super::laws::{Contact, XpbdSpring, collide, length_correction, xpbd_correction};
+use super::laws::{Contact, V3, XpbdSpring, collide, length_correction, xpbd_correction};
 use super::{Integrator, LatticeShape, Model, State, Workspace};
 
 /// Applies every constraint the model has, then updates velocities.
@@ -85,7 +85,8 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
             if active {
                 (*x, *v) = contact.resolve(x_in, v_in, w);
             }
-            (*x, *v) = collide(colliders, poses, *x, *v, h);
+            let (x_out, v_out) = collide(colliders, poses, V3::from(*x), V3::from(*v), h);
+            (*x, *v) = (x_out.into(), v_out.into());
             // Verlet reads the push from the positions; the friction's change of
             // velocity goes into its previous position.
             if let Some(prev) = verlet.get_mut(i) {

@@ -62,6 +62,38 @@ pub(crate) trait Lanes:
     fn keep_if_positive(self, a: Self) -> Self {
         Self::select(self.gt(self.splat(0.0)), a, self.splat(0.0))
     }
+    /// The greater of the two (`other` on ties and NaN).
+    #[inline(always)]
+    fn max(self, other: Self) -> Self {
+        Self::select(self.gt(other), self, other)
+    }
+    /// The lesser of the two (`other` on ties and NaN).
+    #[inline(always)]
+    fn min(self, other: Self) -> Self {
+        Self::select(self.lt(other), self, other)
+    }
+    /// `-self` where `self < 0`, else `self`.
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Self::select(self.lt(self.splat(0.0)), self.splat(0.0) - self, self)
+    }
+    /// -1 where `self < 0`, else 1.
+    #[inline(always)]
+    fn sign(self) -> Self {
+        Self::select(self.lt(self.splat(0.0)), self.splat(-1.0), self.splat(1.0))
+    }
+
+    /// Yes where both say yes.
+    fn both(a: Self::Mask, b: Self::Mask) -> Self::Mask;
+
+    /// How many lanes there are.
+    const WIDTH: usize;
+    /// Lane `i`'s value, as f64.
+    fn lane(self, i: usize) -> f64;
+    /// The lanes with lane `i` set to `x`.
+    fn with_lane(self, i: usize, x: f64) -> Self;
+    /// Whether lane `i` of `m` says yes.
+    fn lane_says(m: Self::Mask, i: usize) -> bool;
 }
 
 impl Lanes for f64 {
@@ -99,6 +131,24 @@ impl Lanes for f64 {
     fn select(m: bool, a: Self, b: Self) -> Self {
         if m { a } else { b }
     }
+    #[inline(always)]
+    fn both(a: bool, b: bool) -> bool {
+        a & b
+    }
+
+    const WIDTH: usize = 1;
+    #[inline(always)]
+    fn lane(self, _: usize) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn with_lane(self, _: usize, x: f64) -> Self {
+        x
+    }
+    #[inline(always)]
+    fn lane_says(m: bool, _: usize) -> bool {
+        m
+    }
 }
 
 /// A float a lane holds: `f64` or `f32`.
@@ -121,6 +171,8 @@ pub(crate) trait LaneFloat:
     const YES: Self::Word;
     /// `x` rounded to this float.
     fn of_f64(x: f64) -> Self;
+    /// This float as f64 (exact).
+    fn to_f64(self) -> f64;
     fn root(self) -> Self;
     fn is_nan(self) -> bool;
     fn word(self) -> Self::Word;
@@ -152,6 +204,10 @@ macro_rules! lane_float {
             #[inline(always)]
             fn of_f64(x: f64) -> Self {
                 x as $t
+            }
+            #[inline(always)]
+            fn to_f64(self) -> f64 {
+                f64::from(self)
             }
             #[inline(always)]
             fn root(self) -> Self {
@@ -250,6 +306,25 @@ impl<F: LaneFloat, const N: usize> Lanes for Floats<F, N> {
     fn select(m: Self::Mask, a: Self, b: Self) -> Self {
         Floats(std::array::from_fn(|i| F::pick(m[i], a.0[i], b.0[i])))
     }
+    #[inline(always)]
+    fn both(a: Self::Mask, b: Self::Mask) -> Self::Mask {
+        std::array::from_fn(|i| a[i] & b[i])
+    }
+
+    const WIDTH: usize = N;
+    #[inline(always)]
+    fn lane(self, i: usize) -> f64 {
+        self.0[i].to_f64()
+    }
+    #[inline(always)]
+    fn with_lane(mut self, i: usize, x: f64) -> Self {
+        self.0[i] = F::of_f64(x);
+        self
+    }
+    #[inline(always)]
+    fn lane_says(m: Self::Mask, i: usize) -> bool {
+        m[i] != F::NO
+    }
 }
 
 /// A 3-vector of lanes, with the operations of [`DVec3`] that the shared physics
@@ -313,6 +388,18 @@ impl<T: Lanes> V3<T> {
             y: self.y / s,
             z: self.z / s,
         }
+    }
+    /// Turned by the unit quaternion `q` (glam's formula: `v (w² - |b|²) + 2 (v·b)
+    /// b + 2 w (b × v)`, with `b` the quaternion's vector part).
+    #[inline(always)]
+    pub fn rotated(self, q: glam::DQuat) -> Self {
+        let like = self.x;
+        let b = V3::splat(like, DVec3::new(q.x, q.y, q.z));
+        let b2 = q.x * q.x + q.y * q.y + q.z * q.z;
+        let along = self.dot(b) * like.splat(2.0);
+        self.scale(like.splat(q.w * q.w - b2))
+            + b.scale(along)
+            + b.cross(self).scale(like.splat(2.0 * q.w))
     }
     /// `a` in the lanes where `m` says yes, else `b`.
     #[inline(always)]

@@ -16,6 +16,8 @@ use std::sync::Arc;
 
 use glam::{DMat3, DQuat, DVec3};
 
+use crate::sim::lanes::{Lanes, V3};
+
 pub use mesh::ColliderMesh;
 
 /// A collider's geometry, in its own frame (centred on its pose's origin).
@@ -104,11 +106,41 @@ impl Shape {
     /// the surface than `reach` outside it (anywhere inside for the analytic
     /// shapes; within `reach` of the surface for a mesh).
     pub fn surface(&self, p: DVec3, reach: f64) -> Option<(f64, DVec3)> {
+        let (distance, normal) = self.surface_lanes(V3::from(p), true, reach);
+        (distance < reach).then(|| (distance, normal.into()))
+    }
+
+    /// [`Self::surface`] of a block of points, for the lanes `near` says (the
+    /// others' answers are not read): the distance, or infinity for a mesh's
+    /// lane that it does not reach, and the normal.
+    #[inline(always)]
+    pub(crate) fn surface_lanes<T: Lanes>(
+        &self,
+        p: V3<T>,
+        near: T::Mask,
+        reach: f64,
+    ) -> (T, V3<T>) {
         match self {
-            Self::Sphere { radius } => shapes::sphere(p, *radius, reach),
-            Self::Box { half_extents } => shapes::cuboid(p, *half_extents, reach),
-            Self::Capsule { a, b, radius } => shapes::capsule(p, (*a, *b), *radius, reach),
-            Self::Mesh(mesh) => mesh.surface(p, reach),
+            Self::Sphere { radius } => shapes::sphere(p, *radius),
+            Self::Box { half_extents } => shapes::cuboid(p, *half_extents),
+            Self::Capsule { a, b, radius } => shapes::capsule(p, (*a, *b), *radius),
+            // Triangles are not lanes: each lane's query on its own.
+            Self::Mesh(mesh) => {
+                let mut distance = p.x.splat(f64::INFINITY);
+                let mut normal = V3::splat(p.x, DVec3::Y);
+                for i in (0..T::WIDTH).filter(|&i| T::lane_says(near, i)) {
+                    let at = DVec3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
+                    if let Some((d, n)) = mesh.surface(at, reach) {
+                        distance = distance.with_lane(i, d);
+                        normal = V3 {
+                            x: normal.x.with_lane(i, n.x),
+                            y: normal.y.with_lane(i, n.y),
+                            z: normal.z.with_lane(i, n.z),
+                        };
+                    }
+                }
+                (distance, normal)
+            }
         }
     }
 }
@@ -164,6 +196,16 @@ pub struct Touch {
     pub normal: DVec3,
     /// Velocity (m/s) of the solid's material at the point.
     pub surface_velocity: DVec3,
+}
+
+/// [`Touch`] for a block of points: its fields in the lanes `touched` says (a
+/// depth of 0 in the others).
+#[derive(Clone, Copy)]
+pub(crate) struct Touches<T: Lanes> {
+    pub touched: T::Mask,
+    pub depth: T,
+    pub normal: V3<T>,
+    pub surface_velocity: V3<T>,
 }
 
 impl Collider {
@@ -243,18 +285,36 @@ impl Collider {
     /// [`Self::touch`] with the collider at `pose`.
     #[inline]
     pub fn touch_at(&self, pose: &Pose, x: DVec3) -> Option<Touch> {
-        let offset = x - pose.center;
+        self.touches(pose, V3::from(x)).map(|t| Touch {
+            depth: t.depth,
+            normal: t.normal.into(),
+            surface_velocity: t.surface_velocity.into(),
+        })
+    }
+
+    /// [`Self::touch_at`] of a block of points `x` (m): `None` when none touches.
+    #[inline(always)]
+    pub(crate) fn touches<T: Lanes>(&self, pose: &Pose, x: V3<T>) -> Option<Touches<T>> {
+        let like = x.x;
+        let offset = x - V3::splat(like, pose.center);
         let reach = self.shape.bounding_radius() + self.thickness;
-        if offset.length_squared() >= reach * reach {
+        let near = offset.dot(offset).lt(like.splat(reach * reach));
+        if !T::any(near) {
             return None;
         }
-        let local = pose.inverse * offset;
-        let (distance, normal) = self.shape.surface(local, self.thickness)?;
-        let depth = self.thickness - distance;
-        (depth > 0.0).then(|| Touch {
-            depth,
-            normal: pose.rotation * normal,
-            surface_velocity: self.velocity + self.angular_velocity.cross(offset),
+        let local = offset.rotated(pose.inverse);
+        let (distance, normal) = self.shape.surface_lanes(local, near, self.thickness);
+        let depth = like.splat(self.thickness) - distance;
+        let touched = T::both(near, depth.gt(like.splat(0.0)));
+        if !T::any(touched) {
+            return None;
+        }
+        let spin = V3::splat(like, self.angular_velocity).cross(offset);
+        Some(Touches {
+            touched,
+            depth: T::select(touched, depth, like.splat(0.0)),
+            normal: normal.rotated(pose.rotation),
+            surface_velocity: V3::splat(like, self.velocity) + spin,
         })
     }
 

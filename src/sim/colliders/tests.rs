@@ -4,30 +4,48 @@
 use glam::{DQuat, DVec3};
 
 use super::mesh::closest_on_triangle;
-use super::shapes;
 use super::*;
 
 const EPS: f64 = 1e-12;
+
+/// A box's surface ([`Shape::surface`]) at `p`, within `reach`.
+fn cuboid(p: DVec3, half: DVec3, reach: f64) -> Option<(f64, DVec3)> {
+    Shape::Box { half_extents: half }.surface(p, reach)
+}
+
+/// A capsule of radius 0.2 about `ends`: its surface at `p`.
+fn capsule(p: DVec3, (a, b): (DVec3, DVec3)) -> Option<(f64, DVec3)> {
+    Shape::Capsule { a, b, radius: 0.2 }.surface(p, 1.0)
+}
+
+/// The law ([`crate::sim::laws::collide`]) on a particle at `x` with velocity
+/// `v`, `collider` alone at time 0, after a step `h`.
+fn respond(collider: &Collider, x: DVec3, v: DVec3, h: f64) -> (DVec3, DVec3) {
+    let pose = [collider.pose(0.0)];
+    let (x, v) =
+        crate::sim::laws::collide(std::slice::from_ref(collider), &pose, x.into(), v.into(), h);
+    (x.into(), v.into())
+}
 
 /// A box's distance outside a face, an edge and a corner, and inside from the
 /// nearest face, each worked by hand.
 #[test]
 fn box_distances_and_normals() {
     let half = DVec3::new(0.5, 0.2, 0.3);
-    let (d, n) = shapes::cuboid(DVec3::new(0.0, 0.25, 0.0), half, 1.0).unwrap();
+    let (d, n) = cuboid(DVec3::new(0.0, 0.25, 0.0), half, 1.0).unwrap();
     assert!((d - 0.05).abs() < EPS && n == DVec3::Y, "{d} {n}");
     // Past an edge: (0.6 - 0.5, 0.3 - 0.2) away, along their diagonal.
-    let (d, n) = shapes::cuboid(DVec3::new(0.6, 0.3, 0.0), half, 1.0).unwrap();
+    let (d, n) = cuboid(DVec3::new(0.6, 0.3, 0.0), half, 1.0).unwrap();
     assert!((d - 0.02f64.sqrt()).abs() < EPS, "{d}");
     assert!((n - DVec3::new(1.0, 1.0, 0.0).normalize()).length() < EPS);
-    let (d, _) = shapes::cuboid(DVec3::new(-0.6, -0.3, -0.4), half, 1.0).unwrap();
+    let (d, _) = cuboid(DVec3::new(-0.6, -0.3, -0.4), half, 1.0).unwrap();
     assert!((d - 0.03f64.sqrt()).abs() < EPS, "{d}");
     // Inside: 0.15 from the top face, farther from the others.
-    let (d, n) = shapes::cuboid(DVec3::new(0.1, 0.05, 0.0), half, 1.0).unwrap();
+    let (d, n) = cuboid(DVec3::new(0.1, 0.05, 0.0), half, 1.0).unwrap();
     assert!((d + 0.15).abs() < EPS && n == DVec3::Y, "{d} {n}");
-    let (d, n) = shapes::cuboid(DVec3::new(-0.45, 0.0, 0.0), half, 1.0).unwrap();
+    let (d, n) = cuboid(DVec3::new(-0.45, 0.0, 0.0), half, 1.0).unwrap();
     assert!((d + 0.05).abs() < EPS && n == -DVec3::X, "{d} {n}");
-    assert!(shapes::cuboid(DVec3::new(0.0, 0.25, 0.0), half, 0.04).is_none());
+    assert!(cuboid(DVec3::new(0.0, 0.25, 0.0), half, 0.04).is_none());
 }
 
 /// A capsule is a ball about its axis's nearest point: beside the axis, past an
@@ -35,11 +53,11 @@ fn box_distances_and_normals() {
 #[test]
 fn capsule_distances_and_normals() {
     let ends = (DVec3::new(-1.0, 0.0, 0.0), DVec3::new(1.0, 0.0, 0.0));
-    let (d, n) = shapes::capsule(DVec3::new(0.3, 0.0, 0.5), ends, 0.2, 1.0).unwrap();
+    let (d, n) = capsule(DVec3::new(0.3, 0.0, 0.5), ends).unwrap();
     assert!((d - 0.3).abs() < EPS && (n - DVec3::Z).length() < EPS);
-    let (d, n) = shapes::capsule(DVec3::new(1.3, 0.4, 0.0), ends, 0.2, 1.0).unwrap();
+    let (d, n) = capsule(DVec3::new(1.3, 0.4, 0.0), ends).unwrap();
     assert!((d - 0.3).abs() < EPS && (n - DVec3::new(0.6, 0.8, 0.0)).length() < EPS);
-    let (d, n) = shapes::capsule(DVec3::new(-0.5, -0.05, 0.0), ends, 0.2, 1.0).unwrap();
+    let (d, n) = capsule(DVec3::new(-0.5, -0.05, 0.0), ends).unwrap();
     assert!((d + 0.15).abs() < EPS && (n + DVec3::Y).length() < EPS);
 }
 
@@ -97,7 +115,7 @@ fn a_mesh_cube_is_the_box() {
     let mut checked = 0;
     for _ in 0..20_000 {
         let p = DVec3::new(next(), next(), next()) * 1.4 - 0.7;
-        let want = shapes::cuboid(p, half, 0.08);
+        let want = cuboid(p, half, 0.08);
         let got = mesh.surface(p, 0.08);
         match (want, got) {
             (Some((dw, nw)), Some((dg, ng))) if dw > -0.1 => {
@@ -124,7 +142,7 @@ fn push_and_friction_follow_the_surface() {
     let x = DVec3::new(0.0, 0.505, 0.0);
     let touch = ball.touch(x, 0.0).unwrap();
     assert!((touch.depth - 0.005).abs() < EPS && touch.normal == DVec3::Y);
-    let (x1, v1) = crate::sim::laws::pushed_out(x, DVec3::ZERO, &touch, 0.0, h);
+    let (x1, v1) = respond(&ball, x, DVec3::ZERO, h);
     assert!((x1.y - 0.51).abs() < EPS && (v1 - DVec3::new(0.0, 5.0, 0.0)).length() < 1e-9);
     // Turning about y at 2 rad/s: at the top, the surface is still; on the
     // equator at +x it moves at -z... take a particle at rest on the equator.
@@ -133,7 +151,8 @@ fn push_and_friction_follow_the_surface() {
     let touch = ball.touch(x, 0.0).unwrap();
     assert!((touch.surface_velocity - DVec3::new(0.0, 0.0, -1.01)).length() < EPS);
     for (mu, dz) in [(0.0, 0.0), (0.1, -0.5), (10.0, -1.01)] {
-        let (_, v) = crate::sim::laws::pushed_out(x, DVec3::ZERO, &touch, mu, h);
+        ball.friction = mu;
+        let (_, v) = respond(&ball, x, DVec3::ZERO, h);
         assert!((v.x - 5.0).abs() < 1e-9, "the push's velocity stays: {v}");
         assert!((v.z - dz).abs() < 1e-9, "μ = {mu}: {v} not {dz} along z");
     }
@@ -265,4 +284,87 @@ fn what_a_collider_touches_lies_in_its_bounds() {
     let (lo, hi) = flat.bounds_at(&flat.pose(0.0));
     assert!((hi - (half + 0.05)).abs().max_element() < 1e-8, "{hi}");
     assert!((lo + (half + 0.05)).abs().max_element() < 1e-8, "{lo}");
+}
+
+/// The law on a block of 8 particles in float64 lanes (as the grid kernel runs
+/// it) gives each lane, bit for bit, what it gives the particle alone (as the f64
+/// engine runs it): four colliders of every shape, turning and sliding, with
+/// friction, each block's points scattered over all of them.
+#[test]
+fn the_law_in_lanes_is_the_law_on_each_particle() {
+    use crate::sim::lanes::{Floats, V3};
+    use crate::sim::laws::collide;
+    type Block = Floats<f64, 8>;
+    let mut rng_state = 5u64;
+    let mut next = || {
+        rng_state = rng_state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (rng_state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let shapes = [
+        Shape::Sphere { radius: 0.3 },
+        Shape::Box {
+            half_extents: DVec3::new(0.4, 0.1, 0.2),
+        },
+        Shape::Capsule {
+            a: DVec3::new(-0.3, 0.1, 0.0),
+            b: DVec3::new(0.4, -0.1, 0.1),
+            radius: 0.1,
+        },
+        Shape::Mesh(std::sync::Arc::new(cube_mesh(0.05))),
+    ];
+    let colliders: Vec<Collider> = shapes
+        .into_iter()
+        .enumerate()
+        .map(|(i, shape)| {
+            let centre = DVec3::new(0.5 * i as f64, 0.0, 0.0);
+            let mut c = Collider::at_rest(shape, centre, 0.1 + 0.3 * i as f64, 0.02);
+            c.rotation = DQuat::from_axis_angle(DVec3::new(1.0, 2.0, 3.0).normalize(), i as f64);
+            c.velocity = DVec3::new(0.3, -0.2, 0.1) * i as f64;
+            c.angular_velocity = DVec3::new(0.0, 2.0, 1.0 - i as f64);
+            c
+        })
+        .collect();
+    let mut poses = Vec::new();
+    poses_at(&colliders, 0.37, &mut poses);
+    let h = 1e-3;
+    let mut moved = 0;
+    for _ in 0..5_000 {
+        let points: [(DVec3, DVec3); 8] = std::array::from_fn(|_| {
+            let x = DVec3::new(0.75 + 2.4 * next(), 0.7 * next(), 0.7 * next());
+            (x, DVec3::new(next(), next(), next()) * 4.0)
+        });
+        let block = |k: usize| {
+            let axis = |a: usize| -> Block {
+                Floats(std::array::from_fn(|l| {
+                    if k == 0 {
+                        points[l].0[a]
+                    } else {
+                        points[l].1[a]
+                    }
+                }))
+            };
+            V3 {
+                x: axis(0),
+                y: axis(1),
+                z: axis(2),
+            }
+        };
+        let (x, v) = (block(0), block(1));
+        let (xs, vs) = collide(&colliders, &poses, x, v, h);
+        for (l, &(x, v)) in points.iter().enumerate() {
+            let (x1, v1) = collide(&colliders, &poses, V3::from(x), V3::from(v), h);
+            let (x1, v1): (DVec3, DVec3) = (x1.into(), v1.into());
+            let lane = |p: V3<Block>| DVec3::new(p.x.0[l], p.y.0[l], p.z.0[l]);
+            let bits = |p: DVec3| p.to_array().map(f64::to_bits);
+            assert_eq!(bits(lane(xs)), bits(x1), "position of {x}");
+            assert_eq!(bits(lane(vs)), bits(v1), "velocity of {x}, {v}");
+            moved += usize::from(x1 != x);
+        }
+    }
+    assert!(
+        moved > 2_000,
+        "only {moved} of 40,000 points touched a collider"
+    );
 }

@@ -10,13 +10,18 @@ use glam::DVec3;
 
 use super::contact::in_halves;
 use super::frame::{COLLIDER_RANGE, RANGE, whole_units};
-use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real};
+#[cfg(target_arch = "x86_64")]
+use super::x86;
+use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel};
 use crate::sim::colliders::{Collider, Pose, poses_at};
 use crate::sim::duo::Duo;
-use crate::sim::laws::collide;
+use crate::sim::lanes::Floats;
+use crate::sim::laws::{V3, collide};
 
 /// Particles tested against the bounds together, one per lane.
 const LANES: usize = 16;
+/// Particles the law takes together: float64 lanes, 8 to an AVX-512 register.
+const LAW_LANES: usize = 8;
 
 /// The kernel's colliders and where they are, kept between steps (nothing
 /// allocates once their number stops growing).
@@ -70,6 +75,7 @@ impl<E: Real> Kernel<E> {
         }
         let (w, h, st) = (self.grid.w, self.grid.h, self.grid.stride);
         let ctx = CollideRows {
+            simd: self.simd,
             width: w,
             stride: st,
             inv_mass: self.inv_mass.as_slice(),
@@ -131,7 +137,8 @@ fn stored_bounds<E: Real>(frame: &Frame, (lo, hi): (DVec3, DVec3)) -> Stored<E> 
 }
 
 /// What the colliders' pass over rows reads ([`Kernel::collide_pass`]).
-struct CollideRows<'a, E> {
+pub(super) struct CollideRows<'a, E> {
+    simd: SimdLevel,
     width: usize,
     stride: usize,
     inv_mass: &'a [E],
@@ -147,9 +154,34 @@ struct CollideRows<'a, E> {
 
 impl<E: Real> CollideRows<'_, E> {
     /// The contact of the particles of rows `rows`, whose arrays `out` holds from
-    /// row `first` on. A row's last block reads past its last column, into the
-    /// grid's ghost columns; lanes past it are never inside.
-    fn resolve(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>) {
+    /// row `first` on, compiled for the kernel's SIMD level. A row's last block
+    /// reads past its last column, into the grid's ghost columns; lanes past it
+    /// are never written.
+    pub(super) fn resolve(
+        &self,
+        out: &mut Out<E>,
+        first: usize,
+        rows: impl Iterator<Item = usize>,
+    ) {
+        match self.simd {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+            SimdLevel::Avx512 => unsafe { x86::collide_rows_avx512(self, out, first, rows) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
+            SimdLevel::Avx2 => unsafe { x86::collide_rows_avx2(self, out, first, rows) },
+            _ => self.resolve_rows(out, first, rows),
+        }
+    }
+
+    /// [`CollideRows::resolve`], compiled for the caller's SIMD level.
+    #[inline(always)]
+    pub(super) fn resolve_rows(
+        &self,
+        out: &mut Out<E>,
+        first: usize,
+        rows: impl Iterator<Item = usize>,
+    ) {
         if self.frame.fixed {
             self.resolve_in::<true>(out, first, rows);
         } else {
@@ -157,6 +189,7 @@ impl<E: Real> CollideRows<'_, E> {
         }
     }
 
+    #[inline(always)]
     fn resolve_in<const FIXED: bool>(
         &self,
         out: &mut Out<E>,
@@ -167,9 +200,11 @@ impl<E: Real> CollideRows<'_, E> {
             let at = (r - first) * self.stride;
             for c in (0..self.width).step_by(LANES) {
                 let inside = self.inside::<FIXED>(out, r * self.stride + c, at + c);
-                for (l, &inside) in inside.iter().enumerate() {
-                    if inside && c + l < self.width {
-                        self.collide_one(out, at + c + l);
+                for part in (0..LANES).step_by(LAW_LANES) {
+                    let active: [bool; LAW_LANES] =
+                        std::array::from_fn(|l| inside[part + l] & (c + part + l < self.width));
+                    if active.contains(&true) {
+                        self.collide_block::<FIXED>(out, at + c + part, &active);
                     }
                 }
             }
@@ -202,32 +237,81 @@ impl<E: Real> CollideRows<'_, E> {
         std::array::from_fn(|l| inside[l] & (w[l] > E::ZERO))
     }
 
-    /// The law on one particle (at `j` in `out`), decoded to
-    /// metres: the push moves its stored position (rounded to a whole unit in
-    /// fixed point), and its velocity (and Verlet's update velocity) gets the
-    /// change as computed.
-    fn collide_one(&self, out: &mut Out<E>, j: usize) {
+    /// The law on the block of particles from `j` in `out`, decoded to metres, in
+    /// float64 lanes (each lane gets what the f64 engine gives its particle): the
+    /// `active` lanes' pushes move their stored positions (rounded to a whole
+    /// unit in fixed point), and their velocities (and Verlet's update
+    /// velocities) get the change as computed.
+    #[inline(always)]
+    fn collide_block<const FIXED: bool>(
+        &self,
+        out: &mut Out<E>,
+        j: usize,
+        active: &[bool; LAW_LANES],
+    ) {
         let frame = &self.frame;
-        let x = DVec3::from_array(std::array::from_fn(|a| frame.decode(out.0[a][j], a)));
-        let v = DVec3::from_array(std::array::from_fn(|a| out.0[3 + a][j].f64()));
+        let block = |a: usize| -> &[E] { &out.0[a][j..j + LAW_LANES] };
+        let position = |a: usize| {
+            let p = block(a);
+            Floats::<f64, LAW_LANES>(std::array::from_fn(|l| {
+                if FIXED {
+                    p[l].fixed_value() * frame.unit + frame.centre[a]
+                } else {
+                    p[l].f64()
+                }
+            }))
+        };
+        let velocity = |a: usize| {
+            let v = block(3 + a);
+            Floats::<f64, LAW_LANES>(std::array::from_fn(|l| v[l].f64()))
+        };
+        let x = V3 {
+            x: position(0),
+            y: position(1),
+            z: position(2),
+        };
+        let v = V3 {
+            x: velocity(0),
+            y: velocity(1),
+            z: velocity(2),
+        };
         let (x_new, v_new) = collide(self.colliders, self.poses, x, v, self.h);
-        if x_new == x && v_new == v {
+        let axes = |p: V3<Floats<f64, LAW_LANES>>| [p.x.0, p.y.0, p.z.0];
+        let (x, v, x_new, v_new) = (axes(x), axes(v), axes(x_new), axes(v_new));
+        // Lanes as arrays, written whole, without a branch per lane.
+        let changed: [bool; LAW_LANES] = std::array::from_fn(|l| {
+            let moved = (0..3).fold(false, |c, a| {
+                c | (x_new[a][l] != x[a][l]) | (v_new[a][l] != v[a][l])
+            });
+            active[l] & moved
+        });
+        if !changed.contains(&true) {
             return;
         }
+        let per_unit = 1.0 / frame.unit;
         for a in 0..3 {
-            let push = x_new[a] - x[a];
-            if push != 0.0 {
-                let p = out.0[a][j];
-                out.0[a][j] = if frame.fixed {
-                    whole_units(p.fixed_value() + (push / frame.unit).round())
+            let p = &mut out.0[a][j..j + LAW_LANES];
+            let moved: [E; LAW_LANES] = std::array::from_fn(|l| {
+                let push = x_new[a][l] - x[a][l];
+                let to = if FIXED {
+                    whole_units(p[l].fixed_value() + (push * per_unit).round())
                 } else {
-                    E::of(x_new[a])
+                    E::of(x_new[a][l])
                 };
-            }
-            let dv = E::of(v_new[a] - v[a]);
-            out.0[3 + a][j] += dv;
-            if self.verlet {
-                out.0[6 + a][j] += dv;
+                E::select(changed[l] & (push != 0.0), to, p[l])
+            });
+            p.copy_from_slice(&moved);
+            let dv: [E; LAW_LANES] = std::array::from_fn(|l| E::of(v_new[a][l] - v[a][l]));
+            let rows = if self.verlet {
+                [3, 6].as_slice()
+            } else {
+                [3].as_slice()
+            };
+            for &row in rows {
+                let speed = &mut out.0[row + a][j..j + LAW_LANES];
+                for l in 0..LAW_LANES {
+                    speed[l] = E::select(changed[l], speed[l] + dv[l], speed[l]);
+                }
             }
         }
     }

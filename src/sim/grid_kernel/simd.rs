@@ -291,6 +291,44 @@ impl<S: Simd> Lanes for Vector<S> {
     fn keep_if_positive(self, a: Self) -> Self {
         Vector(self.0, self.0.keep_if_positive(self.1, a.1))
     }
+    #[inline(always)]
+    fn both(a: VectorMask<S>, b: VectorMask<S>) -> VectorMask<S> {
+        VectorMask(a.0, a.0.both(a.1, b.1))
+    }
+
+    const WIDTH: usize = S::LANES;
+    #[inline(always)]
+    fn lane(self, i: usize) -> f64 {
+        self.lanes()[i].f64()
+    }
+    #[inline(always)]
+    fn with_lane(self, i: usize, x: f64) -> Self {
+        let mut lanes = self.lanes();
+        lanes[i] = S::E::of(x);
+        // SAFETY: `lanes` holds `MAX_LANES >= S::LANES` floats.
+        Vector(self.0, unsafe { self.0.load(lanes.as_ptr()) })
+    }
+    #[inline(always)]
+    fn lane_says(m: VectorMask<S>, i: usize) -> bool {
+        let one = m.0.splat(S::E::ONE);
+        let yes = Vector(m.0, m.0.select(m.1, one, m.0.splat(S::E::ZERO)));
+        yes.lane(i) > 0.0
+    }
+}
+
+/// Most lanes a kernel's vector has (16 float32 in AVX-512).
+const MAX_LANES: usize = 16;
+
+impl<S: Simd> Vector<S> {
+    /// Its lanes, in the first `S::LANES` of an array.
+    #[inline(always)]
+    fn lanes(self) -> [S::E; MAX_LANES] {
+        const { assert!(S::LANES <= MAX_LANES) };
+        let mut lanes = [S::E::ZERO; MAX_LANES];
+        // SAFETY: `lanes` holds `MAX_LANES >= S::LANES` floats.
+        unsafe { self.0.store(lanes.as_mut_ptr(), self.1) };
+        lanes
+    }
 }
 
 /// Holds the frame of the function this is inlined into on a cache line (a

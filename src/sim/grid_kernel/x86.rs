@@ -2,6 +2,7 @@
 
 use std::arch::x86_64::*;
 
+use super::colliders::CollideRows;
 use super::row::{RowMode, row_step};
 use super::{
     Band, ContactRows, Ctx, Out, Real, Simd, State, SweepLines, any_faster, lattice, row_may_tear,
@@ -175,6 +176,36 @@ pub(super) unsafe fn contact_rows_avx2<E: Real>(
 #[inline(never)]
 pub(super) unsafe fn contact_rows_avx512<E: Real>(
     ctx: &ContactRows<E>,
+    out: &mut Out<E>,
+    first: usize,
+    rows: impl Iterator<Item = usize>,
+) {
+    ctx.resolve_rows(out, first, rows)
+}
+
+/// The colliders' pass (`CollideRows::resolve`), compiled for AVX2 and FMA.
+///
+/// # Safety
+/// As for `row_avx2`.
+#[target_feature(enable = "avx2,fma")]
+#[inline(never)]
+pub(super) unsafe fn collide_rows_avx2<E: Real>(
+    ctx: &CollideRows<E>,
+    out: &mut Out<E>,
+    first: usize,
+    rows: impl Iterator<Item = usize>,
+) {
+    ctx.resolve_rows(out, first, rows)
+}
+
+/// The colliders' pass (`CollideRows::resolve`), compiled for AVX-512.
+///
+/// # Safety
+/// As for `row_avx512`.
+#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
+#[inline(never)]
+pub(super) unsafe fn collide_rows_avx512<E: Real>(
+    ctx: &CollideRows<E>,
     out: &mut Out<E>,
     first: usize,
     rows: impl Iterator<Item = usize>,

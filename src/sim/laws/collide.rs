@@ -6,62 +6,64 @@
 //! normal velocity the push gave (so a turning sphere twists the cloth and a
 //! sliding box drags it, and μ = 0 does neither).
 
-use glam::DVec3;
-
 use super::contact::coulomb;
 use super::{Lanes, V3};
-use crate::sim::colliders::{Collider, Pose, Touch};
+use crate::sim::colliders::{Collider, Pose, Touches};
 
-/// The colliders' contact of a free particle at `x` with velocity `v`, after a
-/// step `h`, the colliders at `poses` (where they are at its end): each collider
-/// in turn, in the order given. Returns the new position and velocity.
-#[inline]
-pub(crate) fn collide(
+/// The colliders' contact of free particles at `x` with velocities `v` (one, or
+/// a block of them in lanes), after a step `h`, the colliders at `poses` (where
+/// they are at its end): each collider in turn, in the order given. Returns the
+/// new positions and velocities.
+#[inline(always)]
+pub(crate) fn collide<T: Lanes>(
     colliders: &[Collider],
     poses: &[Pose],
-    x: DVec3,
-    v: DVec3,
+    x: V3<T>,
+    v: V3<T>,
     h: f64,
-) -> (DVec3, DVec3) {
+) -> (V3<T>, V3<T>) {
     let (mut x, mut v) = (x, v);
     for (collider, pose) in colliders.iter().zip(poses) {
-        if let Some(touch) = collider.touch_at(pose, x) {
-            (x, v) = pushed_out(x, v, &touch, collider.friction, h);
+        if let Some(touch) = collider.touches(pose, x) {
+            let (x_new, v_new) = pushed_out(x, v, &touch, collider.friction, h);
+            x = V3::select(touch.touched, x_new, x);
+            v = V3::select(touch.touched, v_new, v);
         }
     }
     (x, v)
 }
 
-/// A particle at `x` with velocity `v` pushed out of a collider it `touch`es,
-/// with friction μ, after a step `h`.
-pub(crate) fn pushed_out(
-    x: DVec3,
-    v: DVec3,
-    touch: &Touch,
+/// Particles at `x` with velocities `v` pushed out of a collider they `touch`,
+/// with friction μ, after a step `h` (the lanes it does not touch come back at
+/// rest, to be left out by the caller).
+#[inline(always)]
+pub(crate) fn pushed_out<T: Lanes>(
+    x: V3<T>,
+    v: V3<T>,
+    touch: &Touches<T>,
     friction: f64,
     h: f64,
-) -> (DVec3, DVec3) {
-    let push = touch.normal * touch.depth;
-    let surface = V3::from(touch.surface_velocity);
-    let relative = V3::from(v) - surface;
-    let most = friction * touch.depth / h;
-    let relative = contact_velocity(relative, V3::from(push), V3::from(touch.normal), h, most);
-    (x + push, DVec3::from(relative + surface))
+) -> (V3<T>, V3<T>) {
+    let like = x.x;
+    let push = touch.normal.scale(touch.depth);
+    // Untouched lanes at rest (their depth is 0): friction's shortcut for a
+    // block at rest on the surface is not lost to them.
+    let still = V3::splat(like, glam::DVec3::ZERO);
+    let relative = V3::select(touch.touched, v - touch.surface_velocity, still);
+    // Reciprocals of the step's constants: no division per particle.
+    let per_h = like.splat(1.0 / h);
+    let most = like.splat(friction / h) * touch.depth;
+    let relative = contact_velocity(relative, push, touch.normal, per_h, most);
+    (x + push, relative + touch.surface_velocity)
 }
 
 /// The velocity, relative to the surface, of a particle moving at `v` (relative
-/// to it) that a contact pushed by `push` along unit `normal` over a step `h`:
-/// the push's velocity added, then Coulomb friction removing up to `most` (m/s)
-/// of the part along the surface (none when `most` is 0).
+/// to it) that a contact pushed by `push` along unit `normal` over a step of
+/// `1 / per_h`: the push's velocity added, then Coulomb friction removing up to
+/// `most` (m/s) of the part along the surface (none when `most` is 0).
 #[inline(always)]
-pub(crate) fn contact_velocity<T: Lanes>(
-    v: V3<T>,
-    push: V3<T>,
-    normal: V3<T>,
-    h: T,
-    most: T,
-) -> V3<T> {
-    let pushed = v + push.over(h);
+fn contact_velocity<T: Lanes>(v: V3<T>, push: V3<T>, normal: V3<T>, per_h: T, most: T) -> V3<T> {
+    let pushed = v + push.scale(per_h);
     if T::all(most.le(most.splat(0.0))) {
         return pushed;
     }

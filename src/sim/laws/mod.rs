@@ -32,8 +32,6 @@ mod motion;
 
 pub(crate) use crate::sim::lanes::{Lanes, V3};
 pub(crate) use collide::collide;
-#[cfg(test)]
-pub(crate) use collide::pushed_out;
 pub(crate) use constraints::{
     XpbdCoefficients, XpbdSpring, length_correction, length_factor, xpbd_correction, xpbd_factor,
 };

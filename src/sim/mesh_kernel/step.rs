@@ -11,7 +11,7 @@ use super::{MIN_LEAF, MeshKernel};
 use crate::sim::colliders::poses_at;
 use crate::sim::constraints::{xpbd_pass, xpbd_sweeps_back};
 use crate::sim::laws::speed_limit;
-use crate::sim::laws::{collide, overstretched};
+use crate::sim::laws::{V3, collide, overstretched};
 use crate::sim::springs;
 use crate::sim::springs::Adjacency;
 use crate::sim::tearing::remove_broken;
@@ -240,7 +240,8 @@ impl MeshKernel {
                 if active {
                     (x_new, v) = contact.resolve(x, v, self.inv_mass[i]);
                 }
-                (x_new, v) = collide(colliders, poses, x_new, v, h);
+                let (x_out, v_out) = collide(colliders, poses, V3::from(x_new), V3::from(v), h);
+                (x_new, v) = (x_out.into(), v_out.into());
                 store(&mut self.x.each_mut().map(Vec::as_mut_slice), i, x_new);
             }
             store(&mut self.v.each_mut().map(Vec::as_mut_slice), i, v);
