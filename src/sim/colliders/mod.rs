@@ -124,25 +124,30 @@ impl Shape {
             Self::Sphere { radius } => shapes::sphere(p, *radius),
             Self::Box { half_extents } => shapes::cuboid(p, *half_extents),
             Self::Capsule { a, b, radius } => shapes::capsule(p, (*a, *b), *radius),
-            // Triangles are not lanes: each lane's query on its own.
-            Self::Mesh(mesh) => {
-                let mut distance = p.x.splat(f64::INFINITY);
-                let mut normal = V3::splat(p.x, DVec3::Y);
-                for i in (0..T::WIDTH).filter(|&i| T::lane_says(near, i)) {
-                    let at = DVec3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
-                    if let Some((d, n)) = mesh.surface(at, reach) {
-                        distance = distance.with_lane(i, d);
-                        normal = V3 {
-                            x: normal.x.with_lane(i, n.x),
-                            y: normal.y.with_lane(i, n.y),
-                            z: normal.z.with_lane(i, n.z),
-                        };
-                    }
-                }
-                (distance, normal)
-            }
+            Self::Mesh(mesh) => mesh_lanes(mesh, p, near, reach),
         }
     }
+}
+
+/// [`Shape::surface_lanes`] of a mesh: triangles are not lanes, so each lane's
+/// query on its own (out of line, to leave the analytic shapes' code its
+/// registers).
+#[inline(never)]
+fn mesh_lanes<T: Lanes>(mesh: &ColliderMesh, p: V3<T>, near: T::Mask, reach: f64) -> (T, V3<T>) {
+    let mut distance = p.x.splat(f64::INFINITY);
+    let mut normal = V3::splat(p.x, DVec3::Y);
+    for i in (0..T::WIDTH).filter(|&i| T::lane_says(near, i)) {
+        let at = DVec3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
+        if let Some((d, n)) = mesh.surface(at, reach) {
+            distance = distance.with_lane(i, d);
+            normal = V3 {
+                x: normal.x.with_lane(i, n.x),
+                y: normal.y.with_lane(i, n.y),
+                z: normal.z.with_lane(i, n.z),
+            };
+        }
+    }
+    (distance, normal)
 }
 
 /// A solid at a pose, moving at constant velocity and angular velocity from the
