@@ -155,7 +155,7 @@ pub use real::SimdLevel;
 pub(crate) use spec::SpringNoise;
 pub use spec::{GridSpec, Precision, SpringCoefficients, stencil_counts};
 
-use contact::ContactRows;
+use contact::{ContactRows, RowsPass};
 use kernel::{Kernel, runaway_scan};
 use real::Real;
 use row::{

@@ -8,6 +8,34 @@ use super::*;
 
 const EPS: f64 = 1e-12;
 
+/// Numbers uniform on [-0.5, 0.5), from `seed` (a linear congruential generator:
+/// the same every run).
+fn centred_uniform(seed: u64) -> impl FnMut() -> f64 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+/// One collider shape of each kind, each some 0.2 to 0.8 m across.
+fn every_shape() -> [Shape; 4] {
+    [
+        Shape::Sphere { radius: 0.3 },
+        Shape::Box {
+            half_extents: DVec3::new(0.4, 0.1, 0.2),
+        },
+        Shape::Capsule {
+            a: DVec3::new(-0.3, 0.1, 0.0),
+            b: DVec3::new(0.4, -0.1, 0.1),
+            radius: 0.1,
+        },
+        Shape::Mesh(std::sync::Arc::new(cube_mesh(0.05))),
+    ]
+}
+
 /// A box's surface ([`Shape::surface`]) at `p`, within `reach`.
 fn cuboid(p: DVec3, half: DVec3, reach: f64) -> Option<(f64, DVec3)> {
     Shape::Box { half_extents: half }.surface(p, reach)
@@ -105,16 +133,10 @@ fn cube_mesh(reach: f64) -> ColliderMesh {
 fn a_mesh_cube_is_the_box() {
     let mesh = cube_mesh(0.1);
     let half = DVec3::splat(0.5);
-    let mut rng_state = 7u64;
-    let mut next = || {
-        rng_state = rng_state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (rng_state >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut next = centred_uniform(7);
     let mut checked = 0;
     for _ in 0..20_000 {
-        let p = DVec3::new(next(), next(), next()) * 1.4 - 0.7;
+        let p = DVec3::new(next(), next(), next()) * 1.4;
         let want = cuboid(p, half, 0.08);
         let got = mesh.surface(p, 0.08);
         match (want, got) {
@@ -233,25 +255,8 @@ fn rays_hit_the_solids() {
 /// are the box grown by the thickness, no looser.
 #[test]
 fn what_a_collider_touches_lies_in_its_bounds() {
-    let mut rng_state = 11u64;
-    let mut next = || {
-        rng_state = rng_state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (rng_state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let shapes = [
-        Shape::Sphere { radius: 0.3 },
-        Shape::Box {
-            half_extents: DVec3::new(0.4, 0.1, 0.2),
-        },
-        Shape::Capsule {
-            a: DVec3::new(-0.3, 0.1, 0.0),
-            b: DVec3::new(0.4, -0.1, 0.1),
-            radius: 0.1,
-        },
-        Shape::Mesh(std::sync::Arc::new(cube_mesh(0.05))),
-    ];
+    let mut next = centred_uniform(11);
+    let shapes = every_shape();
     for shape in shapes {
         let mut touched = 0;
         for _ in 0..200 {
@@ -295,25 +300,8 @@ fn the_law_in_lanes_is_the_law_on_each_particle() {
     use crate::sim::lanes::{Floats, V3};
     use crate::sim::laws::collide;
     type Block = Floats<f64, 8>;
-    let mut rng_state = 5u64;
-    let mut next = || {
-        rng_state = rng_state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (rng_state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    let shapes = [
-        Shape::Sphere { radius: 0.3 },
-        Shape::Box {
-            half_extents: DVec3::new(0.4, 0.1, 0.2),
-        },
-        Shape::Capsule {
-            a: DVec3::new(-0.3, 0.1, 0.0),
-            b: DVec3::new(0.4, -0.1, 0.1),
-            radius: 0.1,
-        },
-        Shape::Mesh(std::sync::Arc::new(cube_mesh(0.05))),
-    ];
+    let mut next = centred_uniform(5);
+    let shapes = every_shape();
     let colliders: Vec<Collider> = shapes
         .into_iter()
         .enumerate()

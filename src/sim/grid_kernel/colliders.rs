@@ -8,10 +8,8 @@
 
 use glam::DVec3;
 
-use super::contact::in_halves;
+use super::contact::{RowsPass, in_halves};
 use super::frame::{COLLIDER_RANGE, RANGE, whole_units};
-#[cfg(target_arch = "x86_64")]
-use super::x86;
 use super::{Frame, Kernel, Out, PARALLEL_MIN_PARTICLES, Real, SimdLevel};
 use crate::sim::colliders::{Collider, Pose, poses_at};
 use crate::sim::duo::Duo;
@@ -152,43 +150,25 @@ pub(super) struct CollideRows<'a, E> {
     h: f64,
 }
 
-impl<E: Real> CollideRows<'_, E> {
-    /// The contact of the particles of rows `rows`, whose arrays `out` holds from
-    /// row `first` on, compiled for the kernel's SIMD level. A row's last block
-    /// reads past its last column, into the grid's ghost columns; lanes past it
-    /// are never written.
-    pub(super) fn resolve(
-        &self,
-        out: &mut Out<E>,
-        first: usize,
-        rows: impl Iterator<Item = usize>,
-    ) {
-        match self.simd {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-            SimdLevel::Avx512 => unsafe { x86::collide_rows_avx512(self, out, first, rows) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
-            SimdLevel::Avx2 => unsafe { x86::collide_rows_avx2(self, out, first, rows) },
-            _ => self.resolve_rows(out, first, rows),
-        }
+impl<E: Real> RowsPass<E> for CollideRows<'_, E> {
+    fn simd(&self) -> SimdLevel {
+        self.simd
     }
 
-    /// [`CollideRows::resolve`], compiled for the caller's SIMD level.
+    /// The contact of the particles of rows `rows`, whose arrays `out` holds from
+    /// row `first` on. A row's last block reads past its last column, into the
+    /// grid's ghost columns; lanes past it are never written.
     #[inline(always)]
-    pub(super) fn resolve_rows(
-        &self,
-        out: &mut Out<E>,
-        first: usize,
-        rows: impl Iterator<Item = usize>,
-    ) {
+    fn rows(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>) {
         if self.frame.fixed {
             self.resolve_in::<true>(out, first, rows);
         } else {
             self.resolve_in::<false>(out, first, rows);
         }
     }
+}
 
+impl<E: Real> CollideRows<'_, E> {
     #[inline(always)]
     fn resolve_in<const FIXED: bool>(
         &self,

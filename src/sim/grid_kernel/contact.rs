@@ -97,6 +97,41 @@ pub(super) struct ContactRows<'a, E> {
 /// Particles [`ContactRows`] resolves together, one per lane.
 const CONTACT_LANES: usize = 8;
 
+/// A pass over rows of a kernel's arrays in which each particle's result is its
+/// own (contact, the colliders), compiled for the kernel's SIMD level.
+pub(super) trait RowsPass<E: Real> {
+    /// The level the pass runs at.
+    fn simd(&self) -> SimdLevel;
+
+    /// The pass over rows `rows`, whose arrays `out` holds from row `first` on,
+    /// compiled for the caller's SIMD level (inlined into each level's entry).
+    fn rows(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>);
+
+    /// [`RowsPass::rows`] with the code for the pass's level.
+    fn resolve(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>) {
+        match self.simd() {
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
+            SimdLevel::Avx512 => unsafe { x86::rows_avx512(self, out, first, rows) },
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
+            SimdLevel::Avx2 => unsafe { x86::rows_avx2(self, out, first, rows) },
+            _ => self.rows(out, first, rows),
+        }
+    }
+}
+
+impl<E: Real> RowsPass<E> for ContactRows<'_, E> {
+    fn simd(&self) -> SimdLevel {
+        self.simd
+    }
+
+    #[inline(always)]
+    fn rows(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>) {
+        self.resolve_rows(out, first, rows)
+    }
+}
+
 impl<'a, E: Real> ContactRows<'a, E> {
     /// The contact with the colliders of `contact` of a grid's cloth: its
     /// inverse masses, frame, SIMD level, whether it steps by Verlet, and whether
@@ -161,31 +196,8 @@ impl<'a, E: Real> ContactRows<'a, E> {
     /// column: the grid's ghost columns (its rows are [`super::BLOCK`] floats longer than their
     /// blocks), or the next row of a lattice (whose arrays end in ghosts); lanes
     /// that do not touch are written back what they held.
-    pub(super) fn resolve(
-        &self,
-        out: &mut Out<E>,
-        first: usize,
-        rows: impl Iterator<Item = usize>,
-    ) {
-        match self.simd {
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is AVX-512 only when the CPU has AVX-512F/VL, AVX2 and FMA.
-            SimdLevel::Avx512 => unsafe { x86::contact_rows_avx512(self, out, first, rows) },
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: the level is AVX2 only when the CPU has AVX2 and FMA.
-            SimdLevel::Avx2 => unsafe { x86::contact_rows_avx2(self, out, first, rows) },
-            _ => self.resolve_rows(out, first, rows),
-        }
-    }
-
-    /// [`ContactRows::resolve`], compiled for the caller's SIMD level.
     #[inline(always)]
-    pub(super) fn resolve_rows(
-        &self,
-        out: &mut Out<E>,
-        first: usize,
-        rows: impl Iterator<Item = usize>,
-    ) {
+    fn resolve_rows(&self, out: &mut Out<E>, first: usize, rows: impl Iterator<Item = usize>) {
         align_frame();
         if self.frame.fixed {
             self.resolve_rows_in::<true>(out, first, rows)

@@ -5,7 +5,7 @@
 
 use std::ops::Range;
 
-use super::contact::ContactRows;
+use super::contact::{ContactRows, RowsPass};
 use super::simd::{Vector, align_frame};
 use super::spring_passes::SpringPass;
 use super::{BLOCK, Band, Duo, Grid, Out, Params, Portable, Real, SLOTS, Simd, SimdLevel};

@@ -2,11 +2,11 @@
 
 use std::arch::x86_64::*;
 
-use super::colliders::CollideRows;
+use super::contact::RowsPass;
 use super::row::{RowMode, row_step};
 use super::{
-    Band, ContactRows, Ctx, Out, Real, Simd, State, SweepLines, any_faster, lattice, row_may_tear,
-    row_variant, spring_sweep,
+    Band, Ctx, Out, Real, Simd, State, SweepLines, any_faster, lattice, row_may_tear, row_variant,
+    spring_sweep,
 };
 
 /// Token for AVX2 + FMA; only built inside `band_avx2`.
@@ -153,64 +153,35 @@ pub(super) unsafe fn any_faster_avx2<E: Real>(v: [&[E]; 3], limit2: E) -> bool {
     any_faster(v, limit2)
 }
 
-/// Contact with friction (`ContactRows::resolve`), compiled for AVX2 and FMA.
+/// A pass over rows (`RowsPass::resolve`: contact, the colliders), compiled for
+/// AVX2 and FMA.
 ///
 /// # Safety
 /// As for `row_avx2`.
 #[target_feature(enable = "avx2,fma")]
 #[inline(never)]
-pub(super) unsafe fn contact_rows_avx2<E: Real>(
-    ctx: &ContactRows<E>,
+pub(super) unsafe fn rows_avx2<E: Real, P: RowsPass<E> + ?Sized>(
+    pass: &P,
     out: &mut Out<E>,
     first: usize,
     rows: impl Iterator<Item = usize>,
 ) {
-    ctx.resolve_rows(out, first, rows)
+    pass.rows(out, first, rows)
 }
 
-/// Contact with friction (`ContactRows::resolve`), compiled for AVX-512.
+/// A pass over rows (`RowsPass::resolve`), compiled for AVX-512.
 ///
 /// # Safety
 /// As for `row_avx512`.
 #[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
 #[inline(never)]
-pub(super) unsafe fn contact_rows_avx512<E: Real>(
-    ctx: &ContactRows<E>,
+pub(super) unsafe fn rows_avx512<E: Real, P: RowsPass<E> + ?Sized>(
+    pass: &P,
     out: &mut Out<E>,
     first: usize,
     rows: impl Iterator<Item = usize>,
 ) {
-    ctx.resolve_rows(out, first, rows)
-}
-
-/// The colliders' pass (`CollideRows::resolve`), compiled for AVX2 and FMA.
-///
-/// # Safety
-/// As for `row_avx2`.
-#[target_feature(enable = "avx2,fma")]
-#[inline(never)]
-pub(super) unsafe fn collide_rows_avx2<E: Real>(
-    ctx: &CollideRows<E>,
-    out: &mut Out<E>,
-    first: usize,
-    rows: impl Iterator<Item = usize>,
-) {
-    ctx.resolve_rows(out, first, rows)
-}
-
-/// The colliders' pass (`CollideRows::resolve`), compiled for AVX-512.
-///
-/// # Safety
-/// As for `row_avx512`.
-#[target_feature(enable = "avx512f,avx512vl,avx2,fma")]
-#[inline(never)]
-pub(super) unsafe fn collide_rows_avx512<E: Real>(
-    ctx: &CollideRows<E>,
-    out: &mut Out<E>,
-    first: usize,
-    rows: impl Iterator<Item = usize>,
-) {
-    ctx.resolve_rows(out, first, rows)
+    pass.rows(out, first, rows)
 }
 
 /// The spring passes' `spring_sweep` compiled for a SIMD level, in each precision:

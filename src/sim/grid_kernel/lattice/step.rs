@@ -14,7 +14,7 @@ use crate::sim::grid_kernel::spring_passes::{
     ColourClass, RowColour, SpringRule, Sweep, SweepLines, SweepMultipliers, SweepRules,
     SweepSprings, step_start,
 };
-use crate::sim::grid_kernel::{BLOCK, Buf, ContactRows, Real, frame};
+use crate::sim::grid_kernel::{BLOCK, Buf, ContactRows, Real, RowsPass, frame};
 
 impl<E: Real> Lattice<E> {
     /// Advances `n` steps of `dt` seconds (inside the thread pool once).
