@@ -174,6 +174,16 @@ fn vec3(rng: &mut StdRng, scale: f32) -> [f32; 3] {
     [0; 3].map(|_| rng.random_range(-scale..=scale))
 }
 
+/// An offset within 1 m on each axis, or, one time in fifty, none (the laws'
+/// degenerate case: no direction).
+fn offset_or_zero(rng: &mut StdRng) -> [f32; 3] {
+    if rng.random_bool(0.02) {
+        [0.0; 3]
+    } else {
+        vec3(rng, 1.0)
+    }
+}
+
 fn cases(seed: u64, make: impl Fn(&mut StdRng) -> Case) -> Vec<Case> {
     let mut rng = StdRng::seed_from_u64(seed);
     (0..CASES).map(|_| make(&mut rng)).collect()
@@ -206,11 +216,7 @@ fn the_wgsl_forces_agree_with_the_f64_laws() {
     };
     let f = f64::from;
     let spring = cases(1, |r| {
-        let d = if r.random_bool(0.02) {
-            [0.0; 3]
-        } else {
-            vec3(r, 1.0)
-        };
+        let d = offset_or_zero(r);
         let length = d.iter().map(|x| x * x).sum::<f32>().sqrt();
         let (k, rest, b) = (
             r.random_range(1.0..1e4),
@@ -378,11 +384,7 @@ fn the_wgsl_contact_and_speed_limit_agree_with_the_f64_laws() {
     };
     let f = f64::from;
     let offset = cases(7, |r| {
-        let d = if r.random_bool(0.02) {
-            [0.0; 3]
-        } else {
-            vec3(r, 1.0)
-        };
+        let d = offset_or_zero(r);
         [
             v4(d, 0.0),
             [r.random_range(0.1..2.0), 0.0, 0.0, 0.0],

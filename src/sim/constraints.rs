@@ -20,7 +20,7 @@
 use glam::DVec3;
 
 use super::colliders::poses_at;
-use super::laws::{Contact, V3, XpbdSpring, collide, length_correction, xpbd_correction};
+use super::laws::{Contact, XpbdSpring, end_of_step_contacts, length_correction, xpbd_correction};
 use super::{Integrator, LatticeShape, Model, State, Workspace};
 
 /// Applies every constraint the model has, then updates velocities.
@@ -71,27 +71,18 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     }
     let h = p.dt;
     let contact = Contact::of(p);
-    let active = contact.is_active();
     // The colliders where they are at the end of the step.
-    let colliders = &model.colliders[..];
-    poses_at(colliders, state.time + h, &mut work.collider_poses);
-    let poses = &work.collider_poses[..];
+    poses_at(&model.colliders, state.time + h, &mut work.collider_poses);
+    let solids = (&model.colliders[..], &work.collider_poses[..]);
     let verlet = &mut state.verlet.positions;
     for (i, (v, x)) in state.velocities.iter_mut().zip(x.iter_mut()).enumerate() {
         *v += (*x - work.before_constraints[i]) / h;
-        let w = model.inv_mass[i];
-        if (active || !colliders.is_empty()) && w > 0.0 {
-            let (x_in, v_in) = (*x, *v);
-            if active {
-                (*x, *v) = contact.resolve(x_in, v_in, w);
-            }
-            let (x_out, v_out) = collide(colliders, poses, V3::from(*x), V3::from(*v), h);
-            (*x, *v) = (x_out.into(), v_out.into());
-            // Verlet reads the push from the positions; the friction's change of
-            // velocity goes into its previous position.
-            if let Some(prev) = verlet.get_mut(i) {
-                *prev -= h * (*v - v_in) - (*x - x_in);
-            }
+        let (x_in, v_in) = (*x, *v);
+        (*x, *v) = end_of_step_contacts(&contact, solids, (x_in, v_in), model.inv_mass[i], h);
+        // Verlet reads the push from the positions; the friction's change of
+        // velocity goes into its previous position.
+        if let Some(prev) = verlet.get_mut(i) {
+            *prev -= h * (*v - v_in) - (*x - x_in);
         }
     }
 }

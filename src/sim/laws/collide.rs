@@ -6,8 +6,10 @@
 //! normal velocity the push gave (so a turning sphere twists the cloth and a
 //! sliding box drags it, and μ = 0 does neither).
 
+use glam::DVec3;
+
 use super::contact::coulomb;
-use super::{Lanes, V3};
+use super::{Contact, Lanes, V3};
 use crate::sim::colliders::{Collider, Pose, Touches};
 
 /// The colliders' contact of free particles at `x` with velocities `v` (one, or
@@ -33,6 +35,35 @@ pub(crate) fn collide<T: Lanes>(
     (x, v)
 }
 
+/// A particle's contacts at the end of a step `h`, at `x` with velocity `v` (the
+/// constraints' moves already in it): for a free particle (inverse mass `w >
+/// 0`), the ground's and the scene sphere's `contact`, then the `colliders` at
+/// `poses`. The f64 and mesh engines' pass after their constraints; the grid
+/// kernel's passes call the same laws on blocks. Returns the new position and
+/// velocity.
+#[inline(always)]
+pub(crate) fn end_of_step_contacts(
+    contact: &Contact,
+    (colliders, poses): (&[Collider], &[Pose]),
+    (x, v): (DVec3, DVec3),
+    w: f64,
+    h: f64,
+) -> (DVec3, DVec3) {
+    if w <= 0.0 {
+        return (x, v);
+    }
+    let (x, v) = if contact.is_active() {
+        contact.resolve(x, v, w)
+    } else {
+        (x, v)
+    };
+    if colliders.is_empty() {
+        return (x, v);
+    }
+    let (x, v) = collide(colliders, poses, V3::from(x), V3::from(v), h);
+    (x.into(), v.into())
+}
+
 /// Particles at `x` with velocities `v` pushed out of a collider they `touch`,
 /// with friction μ, after a step `h` (the lanes it does not touch come back at
 /// rest, to be left out by the caller).
@@ -48,7 +79,7 @@ pub(crate) fn pushed_out<T: Lanes>(
     let push = touch.normal.scale(touch.depth);
     // Untouched lanes at rest (their depth is 0): friction's shortcut for a
     // block at rest on the surface is not lost to them.
-    let still = V3::splat(like, glam::DVec3::ZERO);
+    let still = V3::splat(like, DVec3::ZERO);
     let relative = V3::select(touch.touched, v - touch.surface_velocity, still);
     // Reciprocals of the step's constants: no division per particle.
     let per_h = like.splat(1.0 / h);

@@ -31,7 +31,7 @@ mod forces;
 mod motion;
 
 pub(crate) use crate::sim::lanes::{Lanes, V3};
-pub(crate) use collide::collide;
+pub(crate) use collide::{collide, end_of_step_contacts};
 pub(crate) use constraints::{
     XpbdCoefficients, XpbdSpring, length_correction, length_factor, xpbd_correction, xpbd_factor,
 };

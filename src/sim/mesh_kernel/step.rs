@@ -11,7 +11,7 @@ use super::{MIN_LEAF, MeshKernel};
 use crate::sim::colliders::poses_at;
 use crate::sim::constraints::{xpbd_pass, xpbd_sweeps_back};
 use crate::sim::laws::speed_limit;
-use crate::sim::laws::{V3, collide, overstretched};
+use crate::sim::laws::{end_of_step_contacts, overstretched};
 use crate::sim::springs;
 use crate::sim::springs::Adjacency;
 use crate::sim::tearing::remove_broken;
@@ -225,25 +225,17 @@ impl MeshKernel {
         }
         let h = p.dt;
         let contact = self.contact();
-        let active = contact.is_active();
         // The colliders where they are at the end of the step.
         poses_at(&self.colliders, self.time + h, &mut self.collider_poses);
-        let (colliders, poses) = (&self.colliders[..], &self.collider_poses[..]);
+        let solids = (&self.colliders[..], &self.collider_poses[..]);
         let verlet = !self.u[0].is_empty();
         for i in 0..self.inv_mass.len() {
             let before = load(self.before.each_ref().map(Vec::as_slice), i);
             let x = load(self.x.each_ref().map(Vec::as_slice), i);
             let v_old = load(self.v.each_ref().map(Vec::as_slice), i);
-            let mut v = v_old + (x - before) / h;
-            if (active || !colliders.is_empty()) && self.inv_mass[i] > 0.0 {
-                let mut x_new = x;
-                if active {
-                    (x_new, v) = contact.resolve(x, v, self.inv_mass[i]);
-                }
-                let (x_out, v_out) = collide(colliders, poses, V3::from(x_new), V3::from(v), h);
-                (x_new, v) = (x_out.into(), v_out.into());
-                store(&mut self.x.each_mut().map(Vec::as_mut_slice), i, x_new);
-            }
+            let v = v_old + (x - before) / h;
+            let (x, v) = end_of_step_contacts(&contact, solids, (x, v), self.inv_mass[i], h);
+            store(&mut self.x.each_mut().map(Vec::as_mut_slice), i, x);
             store(&mut self.v.each_mut().map(Vec::as_mut_slice), i, v);
             if verlet {
                 let u = load(self.u.each_ref().map(Vec::as_slice), i) + (v - v_old);
