@@ -83,20 +83,26 @@ pub(crate) fn pushed_out<T: Lanes>(
     let relative = V3::select(touch.touched, v - touch.surface_velocity, still);
     // Reciprocals of the step's constants: no division per particle.
     let per_h = like.splat(1.0 / h);
-    let most = like.splat(friction / h) * touch.depth;
-    let relative = contact_velocity(relative, push, touch.normal, per_h, most);
+    let friction = (friction > 0.0).then(|| (touch.normal, like.splat(friction / h) * touch.depth));
+    let relative = contact_velocity(relative, push, per_h, friction);
     (x + push, relative + touch.surface_velocity)
 }
 
 /// The velocity, relative to the surface, of a particle moving at `v` (relative
-/// to it) that a contact pushed by `push` along unit `normal` over a step of
-/// `1 / per_h`: the push's velocity added, then Coulomb friction removing up to
-/// `most` (m/s) of the part along the surface (none when `most` is 0).
+/// to it) that a contact pushed by `push` over a step of `1 / per_h`: the push's
+/// velocity added, then, given the surface's unit normal and `most` (m/s),
+/// Coulomb friction removing up to `most` of the part along the surface. The
+/// response of every contact with a solid: the scene's sphere and the colliders.
 #[inline(always)]
-fn contact_velocity<T: Lanes>(v: V3<T>, push: V3<T>, normal: V3<T>, per_h: T, most: T) -> V3<T> {
+pub(crate) fn contact_velocity<T: Lanes>(
+    v: V3<T>,
+    push: V3<T>,
+    per_h: T,
+    friction: Option<(V3<T>, T)>,
+) -> V3<T> {
     let pushed = v + push.scale(per_h);
-    if T::all(most.le(most.splat(0.0))) {
-        return pushed;
+    match friction {
+        Some((normal, most)) => coulomb(pushed, normal, most),
+        None => pushed,
     }
-    coulomb(pushed, normal, most)
 }

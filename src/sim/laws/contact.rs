@@ -9,6 +9,7 @@
 
 use glam::DVec3;
 
+use super::collide::contact_velocity;
 use super::forces::{DEGENERATE_LENGTH2, ground_support};
 use super::{Lanes, V3};
 use crate::sim::{Ground, Params, Sphere};
@@ -103,17 +104,16 @@ impl Contact {
                 if T::any(inside) {
                     let outside = surface_offset(d, dist2, radius);
                     let push = outside - d;
-                    let mut pushed = v + push.over(h);
-                    if self.friction > 0.0 {
-                        let normal = outside.over(radius);
+                    let friction = (self.friction > 0.0).then(|| {
                         // (Unlimited outside, as for the ground.)
                         let most = T::select(
                             inside,
                             h.splat(self.friction) * push.length() / h,
                             h.splat(f64::INFINITY),
                         );
-                        pushed = coulomb(pushed, normal, most);
-                    }
+                        (outside.over(radius), most)
+                    });
+                    let pushed = contact_velocity(v, push, h.splat(1.0 / self.dt), friction);
                     moves = V3::select(inside, push, moves);
                     v = V3::select(inside, pushed, v);
                 }
