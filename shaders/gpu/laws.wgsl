@@ -2,9 +2,11 @@
 // carries the name of its Rust law and computes it in the same order, in f32;
 // `src/gpu/conformance.rs` runs them (through `probe.wgsl`) on random inputs
 // against the f64 laws.
-// `mul_add` is `fma` here, as in the CPU's vector kernels.
+// `mul_add` and `mul_sub` are `fma` here, as in the CPU's vector kernels.
 
-// `EPSILON_LENGTH²`: below it a spring or a sphere offset has no direction.
+// `EPSILON_LENGTH`, and its square: below them a spring or a sphere offset has
+// no direction.
+const EPSILON_LENGTH: f32 = 1e-12;
 const DEGENERATE_LENGTH2: f32 = 1e-24;
 // `DRAG_TINY`: keeps a triangle with no area or no relative wind at zero drag.
 const DRAG_TINY: f32 = 1e-30;
@@ -150,7 +152,7 @@ fn contact_sphere(d: vec3<f32>, v: vec3<f32>, radius: f32, friction: f32, h: f32
     }
     let outside = surface_offset(d, dist2, radius);
     let push = outside - d;
-    var pushed = v + push / h;
+    var pushed = v + push * (1.0 / h);
     if friction > 0.0 {
         let normal = outside / radius;
         pushed = coulomb(pushed, normal, friction * length(push) / h);
@@ -178,4 +180,38 @@ fn speed_limit(v: vec3<f32>, max_speed: f32) -> f32 {
         return max_speed / speed;
     }
     return 1.0;
+}
+
+// `laws::length_factor`: the factor s that brings the ends of a spring of vector
+// d = x_a - x_b to length `goal`, w the ends' inverse masses summed: x_a -= w_a s d,
+// x_b += w_b s d (for l w > 0; the callers leave the rest alone).
+fn length_factor(d: vec3<f32>, goal: f32, w: f32) -> f32 {
+    let l = length(d);
+    return (l - goal) / (l * w);
+}
+
+// `laws::xpbd_coefficients`: (α̃, γ) = (1 / (k h²), b / (k h)) of a spring (k, b).
+fn xpbd_coefficients(k: f32, b: f32, h: f32) -> vec2<f32> {
+    return vec2<f32>(1.0 / (k * h * h), b / (k * h));
+}
+
+// `laws::XpbdCoefficients`: the rest length L, α̃, γ and 1 + γ.
+struct XpbdCoefficients {
+    rest: f32,
+    alpha: f32,
+    gamma: f32,
+    one_gamma: f32,
+}
+
+// `laws::xpbd_factor`: XPBD's (s, t) for a spring of vector d whose first end moved
+// by `moved` more than its second this step, w its ends' inverse masses summed and
+// α̃ λ its multiplier so far times α̃: x_a -= w_a s d, x_b += w_b s d, Δλ = -t.
+fn xpbd_factor(d: vec3<f32>, moved: vec3<f32>, w: f32, c: XpbdCoefficients, alpha_lambda: f32) -> vec2<f32> {
+    let l2 = dot(d, d);
+    let inv_l = rsqrt_or_zero(l2, DEGENERATE_LENGTH2);
+    let rest = c.rest - alpha_lambda;
+    let stretch = fma(l2, inv_l, -rest);
+    let along = dot(d, moved) * inv_l;
+    let t = fma(c.gamma, along, stretch) / fma(c.one_gamma, w, c.alpha);
+    return vec2<f32>(t * inv_l, t);
 }

@@ -51,6 +51,17 @@ fn law_of(k: Case) -> array<vec4<f32>, 3> {
             let v = contact_ground_friction(k.a.x, k.b.xyz, k.a.y, k.c, k.a.z);
             return array(vec4(v, 0.0), z, z);
         }
+        case 10u: {
+            return array(vec4(length_factor(k.a.xyz, k.b.x, k.b.y), 0.0, 0.0, 0.0), z, z);
+        }
+        case 11u: {
+            let c = XpbdCoefficients(k.b.y, k.c.x, k.c.y, k.c.z);
+            let st = xpbd_factor(k.a.xyz, k.d.xyz, k.b.x, c, k.b.z);
+            return array(vec4(st, 0.0, 0.0), z, z);
+        }
+        case 12u: {
+            return array(vec4(xpbd_coefficients(k.a.x, k.a.y, k.a.z), 0.0, 0.0), z, z);
+        }
         default: {
             return array(vec4(speed_limit(k.a.xyz, k.b.x), 0.0, 0.0, 0.0), z, z);
         }

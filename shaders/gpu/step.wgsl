@@ -1,9 +1,11 @@
 // One step of the GPU engine for every particle, in the order of the mesh
 // engine's passes: gather the damped springs and the triangles' drag, air
 // damping, the ground's penalty, the applied force, `acceleration`, `update`,
-// then contact with the sphere and the ground's friction, and the speed limit.
-// Each particle gathers its own springs and triangles (no atomics, no shared
-// writes), so every run gives the same bits. Appended to `laws.wgsl`.
+// then (`end_of_step`) contact with the sphere and the ground's friction, and the
+// speed limit. With constraints, the end of the step waits for them
+// (`constrain.wgsl`). Each particle gathers its own springs and triangles (no
+// atomics, no shared writes), so every run gives the same bits. Appended to
+// `laws.wgsl`.
 
 // One step's parameters; positions are relative to the engine's origin.
 struct Step {
@@ -12,13 +14,15 @@ struct Step {
     wind: vec4<f32>,      // xyz the air's velocity at the step's start; w: ρ C_d / 2 (0: no drag)
     ground: vec4<f32>,    // height, stiffness, damping, friction
     sphere: vec4<f32>,    // centre, radius
-    limits: vec4<f32>,    // x: the sphere's friction μ; y: the speed limit (0: none)
-    flags: vec4<u32>,     // x: the update rule; y: particles; z: GROUND | SPHERE | SPRINGS
+    limits: vec4<f32>,    // x: the sphere's friction μ; y: the speed limit (0: none); z: the stretch limit τ
+    flags: vec4<u32>,     // x: the update rule; y: particles; z: GROUND | SPHERE | SPRINGS | CONSTRAINED
 }
 
 const GROUND: u32 = 1u;
 const SPHERE: u32 = 2u;
 const SPRINGS: u32 = 4u;
+// Constraint passes follow the step: it leaves the end of the step to `end_step`.
+const CONSTRAINED: u32 = 8u;
 
 // A particle: its position in m is x.xyz + low.xyz (two f32, about 48 bits
 // between them, so that a stiff spring's length is not lost to the rounding of
@@ -56,6 +60,9 @@ fn moved(p: Position, dx: vec3<f32>) -> Position {
 @group(0) @binding(2) var<storage, read> u_in: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> state_out: array<Particle>;
 @group(0) @binding(4) var<storage, read_write> u_out: array<vec4<f32>>;
+// With constraints, each particle's position before them, as `Position` (hi,
+// lo): two vec4 a particle. `end_step` takes the velocity of their moves.
+@group(2) @binding(1) var<storage, read_write> before: array<vec4<f32>>;
 // Per particle (n + 1 entries): x its first spring link, y its first triangle link.
 @group(1) @binding(0) var<storage, read> offsets: array<vec2<u32>>;
 // A spring at a particle: -k, k L, -b (as f32 bits) and the other end.
@@ -118,11 +125,34 @@ fn step_particles(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let next_state = update(method, u, a, w, h, 0.5 * h);
     // `advanced` (x + h v) on the two-part position.
-    var x = moved(Position(me.x.xyz, me.low.xyz), h * next_state.moving);
-    var v = next_state.v;
-    u = next_state.u;
+    let x = moved(Position(me.x.xyz, me.low.xyz), h * next_state.moving);
+    if (step.flags.z & CONSTRAINED) != 0u {
+        before[2u * i] = vec4<f32>(x.hi, 0.0);
+        before[2u * i + 1u] = vec4<f32>(x.lo, 0.0);
+        store_particle(i, Ended(x, next_state.v, next_state.u), w);
+        return;
+    }
+    store_particle(i, end_of_step(x, next_state.v, next_state.u, w), w);
+}
+
+// A particle after its constraints: its position, velocity and (Verlet) update
+// velocity.
+struct Ended {
+    x: Position,
+    v: vec3<f32>,
+    u: vec3<f32>,
+}
+
+// `laws::end_of_step_contacts` for the sphere and the ground (the engine steps no
+// other colliders), then the speed limit, of a particle at x moving at v, of
+// inverse mass w: the push moves x, and the change of velocity goes into u too.
+fn end_of_step(x_in: Position, v_in: vec3<f32>, u_in: vec3<f32>, w: f32) -> Ended {
+    var x = x_in;
+    var v = v_in;
+    var u = u_in;
+    let h = step.gravity.w;
+    let ground = step.ground;
     if w > 0.0 {
-        let v_free = v;
         var push = vec3<f32>(0.0);
         if (step.flags.z & SPHERE) != 0u {
             let out = contact_sphere((x.hi - step.sphere.xyz) + x.lo, v, step.sphere.w, step.limits.x, h);
@@ -133,7 +163,7 @@ fn step_particles(@builtin(global_invocation_id) id: vec3<u32>) {
             v = contact_ground_friction((x.hi.y - ground.x) + x.lo.y + push.y, v, w, ground, h);
         }
         x = moved(x, push);
-        u += v - v_free;
+        u += v - v_in;
     }
     let max_speed = step.limits.y;
     if max_speed > 0.0 {
@@ -141,8 +171,13 @@ fn step_particles(@builtin(global_invocation_id) id: vec3<u32>) {
         v *= factor;
         u *= factor;
     }
-    state_out[i] = Particle(vec4<f32>(x.hi, w), vec4<f32>(v, 0.0), vec4<f32>(x.lo, 0.0));
-    if method == VERLET {
-        u_out[i] = vec4<f32>(u, 0.0);
+    return Ended(x, v, u);
+}
+
+// Particle i's new state (and Verlet's update velocity).
+fn store_particle(i: u32, end: Ended, w: f32) {
+    state_out[i] = Particle(vec4<f32>(end.x.hi, w), vec4<f32>(end.v, 0.0), vec4<f32>(end.x.lo, 0.0));
+    if step.flags.x == VERLET {
+        u_out[i] = vec4<f32>(end.u, 0.0);
     }
 }

@@ -493,3 +493,131 @@ fn the_wgsl_contact_and_speed_limit_agree_with_the_f64_laws() {
         }
     });
 }
+
+/// The constraints' laws: the factor that brings a spring to a length (the
+/// stretch limit's), and XPBD's correction and coefficients.
+#[test]
+fn the_wgsl_constraint_laws_agree_with_the_f64_laws() {
+    let Some(probe) = Probe::open() else {
+        return;
+    };
+    let f = f64::from;
+    let length = cases(11, |r| {
+        let d = glam::Vec3::from(vec3(r, 1.0));
+        let d = d.normalize_or(glam::Vec3::X) * r.random_range(0.01..1.0);
+        let goal = d.length() * r.random_range(0.5..1.5);
+        [
+            v4(d.to_array(), 0.0),
+            [goal, r.random_range(1.0..1e3), 0.0, 0.0],
+            [0.0; 4],
+            [0.0; 4],
+            [0.0; 4],
+            [0.0; 4],
+        ]
+    });
+    conform(&probe, "length_factor", 10, 4.0, &length, |c| {
+        let (d, [goal, w, _, _]) = (d3(c[0]), c[1].map(f));
+        let l = d.length();
+        Expected {
+            values: vec![(0, laws::length_factor(V3::from(d), goal, w))],
+            scale: (l + goal) / (l * w),
+        }
+    });
+    // A spring (k, b) at a step h, as the engines meet them.
+    let spring = |r: &mut StdRng| -> [f32; 3] {
+        [
+            r.random_range(1e2..1e7),
+            r.random_range(0.0..10.0),
+            r.random_range(1e-4..1e-2),
+        ]
+    };
+    let factor = cases(12, |r| {
+        let d = offset_or_zero(r);
+        let l = d.iter().map(|x| x * x).sum::<f32>().sqrt();
+        let [k, b, h] = spring(r);
+        let (alpha, gamma) = (1.0 / (k * h * h), b / (k * h));
+        let alpha_lambda = if r.random_bool(0.5) {
+            0.0
+        } else {
+            r.random_range(-0.1..0.1) * l
+        };
+        [
+            v4(d, 0.0),
+            [
+                r.random_range(1.0..1e3),
+                l * r.random_range(0.5..1.5),
+                alpha_lambda,
+                0.0,
+            ],
+            [alpha, gamma, 1.0 + gamma, 0.0],
+            v4(vec3(r, 0.01), 0.0),
+            [0.0; 4],
+            [0.0; 4],
+        ]
+    });
+    let xpbd = |c: &Case| {
+        let (d, moved) = (d3(c[0]), d3(c[3]));
+        let [w, rest, alpha_lambda, _] = c[1].map(f);
+        let [alpha, gamma, one_gamma, _] = c[2].map(f);
+        let coefficients = laws::XpbdCoefficients {
+            rest,
+            alpha,
+            gamma,
+            one_gamma,
+        };
+        let (s, t) = laws::xpbd_factor(
+            V3::from(d),
+            V3::from(moved),
+            w,
+            coefficients,
+            Some(alpha_lambda),
+        );
+        // The terms of t's numerator over its denominator.
+        let l = d.length();
+        let along = (d.dot(moved) / l.max(1e-12)).abs();
+        let t_scale =
+            (l + rest.abs() + alpha_lambda.abs() + gamma * along) / (one_gamma * w + alpha);
+        (s, t, t_scale, l)
+    };
+    conform(&probe, "xpbd_factor (t)", 11, 4.0, &factor, |c| {
+        let (_, t, scale, _) = xpbd(c);
+        Expected {
+            values: vec![(1, t)],
+            scale,
+        }
+    });
+    conform(&probe, "xpbd_factor (s)", 11, 4.0, &factor, |c| {
+        let (s, _, scale, l) = xpbd(c);
+        // Coincident ends: s is 0, whatever t.
+        let scale = if l > 1e-12 { scale / l } else { 1.0 };
+        Expected {
+            values: vec![(0, s)],
+            scale,
+        }
+    });
+    let coefficients = cases(13, |r| {
+        let [k, b, h] = spring(r);
+        [
+            [k, b, h, 0.0],
+            [0.0; 4],
+            [0.0; 4],
+            [0.0; 4],
+            [0.0; 4],
+            [0.0; 4],
+        ]
+    });
+    for (slot, name) in [
+        (0, "xpbd_coefficients (alpha)"),
+        (1, "xpbd_coefficients (gamma)"),
+    ] {
+        conform(&probe, name, 12, 4.0, &coefficients, |c| {
+            let [k, b, h, _] = c[0].map(f);
+            let spring = laws::XpbdSpring::new(1.0, k, b, h).expect("k > 0");
+            let value = [spring.alpha, spring.gamma][slot];
+            Expected {
+                values: vec![(slot, value)],
+                scale: value,
+            }
+        });
+    }
+}

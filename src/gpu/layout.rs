@@ -1,6 +1,7 @@
 //! What the GPU engine's buffers hold, as the shaders read them
-//! (`shaders/gpu/step.wgsl`): the particles, each particle's springs and
-//! triangles in a compressed adjacency, and one step's parameters.
+//! (`shaders/gpu/step.wgsl`, `shaders/gpu/constrain.wgsl`): the particles, each
+//! particle's springs and triangles in a compressed adjacency, one step's
+//! parameters, and the springs in their constraint order, cut into runs.
 
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec3, Vec3};
@@ -119,6 +120,7 @@ pub(crate) const VERLET: u32 = 2;
 pub(crate) const GROUND: u32 = 1;
 pub(crate) const SPHERE: u32 = 2;
 pub(crate) const SPRINGS: u32 = 4;
+pub(crate) const CONSTRAINED: u32 = 8;
 
 /// One step's parameters, the shader's `Step` (see its fields there), padded to
 /// 256 bytes: one record per step in a uniform buffer, bound at its offset.
@@ -139,3 +141,75 @@ pub(crate) struct StepRecord {
 pub(crate) const RECORD_BYTES: u64 = 256;
 
 const _: () = assert!(std::mem::size_of::<StepRecord>() as u64 == RECORD_BYTES);
+
+/// A spring as the constraint passes read it, the shader's `ConstraintSpring`:
+/// its ends, rest length (m), stiffness (N/m) and damping (N s/m).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub(crate) struct ConstraintSpring {
+    pub a: u32,
+    pub b: u32,
+    pub rest: f32,
+    pub stiffness: f32,
+    pub damping: f32,
+    pub _pad: [u32; 3],
+}
+
+/// The runs of the model's constraint order (`Model::constraint_order`) in which
+/// no two springs share a particle, as (first place, springs): a run's
+/// corrections can be made in any order, in parallel, with the result of the
+/// f64 engine's sequential sweep. On a grid or a lattice the runs are its colour
+/// classes (about a dozen); an order without them falls into many short runs.
+pub(crate) fn constraint_runs(model: &Model) -> Vec<(u32, u32)> {
+    let mut last_run = vec![u32::MAX; model.mass.len()];
+    let mut runs: Vec<(u32, u32)> = Vec::new();
+    for (place, &i) in model.constraint_order.iter().enumerate() {
+        let s = &model.springs[i as usize];
+        let (a, b) = (s.a as usize, s.b as usize);
+        // The open run, if the spring shares no particle with it.
+        let open = (runs.len() as u32).checked_sub(1);
+        let current = match open.filter(|&r| last_run[a] != r && last_run[b] != r) {
+            Some(run) => run,
+            None => {
+                runs.push((place as u32, 0));
+                runs.len() as u32 - 1
+            }
+        };
+        (last_run[a], last_run[b]) = (current, current);
+        runs[current as usize].1 += 1;
+    }
+    runs
+}
+
+/// The model's springs in its constraint order, as the constraint passes read them.
+pub(crate) fn constraint_springs(model: &Model) -> Vec<ConstraintSpring> {
+    let spring = |&i: &u32| {
+        let s = &model.springs[i as usize];
+        ConstraintSpring {
+            a: s.a,
+            b: s.b,
+            rest: s.rest as f32,
+            stiffness: s.stiffness as f32,
+            damping: s.damping as f32,
+            _pad: [0; 3],
+        }
+    };
+    model.constraint_order.iter().map(spring).collect()
+}
+
+/// Which sweep a run's dispatch is, the shader's `FORWARD`, `FORWARD_KEPT`, `BACK`.
+pub(crate) const FORWARD: u32 = 0;
+pub(crate) const FORWARD_KEPT: u32 = 1;
+pub(crate) const BACK: u32 = 2;
+
+/// One constraint dispatch's run, the shader's `Run`, padded to a record.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct RunRecord {
+    pub start: u32,
+    pub count: u32,
+    pub sweep: u32,
+    pub _pad: [u32; 61],
+}
+
+const _: () = assert!(std::mem::size_of::<RunRecord>() as u64 == RECORD_BYTES);

@@ -11,16 +11,20 @@
 //! low`) from an origin at the cloth's centre, taken again at every run, so a
 //! cloth that travels keeps its precision; velocities are f32.
 //!
-//! It steps symplectic Euler, explicit Euler and position Verlet with gravity,
-//! the applied force, damped springs, aero drag with wind and gusts, air
-//! damping, the ground's penalty and friction, the sphere with friction, pins
-//! and the speed limit. A scene that needs more (bars, the stretch limit, XPBD,
-//! self-collision, tearing, colliders, the other integrators) is refused with
-//! its reasons ([`GpuEngine::refusal`]).
+//! It steps symplectic Euler, explicit Euler, position Verlet and XPBD with
+//! gravity, the applied force, damped springs, aero drag with wind and gusts, air
+//! damping, the ground's penalty and friction, the sphere with friction, pins,
+//! the stretch limit and the speed limit. XPBD and the stretch limit sweep the
+//! springs in the model's constraint order, one dispatch for each run of springs
+//! that share no particle (`shaders/gpu/constrain.wgsl`). A scene that needs more
+//! (bars, self-collision, tearing, colliders, the other integrators, constraints
+//! over springs whose order has no colour classes) is refused with its reasons
+//! ([`GpuEngine::refusal`]).
 
 mod choice;
 #[cfg(test)]
 mod conformance;
+mod constraints;
 mod device;
 mod layout;
 mod pipeline;
@@ -61,9 +65,10 @@ pub enum GpuError {
         /// The device's largest storage buffer.
         limit: u64,
     },
-    /// The model's topology changed since the engine was built (springs torn or
-    /// cut, particles added): build the engine again.
-    #[error("the cloth's springs changed since the GPU engine was built")]
+    /// The model's topology or its constraints changed since the engine was
+    /// built (springs torn or cut, particles added, XPBD or the stretch limit
+    /// turned on or off): build the engine again.
+    #[error("the cloth's springs or constraints changed since the GPU engine was built")]
     Changed,
 }
 
@@ -73,6 +78,9 @@ const WORKGROUP: u32 = 64;
 const MAX_GROUPS: u32 = 65_535;
 /// Steps encoded in one submission (their uniform records take 256 KiB).
 const STEPS_PER_SUBMISSION: u64 = 1024;
+/// Runs of springs a constraint sweeps at most, each a dispatch a step (a grid's
+/// constraint order has 12, a lattice's about 30).
+const MOST_RUNS: usize = 256;
 
 /// The GPU engine for one model's topology.
 pub struct GpuEngine {
@@ -88,6 +96,7 @@ pub struct GpuEngine {
     bind: [wgpu::BindGroup; 2],
     topology: wgpu::BindGroup,
     records: wgpu::Buffer,
+    constraints: constraints::Constraints,
     readback: wgpu::Buffer,
     particles: usize,
     springs: usize,
@@ -97,6 +106,11 @@ pub struct GpuEngine {
 impl GpuEngine {
     /// The reasons the engine cannot step `model` exactly, if any, in one line.
     pub fn refusal(model: &Model) -> Option<String> {
+        Self::unsupported(model).or_else(|| Self::too_many_runs(model))
+    }
+
+    /// What the engine does not step in `model`, in one line, if anything.
+    fn unsupported(model: &Model) -> Option<String> {
         let p = &model.params;
         let Some(params) = MeshParams::of(model) else {
             return Some(format!(
@@ -105,14 +119,8 @@ impl GpuEngine {
             ));
         };
         let mut reasons = Vec::new();
-        if params.integrator == Integrator::Xpbd {
-            reasons.push("XPBD".to_string());
-        }
         if !model.bars.is_empty() && params.bar_iterations > 0 {
             reasons.push("bars".to_string());
-        }
-        if params.stretch_limit.is_some() {
-            reasons.push("the stretch limit".to_string());
         }
         if params.self_collision.is_some() {
             reasons.push("self-collision".to_string());
@@ -127,6 +135,22 @@ impl GpuEngine {
             ));
         }
         (!reasons.is_empty()).then(|| format!("it does not step {} yet", reasons.join(", ")))
+    }
+
+    /// Why the constraint sweeps of `model` would take too many dispatches, if
+    /// they would: its springs' order has no colour classes (a mesh cloth).
+    fn too_many_runs(model: &Model) -> Option<String> {
+        let (xpbd, stretch) = constraints::passes(&MeshParams::of(model)?);
+        if !xpbd && !stretch {
+            return None;
+        }
+        let runs = layout::constraint_runs(model).len();
+        let what = if xpbd { "XPBD" } else { "the stretch limit" };
+        (runs > MOST_RUNS).then(|| {
+            format!(
+                "{what} on this cloth, whose springs' constraint order falls into {runs} runs that share no particle where it sweeps at most {MOST_RUNS} (a grid's or a lattice's has colour classes)"
+            )
+        })
     }
 
     /// An engine for `system`'s model on the best adapter there is.
@@ -238,6 +262,9 @@ impl GpuEngine {
         });
         let bind = [0, 1].map(|k| pipelines.step_group(&device, &records, &state, &u, k));
         let topology = pipelines.topology_group(&device, [&offsets, &links, &triangle_links]);
+        let passes = constraints::passes(&MeshParams::of(model).expect("refusal() passed"));
+        let constraints =
+            constraints::Constraints::new((&device, &pipelines), model, passes, fits)?;
         Ok(Self {
             adapter,
             device,
@@ -248,6 +275,7 @@ impl GpuEngine {
             bind,
             topology,
             records,
+            constraints,
             readback,
             particles: n,
             springs: model.springs.len(),
@@ -271,8 +299,13 @@ impl GpuEngine {
         {
             return Err(GpuError::Changed);
         }
-        if let Some(reason) = Self::refusal(model) {
+        // The laws only: the constraint runs were counted when the engine was built.
+        if let Some(reason) = Self::unsupported(model) {
             return Err(GpuError::Unsupported(reason));
+        }
+        let params = MeshParams::of(model).expect("unsupported() passed");
+        if constraints::passes(&params) != self.constraints.passes {
+            return Err(GpuError::Changed);
         }
         system.run_outside(n, |system| self.advance(system, n))
     }
@@ -317,13 +350,15 @@ impl GpuEngine {
                     label: Some("step particles"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&self.pipelines.pipeline);
                 pass.set_bind_group(1, &self.topology, &[]);
                 let (x, y) = dispatch_size(self.particles);
                 for k in 0..chunk {
                     let parity = ((done + k) % 2) as usize;
+                    pass.set_pipeline(&self.pipelines.step);
                     pass.set_bind_group(0, &self.bind[parity], &[(k * RECORD_BYTES) as u32]);
+                    self.constraints.bind(&mut pass);
                     pass.dispatch_workgroups(x, y, 1);
+                    (self.constraints).encode(&mut pass, &self.pipelines, self.particles);
                 }
             }
             self.queue.submit([encoder.finish()]);
@@ -412,6 +447,10 @@ fn step_record(params: &MeshParams, origin: DVec3, time: f64, particles: usize) 
     if params.spring_forces {
         flags |= layout::SPRINGS;
     }
+    let (xpbd, stretch) = constraints::passes(params);
+    if xpbd || stretch {
+        flags |= layout::CONSTRAINED;
+    }
     let ground = params.ground.map_or([0.0; 4], |g| {
         flags |= layout::GROUND;
         [
@@ -439,7 +478,7 @@ fn step_record(params: &MeshParams, origin: DVec3, time: f64, particles: usize) 
         limits: [
             params.friction as f32,
             params.max_speed.unwrap_or(0.0) as f32,
-            0.0,
+            params.stretch_limit.unwrap_or(0.0) as f32,
             0.0,
         ],
         flags: [method, particles as u32, flags, 0],

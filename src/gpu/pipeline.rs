@@ -1,22 +1,33 @@
-//! The step's compute pipeline and its bind groups, as `shaders/gpu/step.wgsl`
-//! declares them.
+//! The step's compute pipelines and their bind groups, as `shaders/gpu/step.wgsl`
+//! and `shaders/gpu/constrain.wgsl` declare them: the step of every particle, the
+//! constraint passes over runs of springs, and the end of a constrained step.
 
 use std::num::NonZeroU64;
 
 use super::layout::RECORD_BYTES;
 
-/// The step shader: the laws, then the pass that calls them.
+/// The step's shaders: the laws, then the passes that call them.
 pub(super) const STEP_SHADER: &str = concat!(
     include_str!("../../shaders/gpu/laws.wgsl"),
-    include_str!("../../shaders/gpu/step.wgsl")
+    include_str!("../../shaders/gpu/step.wgsl"),
+    include_str!("../../shaders/gpu/constrain.wgsl")
 );
 
-/// The pipeline and its two bind group layouts (handles: a clone shares them).
+/// The pipelines and their three bind group layouts (handles: a clone shares
+/// them).
 #[derive(Clone)]
 pub(super) struct Pipelines {
-    pub pipeline: wgpu::ComputePipeline,
-    step: wgpu::BindGroupLayout,
+    /// `step_particles`.
+    pub step: wgpu::ComputePipeline,
+    /// `xpbd_run`.
+    pub xpbd: wgpu::ComputePipeline,
+    /// `stretch_limit_run`.
+    pub stretch_limit: wgpu::ComputePipeline,
+    /// `end_step`.
+    pub end: wgpu::ComputePipeline,
+    records: wgpu::BindGroupLayout,
     topology: wgpu::BindGroupLayout,
+    constraints: wgpu::BindGroupLayout,
 }
 
 fn storage(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -38,19 +49,10 @@ impl Pipelines {
             label: Some("step.wgsl"),
             source: wgpu::ShaderSource::Wgsl(STEP_SHADER.into()),
         });
-        let step = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        let records = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("step: records and particles"),
             entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: NonZeroU64::new(RECORD_BYTES),
-                    },
-                    count: None,
-                },
+                record(0),
                 storage(1, true),
                 storage(2, true),
                 storage(3, false),
@@ -61,23 +63,38 @@ impl Pipelines {
             label: Some("step: adjacency"),
             entries: &[storage(0, true), storage(1, true), storage(2, true)],
         });
+        let constraints = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("step: constraints"),
+            entries: &[
+                record(0),
+                storage(1, false),
+                storage(2, true),
+                storage(3, false),
+            ],
+        });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("step"),
-            bind_group_layouts: &[Some(&step), Some(&topology)],
+            bind_group_layouts: &[Some(&records), Some(&topology), Some(&constraints)],
             immediate_size: 0,
         });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("step particles"),
-            layout: Some(&layout),
-            module: &module,
-            entry_point: Some("step_particles"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = |entry_point| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry_point),
+                layout: Some(&layout),
+                module: &module,
+                entry_point: Some(entry_point),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
         Self {
-            pipeline,
-            step,
+            step: pipeline("step_particles"),
+            xpbd: pipeline("xpbd_run"),
+            stretch_limit: pipeline("stretch_limit_run"),
+            end: pipeline("end_step"),
+            records,
             topology,
+            constraints,
         }
     }
 
@@ -99,7 +116,7 @@ impl Pipelines {
         };
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("step"),
-            layout: &self.step,
+            layout: &self.records,
             entries: &[
                 wgpu::BindGroupEntry {
                     binding: 0,
@@ -125,6 +142,45 @@ impl Pipelines {
             layout: &self.topology,
             entries: &entries,
         })
+    }
+
+    /// The bind group of the constraint passes: the run records, the positions
+    /// before the constraints, the springs in order, the multipliers.
+    pub fn constraint_group(
+        &self,
+        device: &wgpu::Device,
+        runs: &wgpu::Buffer,
+        buffers: [&wgpu::Buffer; 3],
+    ) -> wgpu::BindGroup {
+        let run = wgpu::BufferBinding {
+            buffer: runs,
+            offset: 0,
+            size: NonZeroU64::new(RECORD_BYTES),
+        };
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(run),
+        }];
+        entries.extend((0..3).map(|i| entry(i as u32 + 1, buffers[i])));
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("constraints"),
+            layout: &self.constraints,
+            entries: &entries,
+        })
+    }
+}
+
+/// A uniform binding of one 256-byte record, at a dynamic offset.
+fn record(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: true,
+            min_binding_size: NonZeroU64::new(RECORD_BYTES),
+        },
+        count: None,
     }
 }
 

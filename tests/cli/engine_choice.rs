@@ -94,7 +94,7 @@ fn auto_falls_back_to_the_cpu_and_says_so() {
 #[test]
 fn what_the_gpu_engine_cannot_step_is_refused_with_the_reason() {
     for (scene, reason) in [
-        ("sheet", "stretch limit"),
+        ("fold", "self-collision"),
         ("rope", "bars"),
         ("cloth", "rk4"),
     ] {

@@ -59,14 +59,14 @@ fn a_scene_the_gpu_engine_does_not_step_runs_on_the_cpu_and_says_why() {
     let Some(mut s) = cloth(true) else {
         return;
     };
-    s.apply(Edit::StretchLimit(Some(0.1))).unwrap();
+    s.apply(Edit::TearStrain(Some(0.5))).unwrap();
     let t = s.system().time();
     s.step_frame();
     assert!(s.system().time() > t, "no steps");
     let why = s.gpu_problem().expect("a reason").to_string();
-    assert!(why.contains("stretch limit"), "{why}");
+    assert!(why.contains("tearing"), "{why}");
     // Taken back, it steps on the GPU again.
-    s.apply(Edit::StretchLimit(None)).unwrap();
+    s.apply(Edit::TearStrain(None)).unwrap();
     s.step_frame();
     assert_eq!(s.gpu_problem(), None);
 }
