@@ -434,6 +434,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
         // A warm-up that diverges has served its purpose: the run starts over.
         let _ = stepper.run(&mut system, args.warmup)?;
         system.set_state(start.clone());
+        stepper.reset_gpu_time();
     }
     system.run(0).map_err(|e| e.to_string())?;
     let start_params = *system.params();
@@ -442,7 +443,7 @@ fn run(args: RunArgs) -> Result<ExitCode, String> {
     let start = Instant::now();
     let outcome = run_checked(&mut stepper, &mut system, steps, recheck, None)?;
     let wall = start.elapsed().as_secs_f64();
-    let summary = Summary::of(&system, wall, engine).on_gpu(stepper.adapter());
+    let summary = Summary::of(&system, wall, engine).on_gpu(stepper.adapter(), stepper.gpu_time());
     let mut dumped = None;
     if let (Err(d), Some(start_state)) = (&outcome, start_state) {
         // The state at the divergence is not finite (or ran away): the CSV and

@@ -20,6 +20,8 @@ pub(super) struct Summary {
     engine: Engine,
     /// The adapter, when the GPU engine ran ([`Self::on_gpu`]).
     adapter: Option<String>,
+    /// GPU seconds a step, from its timestamps, where the adapter has them.
+    gpu_seconds_per_step: Option<f64>,
     threads: usize,
     integrator: Integrator,
     /// The step the run ended on (safe stepping may have split the scene's).
@@ -59,6 +61,7 @@ impl Summary {
             max_speed,
             engine,
             adapter: None,
+            gpu_seconds_per_step: None,
             threads: system.engine_threads(),
             integrator: system.params().integrator,
             dt: system.params().dt,
@@ -72,10 +75,16 @@ impl Summary {
         }
     }
 
-    /// The run was the GPU engine's, on `adapter`.
-    pub(super) fn on_gpu(self, adapter: Option<&cloth_sandbox::gpu::Adapter>) -> Self {
+    /// The run was the GPU engine's, on `adapter`, taking `gpu_time` by its
+    /// timestamps.
+    pub(super) fn on_gpu(
+        self,
+        adapter: Option<&cloth_sandbox::gpu::Adapter>,
+        gpu_time: Option<cloth_sandbox::gpu::GpuTime>,
+    ) -> Self {
         Self {
             adapter: adapter.map(ToString::to_string),
+            gpu_seconds_per_step: gpu_time.and_then(|t| t.per_step()),
             ..self
         }
     }
@@ -110,6 +119,7 @@ impl Summary {
             "max_speed": self.max_speed,
             "engine": if self.adapter.is_some() { "gpu" } else { self.engine.name() },
             "adapter": self.adapter,
+            "gpu_seconds_per_step": self.gpu_seconds_per_step,
             "simd": self.adapter.is_none().then(|| self.engine.simd_level().name()),
             "threads": self.adapter.is_none().then_some(self.threads),
             "integrator": self.integrator.name(),
@@ -152,6 +162,9 @@ impl Summary {
         match &self.adapter {
             Some(adapter) => println!("engine          gpu, on {adapter}"),
             None => println!("engine          {}", self.engine.label(self.threads)),
+        }
+        if let Some(t) = self.gpu_seconds_per_step {
+            println!("gpu time        {:.3} us a step (its timestamps)", t * 1e6);
         }
         println!("integrator      {}, dt {:.4e} s", self.integrator, self.dt);
         if let Some(n) = self.solver_iterations {

@@ -4,7 +4,7 @@
 //! CPU adapter such as lavapipe) and from [`AUTO_GPU_PARTICLES`] particles, and
 //! the CPU otherwise, saying why when it had looked for a GPU.
 
-use super::{GpuEngine, GpuError};
+use super::{GpuEngine, GpuError, GpuTime};
 use crate::sim::{Divergence, System};
 
 /// Particles from which `auto` looks for a GPU. Below it no adapter is opened
@@ -124,6 +124,21 @@ impl Stepper {
         match self {
             Self::Cpu => Ok(system.run(n)),
             Self::Gpu(engine) => engine.run(system, n).map_err(|e| e.to_string()),
+        }
+    }
+
+    /// The GPU time of the steps so far, on the GPU engine with timestamps.
+    pub fn gpu_time(&self) -> Option<GpuTime> {
+        match self {
+            Self::Cpu => None,
+            Self::Gpu(engine) => engine.gpu_time(),
+        }
+    }
+
+    /// Starts the GPU time afresh (after a warm-up).
+    pub fn reset_gpu_time(&mut self) {
+        if let Self::Gpu(engine) = self {
+            engine.reset_gpu_time();
         }
     }
 

@@ -43,9 +43,10 @@ pub(super) fn open() -> Result<(Adapter, wgpu::Device, wgpu::Queue), GpuError> {
         backend: format!("{:?}", info.backend),
         software: info.device_type == wgpu::DeviceType::Cpu,
     };
+    // Timestamps where the adapter has them: the GPU time a step takes.
     let descriptor = wgpu::DeviceDescriptor {
         label: Some("cloth GPU engine"),
-        required_features: wgpu::Features::empty(),
+        required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
         required_limits: adapter.limits(),
         ..Default::default()
     };

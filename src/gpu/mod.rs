@@ -28,9 +28,11 @@ mod constraints;
 mod device;
 mod layout;
 mod pipeline;
+mod timer;
 
 pub use choice::{AUTO_GPU_PARTICLES, EngineChoice, Refused, Stepper};
 pub use device::Adapter;
+pub use timer::GpuTime;
 
 use glam::DVec3;
 use wgpu::util::DeviceExt as _;
@@ -98,6 +100,9 @@ pub struct GpuEngine {
     records: wgpu::Buffer,
     constraints: constraints::Constraints,
     readback: wgpu::Buffer,
+    /// Timestamps, where the device has them, and the GPU time they measured.
+    timer: Option<timer::Timer>,
+    gpu_time: GpuTime,
     particles: usize,
     springs: usize,
     triangles: usize,
@@ -254,9 +259,15 @@ impl GpuEngine {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let timer = timer::Timer::new(&device, &queue);
+        let timer_bytes = if timer.is_some() {
+            timer::Timer::BYTES
+        } else {
+            0
+        };
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: particle_bytes.max(16) + u_bytes,
+            size: particle_bytes.max(16) + u_bytes + timer_bytes,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -277,6 +288,8 @@ impl GpuEngine {
             records,
             constraints,
             readback,
+            timer,
+            gpu_time: GpuTime::default(),
             particles: n,
             springs: model.springs.len(),
             triangles: model.triangles.len(),
@@ -286,6 +299,18 @@ impl GpuEngine {
     /// The adapter the engine runs on.
     pub fn adapter(&self) -> &Adapter {
         &self.adapter
+    }
+
+    /// The GPU time the steps took since the engine was built or
+    /// [`Self::reset_gpu_time`], from timestamps; `None` where the device has
+    /// none.
+    pub fn gpu_time(&self) -> Option<GpuTime> {
+        self.timer.as_ref().map(|_| self.gpu_time)
+    }
+
+    /// Starts the GPU time afresh (after a warm-up).
+    pub fn reset_gpu_time(&mut self) {
+        self.gpu_time = GpuTime::default();
     }
 
     /// Runs `n` steps of `system` on the GPU, then checks the state as a run's end
@@ -332,7 +357,7 @@ impl GpuEngine {
                 .write_buffer(&self.u[0], 0, bytemuck::cast_slice(&u));
         }
         let mut time = state.time;
-        let mut done = 0;
+        let (mut done, mut submissions, mut timed_steps) = (0, 0, 0);
         while done < n {
             let chunk = STEPS_PER_SUBMISSION.min(n - done);
             let records: Vec<StepRecord> = (0..chunk)
@@ -346,9 +371,13 @@ impl GpuEngine {
                 .write_buffer(&self.records, 0, bytemuck::cast_slice(&records));
             let mut encoder = self.device.create_command_encoder(&Default::default());
             {
+                let timestamp_writes = self.timer.as_ref().and_then(|t| t.writes(submissions));
+                if timestamp_writes.is_some() {
+                    timed_steps += chunk;
+                }
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("step particles"),
-                    timestamp_writes: None,
+                    timestamp_writes,
                 });
                 pass.set_bind_group(1, &self.topology, &[]);
                 let (x, y) = dispatch_size(self.particles);
@@ -363,9 +392,14 @@ impl GpuEngine {
             }
             self.queue.submit([encoder.finish()]);
             done += chunk;
+            submissions += 1;
         }
         let last = (n % 2) as usize;
-        let (particles, u) = self.read_back(last, verlet.is_some())?;
+        let (particles, u, seconds) = self.read_back(last, verlet.is_some(), submissions)?;
+        if let Some(seconds) = seconds {
+            self.gpu_time.steps += timed_steps;
+            self.gpu_time.seconds += seconds;
+        }
         Ok(Stepped {
             positions: particles.iter().map(|p| p.position(origin)).collect(),
             velocities: particles.iter().map(Particle::velocity).collect(),
@@ -373,12 +407,15 @@ impl GpuEngine {
         })
     }
 
-    /// The particles (and Verlet's update velocities) in `state[which]`.
+    /// The particles (and Verlet's update velocities) in `state[which]`, and the
+    /// GPU seconds of the run's first timed `submissions`, where there is a timer.
+    #[allow(clippy::type_complexity)]
     fn read_back(
         &self,
         which: usize,
         verlet: bool,
-    ) -> Result<(Vec<Particle>, Option<Vec<DVec3>>), GpuError> {
+        submissions: u64,
+    ) -> Result<(Vec<Particle>, Option<Vec<DVec3>>, Option<f64>), GpuError> {
         let particle_bytes = (self.particles * size_of::<Particle>()) as u64;
         let u_bytes = (self.particles * 16) as u64;
         let mut encoder = self.device.create_command_encoder(&Default::default());
@@ -391,6 +428,11 @@ impl GpuEngine {
                 particle_bytes,
                 u_bytes,
             );
+        }
+        // The timestamps, last in the readback.
+        let stamps_at = (self.readback.size()).saturating_sub(timer::Timer::BYTES);
+        if let Some(timer) = &self.timer {
+            timer.resolve(&mut encoder, submissions, (&self.readback, stamps_at));
         }
         self.queue.submit([encoder.finish()]);
         let slice = self.readback.slice(..);
@@ -417,9 +459,11 @@ impl GpuEngine {
                 .map(|u| glam::Vec3::from_slice(&u[..3]).as_dvec3())
                 .collect()
         });
+        let seconds = (self.timer.as_ref())
+            .map(|timer| timer.seconds(&bytes[stamps_at as usize..], submissions));
         drop(mapped);
         self.readback.unmap();
-        Ok((particles, u))
+        Ok((particles, u, seconds))
     }
 }
 

@@ -133,6 +133,17 @@ fn gpu_runs_name_the_adapter_and_agree_with_the_cpu() {
     assert_eq!(gpu["engine"], "gpu");
     assert!(gpu["adapter"].as_str().is_some_and(|a| !a.is_empty()));
     assert!(cpu["adapter"].is_null() && cpu["engine"] != "gpu");
+    // GPU time a step, where the adapter has timestamps: within the wall
+    // clock's time a step, which holds it and the upload and readback.
+    let wall = gpu["wall_time"].as_f64().unwrap() / 480.0;
+    match gpu["gpu_seconds_per_step"].as_f64() {
+        Some(t) => assert!(
+            t > 0.0 && t <= wall,
+            "{t} s a step on the GPU, {wall} s by the wall"
+        ),
+        None => assert!(gpu["gpu_seconds_per_step"].is_null()),
+    }
+    assert!(cpu["gpu_seconds_per_step"].is_null());
     // Both engines are checked against the f64 one elsewhere; here, that the run
     // is the same run: energy within 1e-5 relative after 0.5 s.
     let energy = |v: &serde_json::Value| v["energy"]["total"].as_f64().unwrap();
