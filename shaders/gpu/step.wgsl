@@ -15,7 +15,7 @@ struct Step {
     ground: vec4<f32>,    // height, stiffness, damping, friction
     sphere: vec4<f32>,    // centre, radius
     limits: vec4<f32>,    // x: the sphere's friction μ; y: the speed limit (0: none); z: the stretch limit τ
-    flags: vec4<u32>,     // x: the update rule; y: particles; z: GROUND | SPHERE | SPRINGS | CONSTRAINED
+    flags: vec4<u32>,     // x: the update rule; y: particles; z: GROUND | SPHERE | SPRINGS | CONSTRAINED; w: 0 (`opaque`)
 }
 
 const GROUND: u32 = 1u;
@@ -46,12 +46,20 @@ struct Position {
 }
 
 fn moved(p: Position, dx: vec3<f32>) -> Position {
-    let s = p.hi + dx;
-    let bb = s - p.hi;
-    let err = (p.hi - (s - bb)) + (dx - bb);
+    let s = opaque(p.hi + dx);
+    let bb = opaque(s - p.hi);
+    let err = (p.hi - opaque(s - bb)) + (dx - bb);
     let lo = p.lo + err;
-    let hi = s + lo;
-    return Position(hi, lo - (hi - s));
+    let hi = opaque(s + lo);
+    return Position(hi, lo - opaque(hi - s));
+}
+
+// `x`, through bits the compiler cannot see through: xor a zero it does not
+// know (the step record's flags.w). Shader compilers may reassociate float
+// sums, which folds a two-sum's error to 0 (lavapipe does: a particle's moves
+// of 1e-9 m were lost); a sum behind this is a value, not an expression.
+fn opaque(x: vec3<f32>) -> vec3<f32> {
+    return bitcast<vec3<f32>>(bitcast<vec3<u32>>(x) ^ vec3<u32>(step.flags.w));
 }
 
 @group(0) @binding(0) var<uniform> step: Step;

@@ -525,6 +525,7 @@ fn step_record(params: &MeshParams, origin: DVec3, time: f64, particles: usize) 
             params.stretch_limit.unwrap_or(0.0) as f32,
             0.0,
         ],
+        // The last is the shader's opaque zero (`opaque` in step.wgsl).
         flags: [method, particles as u32, flags, 0],
         _pad: [0; 36],
     }
