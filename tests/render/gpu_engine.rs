@@ -204,9 +204,10 @@ fn the_stiff_flag_keeps_the_f64_engines_energy() {
 /// Each is held within 2e-5 of the span, and the energy within 1e-4; the cloth
 /// within 1e-4 of it, as its top edge amplifies rounding under XPBD (a 1e-7 m
 /// nudge to its particle 14 in the f64 engine doubles every 10 steps from 0.1
-/// s). Each case's constraints move the cloth by over 10 times its tolerance
-/// (the cloth without them, checked here), so an engine that skipped a pass
-/// fails; the jelly swept forward only ends 3.8e-3 m away.
+/// s); the jelly within 2e-6 and 1e-6, as swept forward only it ends 1.8e-5 of
+/// its span and 4.7e-5 of its energy away (checked). Each case's constraints move
+/// the cloth by over 10 times its tolerance (the cloth without them, checked
+/// here), so an engine that skipped a pass fails.
 #[test]
 fn constrained_scenes_agree_with_the_f64_engine() {
     const XPBD: &str = "integrator=\"xpbd\"";
@@ -236,8 +237,8 @@ fn constrained_scenes_agree_with_the_f64_engine() {
             "jelly",
             &[XPBD, PINNED],
             &[XPBD, PINNED, "stiffness=1e-9"],
-            2e-5,
-            1e-4,
+            2e-6,
+            1e-6,
         ),
     ];
     for &(name, set, without, most, energy) in cases {
