@@ -68,15 +68,15 @@ fn opaque(x: vec3<f32>) -> vec3<f32> {
 @group(0) @binding(2) var<storage, read> u_in: array<vec4<f32>>;
 @group(0) @binding(3) var<storage, read_write> state_out: array<Particle>;
 @group(0) @binding(4) var<storage, read_write> u_out: array<vec4<f32>>;
-// With constraints, each particle's position before them, as `Position` (hi,
-// lo): two vec4 a particle. `end_step` takes the velocity of their moves.
-@group(2) @binding(1) var<storage, read_write> before: array<vec4<f32>>;
 // Per particle (n + 1 entries): x its first spring link, y its first triangle link.
 @group(1) @binding(0) var<storage, read> offsets: array<vec2<u32>>;
 // A spring at a particle: -k, k L, -b (as f32 bits) and the other end.
 @group(1) @binding(1) var<storage, read> links: array<vec4<u32>>;
 // A triangle at a particle: its three vertices in the model's order.
 @group(1) @binding(2) var<storage, read> triangle_links: array<vec4<u32>>;
+// With constraints, each particle's position before them, as `Position` (hi,
+// lo): two vec4 a particle. `end_step` takes the velocity of their moves.
+@group(2) @binding(1) var<storage, read_write> before: array<vec4<f32>>;
 
 // Large cloths dispatch in two dimensions (65,535 workgroups a dimension).
 const ROW: u32 = 65535u * 64u;

@@ -14,24 +14,34 @@ use crate::sim::constraints::xpbd_sweeps_back;
 use crate::sim::mesh_kernel::MeshParams;
 use crate::sim::{Integrator, Model};
 
-/// Which constraint passes a step runs: (XPBD, the stretch limit).
-pub(super) type Passes = (bool, bool);
-
-/// The passes `params` ask for.
-pub(super) fn passes(params: &MeshParams) -> Passes {
-    (
-        params.integrator == Integrator::Xpbd,
-        params.stretch_limit.is_some(),
-    )
+/// Which constraint passes a step runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Passes {
+    pub xpbd: bool,
+    pub stretch_limit: bool,
 }
 
-/// One dispatch of a step's constraint passes: a run of springs through a pass.
+impl Passes {
+    /// The passes `params` ask for.
+    pub fn of(params: &MeshParams) -> Self {
+        Self {
+            xpbd: params.integrator == Integrator::Xpbd,
+            stretch_limit: params.stretch_limit.is_some(),
+        }
+    }
+
+    /// Whether a step has constraints, and ends in `end_step`.
+    pub fn any(self) -> bool {
+        self.xpbd || self.stretch_limit
+    }
+}
+
+/// One dispatch of a step's constraint passes: a run of springs through XPBD's
+/// pass (else the stretch limit's), its record the dispatch's place in the run
+/// records.
 #[derive(Clone, Copy, Debug)]
 struct Dispatch {
-    /// XPBD's pass (else the stretch limit's).
     xpbd: bool,
-    /// Its record in the run records.
-    record: u32,
     /// Springs in the run.
     count: u32,
 }
@@ -54,8 +64,11 @@ impl Constraints {
         passes: Passes,
         fits: impl Fn(&'static str, u64) -> Result<(), GpuError>,
     ) -> Result<Self, GpuError> {
-        let (xpbd, stretch) = passes;
-        let constrained = xpbd || stretch;
+        let Passes {
+            xpbd,
+            stretch_limit: stretch,
+        } = passes;
+        let constrained = passes.any();
         let runs = match constrained {
             true => layout::constraint_runs(model),
             false => Vec::new(),
@@ -68,7 +81,6 @@ impl Constraints {
                 for &(start, count) in runs {
                     dispatches.push(Dispatch {
                         xpbd: pass_xpbd,
-                        record: records.len() as u32,
                         count,
                     });
                     records.push(RunRecord {
@@ -134,11 +146,6 @@ impl Constraints {
         })
     }
 
-    /// Whether a step has constraints, and ends in `end_step`.
-    pub fn constrained(&self) -> bool {
-        self.passes.0 || self.passes.1
-    }
-
     /// Binds the group for a step's first pass (`step_particles` writes the
     /// positions before the constraints through it).
     pub fn bind(&self, pass: &mut wgpu::ComputePass<'_>) {
@@ -154,21 +161,17 @@ impl Constraints {
         pipelines: &Pipelines,
         particles: usize,
     ) {
-        if !self.constrained() {
+        if !self.passes.any() {
             return;
         }
-        for d in &self.dispatches {
+        for (record, d) in self.dispatches.iter().enumerate() {
             let pipeline = if d.xpbd {
                 &pipelines.xpbd
             } else {
                 &pipelines.stretch_limit
             };
             pass.set_pipeline(pipeline);
-            pass.set_bind_group(
-                2,
-                &self.group,
-                &[(u64::from(d.record) * RECORD_BYTES) as u32],
-            );
+            pass.set_bind_group(2, &self.group, &[(record as u64 * RECORD_BYTES) as u32]);
             let (x, y) = dispatch_size(d.count as usize);
             pass.dispatch_workgroups(x, y, 1);
         }

@@ -81,7 +81,7 @@ const MAX_GROUPS: u32 = 65_535;
 /// Steps encoded in one submission (their uniform records take 256 KiB).
 const STEPS_PER_SUBMISSION: u64 = 1024;
 /// Runs of springs a constraint sweeps at most, each a dispatch a step (a grid's
-/// constraint order has 12, a lattice's about 30).
+/// constraint order has 12, a lattice's 26).
 const MOST_RUNS: usize = 256;
 
 /// The GPU engine for one model's topology.
@@ -145,12 +145,16 @@ impl GpuEngine {
     /// Why the constraint sweeps of `model` would take too many dispatches, if
     /// they would: its springs' order has no colour classes (a mesh cloth).
     fn too_many_runs(model: &Model) -> Option<String> {
-        let (xpbd, stretch) = constraints::passes(&MeshParams::of(model)?);
-        if !xpbd && !stretch {
+        let passes = constraints::Passes::of(&MeshParams::of(model)?);
+        if !passes.any() {
             return None;
         }
         let runs = layout::constraint_runs(model).len();
-        let what = if xpbd { "XPBD" } else { "the stretch limit" };
+        let what = if passes.xpbd {
+            "XPBD"
+        } else {
+            "the stretch limit"
+        };
         (runs > MOST_RUNS).then(|| {
             format!(
                 "{what} on this cloth, whose springs' constraint order falls into {runs} runs that share no particle where it sweeps at most {MOST_RUNS} (a grid's or a lattice's has colour classes)"
@@ -173,6 +177,13 @@ impl GpuEngine {
     ) -> Result<Self, GpuError> {
         if let Some(reason) = Self::refusal(system.model()) {
             return Err(GpuError::Unsupported(reason));
+        }
+        let has = device.limits().max_storage_buffers_per_shader_stage;
+        if has < pipeline::STORAGE_BUFFERS {
+            return Err(GpuError::Device(format!(
+                "{adapter} allows {has} storage buffers a shader stage, and the GPU engine binds {}",
+                pipeline::STORAGE_BUFFERS
+            )));
         }
         let pipelines = pipeline::Pipelines::new(&device);
         Self::build((adapter, device, queue, pipelines), system)
@@ -273,7 +284,7 @@ impl GpuEngine {
         });
         let bind = [0, 1].map(|k| pipelines.step_group(&device, &records, &state, &u, k));
         let topology = pipelines.topology_group(&device, [&offsets, &links, &triangle_links]);
-        let passes = constraints::passes(&MeshParams::of(model).expect("refusal() passed"));
+        let passes = constraints::Passes::of(&MeshParams::of(model).expect("refusal() passed"));
         let constraints =
             constraints::Constraints::new((&device, &pipelines), model, passes, fits)?;
         Ok(Self {
@@ -329,7 +340,7 @@ impl GpuEngine {
             return Err(GpuError::Unsupported(reason));
         }
         let params = MeshParams::of(model).expect("unsupported() passed");
-        if constraints::passes(&params) != self.constraints.passes {
+        if constraints::Passes::of(&params) != self.constraints.passes {
             return Err(GpuError::Changed);
         }
         system.run_outside(n, |system| self.advance(system, n))
@@ -491,8 +502,7 @@ fn step_record(params: &MeshParams, origin: DVec3, time: f64, particles: usize) 
     if params.spring_forces {
         flags |= layout::SPRINGS;
     }
-    let (xpbd, stretch) = constraints::passes(params);
-    if xpbd || stretch {
+    if constraints::Passes::of(params).any() {
         flags |= layout::CONSTRAINED;
     }
     let ground = params.ground.map_or([0.0; 4], |g| {

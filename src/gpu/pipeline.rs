@@ -13,6 +13,12 @@ pub(super) const STEP_SHADER: &str = concat!(
     include_str!("../../shaders/gpu/constrain.wgsl")
 );
 
+/// Storage buffers the pipelines bind in one stage: four of the particles (in
+/// and out, and Verlet's update velocities), three of the adjacency and three of
+/// the constraints. That is over WebGPU's default of 8: a device with fewer is
+/// refused before any pipeline is made.
+pub(super) const STORAGE_BUFFERS: u32 = 10;
+
 /// The pipelines and their three bind group layouts (handles: a clone shares
 /// them).
 #[derive(Clone)]
