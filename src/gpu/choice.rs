@@ -102,13 +102,17 @@ impl Stepper {
         if let Some(why) = GpuEngine::refusal(system.model()) {
             return cpu(format!("as the GPU engine cannot step this scene: {why}"));
         }
-        // The adapter first: no buffers are made for one that is not taken.
-        let opened = match super::device::open() {
-            Ok((adapter, ..)) if adapter.software => {
+        // The adapter first: no device is opened on one that is not taken.
+        let opened = match super::device::find() {
+            Ok((adapter, _)) if adapter.software => {
                 return cpu(format!(
                     "as the only adapter, {adapter}, is a CPU adapter and no faster"
                 ));
             }
+            Ok(found) => super::device::open_found(found),
+            Err(e) => Err(e),
+        };
+        let opened = match opened {
             Ok(opened) => opened,
             Err(e) => return cpu(format!("as no GPU engine could start: {e}")),
         };

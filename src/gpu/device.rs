@@ -21,10 +21,10 @@ impl std::fmt::Display for Adapter {
     }
 }
 
-/// Opens the highest-performance adapter wgpu finds (`WGPU_BACKEND` chooses the
-/// API, as everywhere in wgpu) and a device with every limit it has: a big cloth
-/// needs its largest storage buffers.
-pub(super) fn open() -> Result<(Adapter, wgpu::Device, wgpu::Queue), GpuError> {
+/// The highest-performance adapter wgpu finds (`WGPU_BACKEND` chooses the API,
+/// as everywhere in wgpu), described, with no device opened on it yet: `auto`
+/// turns a CPU adapter down before it costs a device.
+pub(super) fn find() -> Result<(Adapter, wgpu::Adapter), GpuError> {
     let instance =
         wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
     let options = wgpu::RequestAdapterOptions {
@@ -43,6 +43,19 @@ pub(super) fn open() -> Result<(Adapter, wgpu::Device, wgpu::Queue), GpuError> {
         backend: format!("{:?}", info.backend),
         software: info.device_type == wgpu::DeviceType::Cpu,
     };
+    Ok((described, adapter))
+}
+
+/// Opens [`find`]'s adapter and a device with every limit it has: a big cloth
+/// needs its largest storage buffers.
+pub(super) fn open() -> Result<(Adapter, wgpu::Device, wgpu::Queue), GpuError> {
+    open_found(find()?)
+}
+
+/// Opens a device on an adapter [`find`] gave.
+pub(super) fn open_found(
+    (described, adapter): (Adapter, wgpu::Adapter),
+) -> Result<(Adapter, wgpu::Device, wgpu::Queue), GpuError> {
     // Timestamps where the adapter has them: the GPU time a step takes.
     let descriptor = wgpu::DeviceDescriptor {
         label: Some("cloth GPU engine"),

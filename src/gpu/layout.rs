@@ -86,7 +86,8 @@ impl Adjacency {
         let mut next: Vec<[u32; 2]> = offsets[..n].to_vec();
         let mut links = vec![[0u32; 4]; spring_start as usize];
         for s in &model.springs {
-            let c = SpringCoefficients::new(s.stiffness, s.rest, s.damping);
+            let m = model.material(s.kind);
+            let c = SpringCoefficients::new(m.stiffness, s.rest, m.damping);
             let bits = [c.neg_k, c.k_rest, c.neg_b].map(|c| (c as f32).to_bits());
             for (end, other) in [(s.a, s.b), (s.b, s.a)] {
                 let slot = &mut next[end as usize][0];
@@ -164,7 +165,7 @@ pub(crate) struct ConstraintSpring {
 pub(crate) fn constraint_runs(model: &Model) -> Vec<(u32, u32)> {
     let mut last_run = vec![u32::MAX; model.mass.len()];
     let mut runs: Vec<(u32, u32)> = Vec::new();
-    for (place, &i) in model.constraint_order.iter().enumerate() {
+    for (place, &i) in model.constraint_order().iter().enumerate() {
         let s = &model.springs[i as usize];
         let (a, b) = (s.a as usize, s.b as usize);
         // The open run, if the spring shares no particle with it.
@@ -186,16 +187,17 @@ pub(crate) fn constraint_runs(model: &Model) -> Vec<(u32, u32)> {
 pub(crate) fn constraint_springs(model: &Model) -> Vec<ConstraintSpring> {
     let spring = |&i: &u32| {
         let s = &model.springs[i as usize];
+        let m = model.material(s.kind);
         ConstraintSpring {
             a: s.a,
             b: s.b,
             rest: s.rest as f32,
-            stiffness: s.stiffness as f32,
-            damping: s.damping as f32,
+            stiffness: m.stiffness as f32,
+            damping: m.damping as f32,
             _pad: [0; 3],
         }
     };
-    model.constraint_order.iter().map(spring).collect()
+    model.constraint_order().iter().map(spring).collect()
 }
 
 /// Which sweep a run's dispatch is, the shader's `FORWARD`, `FORWARD_KEPT`, `BACK`.
@@ -233,7 +235,7 @@ mod tests {
             for &(start, count) in &runs {
                 assert_eq!(start, next, "{name}: the runs leave a gap");
                 let mut ends: Vec<u32> = (start..start + count)
-                    .map(|p| &model.springs[model.constraint_order[p as usize] as usize])
+                    .map(|p| &model.springs[model.constraint_order()[p as usize] as usize])
                     .flat_map(|s| [s.a, s.b])
                     .collect();
                 ends.sort_unstable();
@@ -241,7 +243,7 @@ mod tests {
                 assert!(!shared, "{name}: a run shares a particle");
                 next += count;
             }
-            assert_eq!(next as usize, model.constraint_order.len(), "{name}");
+            assert_eq!(next as usize, model.constraint_order().len(), "{name}");
             eprintln!("{name}: {} runs", runs.len());
             assert!(runs.len() <= most, "{name}: {} runs", runs.len());
         }

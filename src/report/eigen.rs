@@ -111,13 +111,14 @@ pub fn omega_max(
 fn spring_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
     (model.springs.iter())
         .map(|s| {
+            let k = model.material(s.kind).stiffness;
             let d = x[s.a as usize] - x[s.b as usize];
             let l = d.length();
             if l <= EPSILON_LENGTH {
                 // Coincident ends: the force is zero and has no direction, but a
                 // zero-rest spring still pulls isotropically with k.
                 return if s.rest <= EPSILON_LENGTH {
-                    DMat3::from_diagonal(DVec3::splat(s.stiffness))
+                    DMat3::from_diagonal(DVec3::splat(k))
                 } else {
                     DMat3::ZERO
                 };
@@ -125,7 +126,7 @@ fn spring_blocks(model: &Model, x: &[DVec3]) -> Vec<DMat3> {
             let u = d / l;
             let uu = DMat3::from_cols(u * u.x, u * u.y, u * u.z);
             let transverse = (1.0 - s.rest / l).max(0.0);
-            s.stiffness * (uu + transverse * (DMat3::IDENTITY - uu))
+            k * (uu + transverse * (DMat3::IDENTITY - uu))
         })
         .collect()
 }

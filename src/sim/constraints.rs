@@ -28,11 +28,11 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let p = &model.params;
     let x = &mut state.positions;
     if p.integrator == Integrator::Xpbd {
-        let order = (&model.constraint_order[..], xpbd_sweeps_back(model.lattice));
+        let order = (model.constraint_order(), xpbd_sweeps_back(model.lattice));
         xpbd_pass(
             x,
             &work.step_start,
-            &model.springs,
+            (&model.springs, &model.materials),
             order,
             &model.inv_mass,
             p.dt,
@@ -50,7 +50,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     }
     if let Some(tau) = p.stretch_limit {
         for s in model
-            .constraint_order
+            .constraint_order()
             .iter()
             .map(|&i| &model.springs[i as usize])
         {
@@ -129,31 +129,39 @@ pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
 pub(crate) fn xpbd_pass(
     x: &mut [DVec3],
     prev: &[DVec3],
-    springs: &[super::Spring],
+    (springs, materials): (&[super::Spring], &super::SpringMaterials),
     (order, back): (&[u32], bool),
     inv_mass: &[f64],
     dt: f64,
     multipliers: &mut Vec<f64>,
 ) {
+    type Given<'a> = (
+        &'a [DVec3],
+        &'a [super::Spring],
+        &'a super::SpringMaterials,
+        &'a [f64],
+        f64,
+    );
     // Corrects spring `i` whose multiplier so far is `lambda`; returns its change.
     #[inline(always)]
     fn correct(
         x: &mut [DVec3],
-        (prev, springs, inv_mass, dt): (&[DVec3], &[super::Spring], &[f64], f64),
+        (prev, springs, materials, inv_mass, dt): Given,
         i: u32,
         lambda: f64,
     ) -> Option<f64> {
         let s = &springs[i as usize];
         let (a, b) = (s.a as usize, s.b as usize);
         let (wa, wb) = (inv_mass[a], inv_mass[b]);
-        let spring = XpbdSpring::new(s.rest, s.stiffness, s.damping, dt)?;
+        let m = materials[s.kind.index()];
+        let spring = XpbdSpring::new(s.rest, m.stiffness, m.damping, dt)?;
         let ends = ([x[a], x[b]], [prev[a], prev[b]]);
         let (c, delta) = xpbd_correction(ends.0, ends.1, wa, wb, &spring, lambda)?;
         x[a] -= wa * c;
         x[b] += wb * c;
         Some(delta)
     }
-    let given = (prev, springs, inv_mass, dt);
+    let given = (prev, springs, materials, inv_mass, dt);
     multipliers.clear();
     if !back {
         // One sweep visits each spring once, from `λ = 0`: nothing to keep.

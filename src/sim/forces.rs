@@ -155,7 +155,8 @@ impl Model {
     ) {
         let force_on_a = |s: &super::Spring| {
             let (a, b) = (s.a as usize, s.b as usize);
-            spring_force(x[a] - x[b], v[a] - v[b], s.rest, s.stiffness, s.damping)
+            let m = self.materials[s.kind.index()];
+            spring_force(x[a] - x[b], v[a] - v[b], s.rest, m.stiffness, m.damping)
         };
         let parallel = uses_threads(self);
         if parallel {
@@ -166,9 +167,9 @@ impl Model {
                 *f = force_on_a(s);
             }
         }
-        let spring_forces = &*spring_forces;
+        let (spring_forces, adjacency) = (&*spring_forces, self.adjacency());
         let gather = |(i, f): (usize, &mut DVec3)| {
-            for (spring, sign) in self.adjacency.springs_of(i) {
+            for (spring, sign) in adjacency.springs_of(i) {
                 *f += sign * spring_forces[spring];
             }
         };

@@ -110,9 +110,10 @@ pub fn step(model: &Model, state: &mut State, w: &mut ImplicitWorkspace, h: f64,
         let u = d / l;
         let uu = outer(u, u);
         let transverse = (1.0 - s.rest / l).max(0.0);
-        let stiffness = h * h * s.stiffness * (uu + transverse * (DMat3::IDENTITY - uu));
+        let m = model.material(s.kind);
+        let stiffness = h * h * m.stiffness * (uu + transverse * (DMat3::IDENTITY - uu));
         w.stiffness_blocks[si] = stiffness;
-        w.blocks[si] = stiffness + h * s.damping * uu;
+        w.blocks[si] = stiffness + h * m.damping * uu;
         // h² (df/dx v)_a = -h² K_s (v_a - v_b); the block already holds the h².
         let kv = stiffness * (v[a] - v[b]);
         w.rhs[a] -= kv;
@@ -122,7 +123,7 @@ pub fn step(model: &Model, state: &mut State, w: &mut ImplicitWorkspace, h: f64,
         // The particle's block of the matrix: its diagonal plus each spring's block
         // (positive definite: the mass term alone is).
         let mut block = w.diagonal[i];
-        for (si, _) in model.adjacency.springs_of(i) {
+        for (si, _) in model.adjacency().springs_of(i) {
             block += w.blocks[si];
         }
         w.preconditioner[i] = if model.inv_mass[i] > 0.0 && block.determinant() > 0.0 {

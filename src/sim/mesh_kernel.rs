@@ -48,7 +48,8 @@ use glam::DVec3;
 
 use super::springs::{Adjacency, BarPairs};
 use super::{
-    Bar, GridShape, Ground, Integrator, LatticeShape, Model, SelfCollision, Sphere, Spring, Wind,
+    Bar, GridShape, Ground, Integrator, LatticeShape, Model, SelfCollision, Sphere, Spring,
+    SpringMaterials, Wind,
 };
 
 mod build;
@@ -233,6 +234,8 @@ pub struct MeshKernel {
     torn: Vec<(u32, u32)>,
     /// The model's springs, canonical (for the stretch limit and to notice edits).
     model_springs: Vec<Spring>,
+    /// Their kinds' stiffness and damping (the model's).
+    materials: SpringMaterials,
     /// The order the stretch limit visits `model_springs` in (the model's).
     constraint_order: Vec<u32>,
     bars: Vec<Bar>,

@@ -64,7 +64,7 @@ pub use integrators::Integrator;
 pub use model::{Ground, Model, Params, Sphere, Topology};
 pub use safe::{SafeStep, safe_step, safe_substeps};
 pub use self_collision::SelfCollision;
-pub use springs::{Adjacency, Bar, BarPairs, Spring, SpringKind};
+pub use springs::{Adjacency, Bar, BarPairs, Spring, SpringKind, SpringMaterial, SpringMaterials};
 pub use stability::Stability;
 pub use state::{Energy, State};
 pub use system::{System, Workspace};

@@ -1,12 +1,15 @@
 //! What stays fixed while the state advances: parameters, colliders, topology and
 //! the model built from them, with the energy of a state.
 
+use std::sync::OnceLock;
+
 use glam::{DVec2, DVec3};
 
 use super::colliders::Collider;
 use super::forces;
 use super::{
-    Adjacency, Bar, BarPairs, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring, Wind,
+    Adjacency, Bar, BarPairs, Energy, ForceTerms, GridShape, Integrator, LatticeShape, Spring,
+    SpringKind, SpringMaterial, SpringMaterials, Wind,
 };
 
 /// A horizontal ground plane `y = height` with penalty contact (seed 002's jelly cube).
@@ -128,6 +131,8 @@ impl Default for Params {
 pub struct Topology {
     /// Damped springs (any order; [`super::System::new`] makes them canonical).
     pub springs: Vec<Spring>,
+    /// Each kind's stiffness and damping.
+    pub materials: SpringMaterials,
     /// Rigid bars.
     pub bars: Vec<Bar>,
     /// Surface triangles.
@@ -153,11 +158,12 @@ pub struct Model {
     pub pinned: Vec<bool>,
     /// Damped springs, canonical (see [`super::springs::canonicalize`]).
     pub springs: Vec<Spring>,
-    /// For each particle, the springs touching it.
-    pub adjacency: Adjacency,
-    /// The order the Gauss-Seidel passes over the springs (XPBD, stretch limit)
-    /// visit them in ([`super::springs::constraint_order`]): indices into `springs`.
-    pub constraint_order: Vec<u32>,
+    /// Each spring kind's stiffness and damping.
+    pub materials: SpringMaterials,
+    /// [`Self::adjacency`], once asked for.
+    pub(crate) adjacency: OnceLock<Adjacency>,
+    /// [`Self::constraint_order`], once asked for.
+    pub(crate) constraint_order: OnceLock<Vec<u32>>,
     /// Springs broken (torn or cut, [`super::tearing`]) since the model was built.
     pub broken_springs: usize,
     /// Rigid bars, relaxed after each step.
@@ -184,10 +190,32 @@ pub struct Model {
 }
 
 impl Model {
+    /// For each particle, the springs touching it. Built on first use: the grid
+    /// and lattice kernels never ask, and on a big cloth it is 8 bytes a spring.
+    pub fn adjacency(&self) -> &Adjacency {
+        (self.adjacency).get_or_init(|| Adjacency::new(self.mass.len(), &self.springs))
+    }
+
+    /// The order the Gauss-Seidel passes over the springs (XPBD, stretch limit)
+    /// visit them in ([`super::springs::constraint_order`]): indices into
+    /// `springs`. Built on first use, by the engines that have such a pass.
+    pub fn constraint_order(&self) -> &[u32] {
+        (self.constraint_order).get_or_init(|| {
+            super::springs::constraint_order(&self.springs, self.grid, self.lattice)
+        })
+    }
+
+    /// Forgets what follows from the spring list, after springs left or came back.
+    pub(crate) fn springs_replaced(&mut self) {
+        self.adjacency = OnceLock::new();
+        self.constraint_order = OnceLock::new();
+        self.refresh_terms();
+    }
+
     /// Whether a spring or a bar joins particles `i` and `j`: self-collision leaves
     /// such pairs alone (pushing them apart would fight the link).
     pub fn joins(&self, i: usize, j: usize) -> bool {
-        self.adjacency.joins(&self.springs, i, j) || self.bar_pairs.join(i, j)
+        self.adjacency().joins(&self.springs, i, j) || self.bar_pairs.join(i, j)
     }
 
     /// Recomputes which force terms run, from the parameters and topology.
@@ -277,17 +305,22 @@ impl Model {
     /// the energy that moving `i` alone changes, when `i` is held (a held
     /// particle's own kinetic and gravity terms are not counted: [`Self::energy`]).
     pub fn energy_of_springs_at(&self, i: usize, x: &[DVec3]) -> f64 {
-        (self.adjacency.springs_of(i))
+        (self.adjacency().springs_of(i))
             .map(|(s, _)| self.spring_energy(&self.springs[s], x))
             .sum()
     }
 
-    /// The stiffness (N/m) spring `s` acts with: its own, except under XPBD, which
+    /// The stiffness and damping of the springs of `kind`.
+    pub fn material(&self, kind: SpringKind) -> SpringMaterial {
+        self.materials[kind.index()]
+    }
+
+    /// The stiffness (N/m) spring `s` acts with: its kind's, except under XPBD, which
     /// at step `h` moves the ends as a spring of stiffness `k / (1 + k h² w)` would
     /// (one iteration from `λ = 0`, `w` the ends' inverse masses): that is the
     /// material XPBD simulates, and whose energy it holds.
     pub fn stiffness_in_effect(&self, s: &Spring) -> f64 {
-        let k = s.stiffness;
+        let k = self.material(s.kind).stiffness;
         if self.params.integrator != Integrator::Xpbd {
             return k;
         }

@@ -188,7 +188,7 @@ pub fn wind_load_ratio(model: &Model) -> f64 {
     // The weakest spring's `k L` and `L`.
     let mut weakest: Option<(f64, f64)> = None;
     for s in model.springs.iter().filter(|s| s.rest > 0.0) {
-        let capacity = s.stiffness * s.rest;
+        let capacity = model.material(s.kind).stiffness * s.rest;
         if weakest.is_none_or(|(least, _)| capacity.total_cmp(&least).is_lt()) {
             weakest = Some((capacity, s.rest));
         }

@@ -22,7 +22,7 @@ use std::sync::Mutex;
 
 use glam::DVec3;
 
-use super::{Model, forces::EPSILON_LENGTH, springs::Spring};
+use super::{Model, SpringKind, forces::EPSILON_LENGTH, springs::Spring};
 
 /// Most Lanczos iterations (each one pass over the springs).
 pub const MAX_ITERATIONS: usize = 80;
@@ -73,7 +73,7 @@ fn apply(model: &Model, at: &[DVec3], scale: &[f64], x: &[DVec3], y: &mut [DVec3
             let Some((t, u)) = block(s, at) else { continue };
             let (a, b) = (s.a as usize, s.b as usize);
             let dx = x[a] * scale[a] - x[b] * scale[b];
-            let f = s.stiffness * (t * dx + ((1.0 - t) * u.dot(dx)) * u);
+            let f = model.material(s.kind).stiffness * (t * dx + ((1.0 - t) * u.dot(dx)) * u);
             y[a] += f;
             y[b] -= f;
         }
@@ -207,8 +207,8 @@ pub fn omega_max(model: &Model, positions: &[DVec3]) -> Spectrum {
 /// lambda_max(K, M^-1)`. The stiffness and mass sliders make such edits (each of
 /// a grid's three kinds set from one stiffness); any other change of the springs,
 /// the pins or the integrator's use of the springs finds the spectrum again, at
-/// the positions then. It keeps each spring's stiffness and each particle's
-/// inverse mass: 8 bytes a spring and a particle.
+/// the positions then. It keeps each spring kind's stiffness and each particle's
+/// inverse mass: 8 bytes a particle.
 #[derive(Debug, Default)]
 pub struct Cache(Mutex<Option<Cached>>);
 
@@ -217,8 +217,9 @@ struct Cached {
     /// `omega_max²`, rad²/s².
     lambda: f64,
     springs_on: bool,
+    springs: usize,
     ground: f64,
-    stiffness: Vec<f64>,
+    stiffness: [f64; SpringKind::ALL.len()],
     inv_mass: Vec<f64>,
 }
 
@@ -261,12 +262,12 @@ impl Cached {
     fn scaled_to(&self, model: &Model) -> Option<f64> {
         let ground = model.params.ground.map_or(0.0, |g| g.stiffness.max(0.0));
         if model.terms.springs != self.springs_on
-            || model.springs.len() != self.stiffness.len()
+            || model.springs.len() != self.springs
             || model.inv_mass.len() != self.inv_mass.len()
         {
             return None;
         }
-        let stiffness = (model.springs.iter().map(|s| s.stiffness)).chain([ground]);
+        let stiffness = (model.materials.iter().map(|m| m.stiffness)).chain([ground]);
         let old = self.stiffness.iter().copied().chain([self.ground]);
         let k = common_factor(stiffness, old)?;
         let inv_mass = model.inv_mass.iter().map(|w| w.max(0.0));
@@ -290,7 +291,8 @@ impl Cache {
             lambda: omega * omega,
             springs_on: model.terms.springs,
             ground: model.params.ground.map_or(0.0, |g| g.stiffness.max(0.0)),
-            stiffness: model.springs.iter().map(|s| s.stiffness).collect(),
+            springs: model.springs.len(),
+            stiffness: model.materials.map(|m| m.stiffness),
             inv_mass: model.inv_mass.iter().map(|w| w.max(0.0)).collect(),
         });
         omega

@@ -19,7 +19,7 @@
 
 use glam::DVec3;
 
-use super::{Integrator, Model, spectrum};
+use super::{Integrator, Model, SpringKind, spectrum};
 
 /// Stability numbers for a model and its step.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,19 +60,25 @@ fn spring_sums(model: &Model) -> SpringSums {
     } else {
         &[]
     };
+    let mut present = [false; SpringKind::ALL.len()];
     for s in springs {
+        present[s.kind.index()] = true;
         let (a, b) = (s.a as usize, s.b as usize);
-        stiffness[a] += s.stiffness;
-        stiffness[b] += s.stiffness;
+        let k = model.material(s.kind).stiffness;
+        stiffness[a] += k;
+        stiffness[b] += k;
         if model.inv_mass[b] > 0.0 {
-            to_free[a] += s.stiffness;
+            to_free[a] += k;
         }
         if model.inv_mass[a] > 0.0 {
-            to_free[b] += s.stiffness;
+            to_free[b] += k;
         }
-        // `b / k < r` as `b < r k` (k > 0): a division only for a new smallest.
-        if s.stiffness > 0.0 && s.damping < damping_per_stiffness * s.stiffness {
-            damping_per_stiffness = damping_per_stiffness.min(s.damping / s.stiffness);
+    }
+    // The smallest `b / k` of the kinds that have springs.
+    for kind in SpringKind::ALL.into_iter().filter(|k| present[k.index()]) {
+        let m = model.material(kind);
+        if m.stiffness > 0.0 {
+            damping_per_stiffness = damping_per_stiffness.min(m.damping / m.stiffness);
         }
     }
     SpringSums {
@@ -276,7 +282,7 @@ pub fn dt_critical_at(model: &Model, positions: &[DVec3], at_rest: Option<f64>) 
 /// grid; more otherwise), and 0 for a triangle with fewer than two.
 pub(crate) fn drag_areas(model: &Model) -> Vec<f64> {
     let rest = |a: u32, b: u32| {
-        (model.adjacency.springs_of(a as usize))
+        (model.adjacency().springs_of(a as usize))
             .map(|(s, _)| &model.springs[s])
             .find(|s| (s.a == b) || (s.b == b))
             .map(|s| s.rest)

@@ -16,9 +16,10 @@ use glam::{DVec2, DVec3};
 use super::divergence::Runaway;
 use super::energy_budget::ENERGY_CHECK_STEPS;
 use super::{
-    Adjacency, Bar, BarPairs, Collider, Divergence, Energy, EnergyBudget, ForceTerms, Grab,
-    HAND_REACH, Integrator, Model, Params, Spring, SpringKind, Stability, State, Topology, Wind,
-    constraints, fast_path, forces, grid_kernel, implicit, integrators, laws, springs, stability,
+    Bar, BarPairs, Collider, Divergence, Energy, EnergyBudget, ForceTerms, Grab, HAND_REACH,
+    Integrator, Model, Params, Spring, SpringKind, SpringMaterial, Stability, State, Topology,
+    Wind, constraints, fast_path, forces, grid_kernel, implicit, integrators, laws, springs,
+    stability,
 };
 
 /// Scratch space for a step, sized once per model and integrator.
@@ -92,6 +93,7 @@ impl System {
     ) -> Self {
         let Topology {
             mut springs,
+            materials,
             mut bars,
             mut triangles,
             uvs,
@@ -112,16 +114,15 @@ impl System {
                 pinned_flags[i] = true;
             }
         }
-        let adjacency = Adjacency::new(n, &springs);
-        let constraint_order = springs::constraint_order(&springs, grid, lattice);
         let wind = Wind::new(params.wind, params.gust, params.seed);
         let mut model = Model {
             inv_mass: vec![0.0; n],
             mass: masses,
             pinned: pinned_flags,
             springs,
-            adjacency,
-            constraint_order,
+            materials,
+            adjacency: OnceLock::new(),
+            constraint_order: OnceLock::new(),
             broken_springs: 0,
             bar_pairs: BarPairs::new(&bars),
             bars,
@@ -330,7 +331,8 @@ impl System {
     /// Length (m) of the shortest spring or bar at particle `i`; infinite with
     /// none.
     fn shortest_link_at(&self, i: usize) -> f64 {
-        let springs = (self.model.adjacency.springs_of(i)).map(|(s, _)| self.model.springs[s].rest);
+        let springs =
+            (self.model.adjacency().springs_of(i)).map(|(s, _)| self.model.springs[s].rest);
         let bars = (self.model.bars.iter())
             .filter(|b| b.a as usize == i || b.b as usize == i)
             .map(|b| b.length);
@@ -407,38 +409,31 @@ impl System {
     }
 
     /// Sets the stiffness (N/m) of the springs of each kind that `stiffness` gives
-    /// one for, in one pass over the springs (a grid's three kinds on a slider drag).
+    /// one for (a grid's three kinds on a slider drag).
     pub fn set_stiffness_by_kind(&mut self, stiffness: impl Fn(SpringKind) -> Option<f64>) {
-        self.edit_springs_by_kind(stiffness, |s, k| s.stiffness = k, |c, k| c.k = k);
+        self.edit_springs_by_kind(stiffness, |m, k| m.stiffness = k, |c, k| c.k = k);
     }
 
     /// Sets the damping (N·s/m) of the springs of each kind that `damping` gives one
-    /// for, in one pass over the springs.
+    /// for.
     pub fn set_damping_by_kind(&mut self, damping: impl Fn(SpringKind) -> Option<f64>) {
-        self.edit_springs_by_kind(damping, |s, b| s.damping = b, |c, b| c.b = b);
+        self.edit_springs_by_kind(damping, |m, b| m.damping = b, |c, b| c.b = b);
     }
 
     /// Sets one coefficient of the springs of each kind `value` gives one for: in
-    /// the model (`spring`) and, a whole kind changing together so that the grid
-    /// stays a grid with no rescan, in the engines' stencil (`stencil`).
+    /// the model's materials (`material`) and, a whole kind changing together so
+    /// that the grid stays a grid with no rescan, in the engines' stencil
+    /// (`stencil`).
     fn edit_springs_by_kind(
         &mut self,
         value: impl Fn(SpringKind) -> Option<f64>,
-        spring: impl Fn(&mut Spring, f64),
+        material: impl Fn(&mut SpringMaterial, f64),
         stencil: impl Fn(&mut grid_kernel::SpringCoefficients, f64),
     ) {
         self.coefficients_edited();
-        let values = SpringKind::ALL.map(&value);
-        if values.iter().all(Option::is_none) {
-            return;
-        }
-        for s in &mut self.model.springs {
-            if let Some(v) = values[s.kind.index()] {
-                spring(s, v);
-            }
-        }
-        for (kind, v) in SpringKind::ALL.into_iter().zip(values) {
-            if let Some(v) = v {
+        for kind in SpringKind::ALL {
+            if let Some(v) = value(kind) {
+                material(&mut self.model.materials[kind.index()], v);
                 (self.engines).edit_stencil_springs(&self.model, kind, |c| stencil(c, v));
             }
         }

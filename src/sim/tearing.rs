@@ -19,7 +19,7 @@
 //!   springs and triangles (`remove_broken`, shared with the model).
 
 pub use super::laws::overstretched;
-use super::{Adjacency, Spring, System, fast_path, springs};
+use super::{Spring, System, fast_path};
 
 impl System {
     /// Springs broken so far (torn or cut) since the system was built.
@@ -106,10 +106,7 @@ impl System {
     fn springs_replaced(&mut self) {
         let model = &mut self.model;
         let n = model.mass.len();
-        model.adjacency = Adjacency::new(n, &model.springs);
-        model.constraint_order =
-            springs::constraint_order(&model.springs, model.grid, model.lattice);
-        model.refresh_terms();
+        model.springs_replaced();
         let m = model.springs.len();
         self.work.spring_forces.resize(m, glam::DVec3::ZERO);
         if self.model.params.integrator == super::Integrator::ImplicitEuler {

@@ -373,7 +373,7 @@ fn float32_arithmetic_heats_a_stiff_cloth_so_the_engine_does_not_use_it() {
 fn a_grid_whose_springs_are_not_the_stencil_is_not_taken_for_one() {
     // A 6 x 5 grid with its structural springs, declared a grid; then the same with
     // one spring moved onto a diagonal (same count, same rest length and kind).
-    use cloth_sandbox::sim::{GridShape, Params, Spring, SpringKind, Topology};
+    use cloth_sandbox::sim::{GridShape, Params, Spring, SpringKind, SpringMaterial, Topology};
     let (w, h, spacing) = (6usize, 5usize, 0.1);
     let at = |r: usize, c: usize| (r * w + c) as u32;
     let build = |rewire: bool| {
@@ -387,8 +387,6 @@ fn a_grid_whose_springs_are_not_the_stencil_is_not_taken_for_one() {
                             a,
                             b,
                             rest: spacing,
-                            stiffness: 10.0,
-                            damping: 0.0,
                             kind: SpringKind::Structural,
                         });
                     }
@@ -401,8 +399,13 @@ fn a_grid_whose_springs_are_not_the_stencil_is_not_taken_for_one() {
         let positions = (0..w * h)
             .map(|p| DVec3::new((p % w) as f64 * spacing, -((p / w) as f64) * spacing, 0.0))
             .collect();
+        let structural = SpringMaterial {
+            stiffness: 10.0,
+            damping: 0.0,
+        };
         let topology = Topology {
             springs,
+            materials: [structural; 4],
             grid: Some(GridShape {
                 width: w,
                 height: h,

@@ -66,11 +66,13 @@ type EditFn = fn(&mut System);
 /// The edits the panel and the mouse make, each on its own.
 const EDITS: &[(&str, EditFn)] = &[
     ("stiffness", |s| {
-        let (kind, k) = (s.springs()[0].kind, s.springs()[0].stiffness * 1.5);
+        let kind = s.springs()[0].kind;
+        let k = s.model().material(kind).stiffness * 1.5;
         s.set_spring_stiffness(kind, k);
     }),
     ("damping", |s| {
-        let (kind, b) = (s.springs()[0].kind, s.springs()[0].damping * 3.0 + 0.05);
+        let kind = s.springs()[0].kind;
+        let b = s.model().material(kind).damping * 3.0 + 0.05;
         s.set_spring_damping(kind, b);
     }),
     ("mass", |s| s.set_particle_mass(0.02)),
@@ -152,7 +154,7 @@ fn the_energy_read_after_a_stiffness_edit_is_the_edited_ones() {
     let kinds: Vec<_> = system
         .springs()
         .iter()
-        .map(|s| (s.kind, s.stiffness))
+        .map(|s| (s.kind, system.model().material(s.kind).stiffness))
         .collect();
     for (kind, k) in kinds {
         system.set_spring_stiffness(kind, 2.0 * k);

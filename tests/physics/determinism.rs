@@ -79,7 +79,7 @@ fn the_energy_is_its_terms_summed_and_the_same_on_one_thread_or_two() {
     }
     for s in &model.springs {
         let stretch = x[s.a as usize].distance(x[s.b as usize]) - s.rest;
-        elastic += 0.5 * s.stiffness * stretch * stretch;
+        elastic += 0.5 * model.material(s.kind).stiffness * stretch * stretch;
     }
     for (name, got, want) in [
         ("kinetic", one.kinetic, kinetic),

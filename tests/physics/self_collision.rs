@@ -19,7 +19,7 @@ fn close_pairs(system: &System, distance: f64) -> usize {
     let mut count = 0;
     for i in 0..x.len() {
         for j in i + 1..x.len() {
-            if x[i].distance(x[j]) < distance && !model.adjacency.joins(&model.springs, i, j) {
+            if x[i].distance(x[j]) < distance && !model.adjacency().joins(&model.springs, i, j) {
                 count += 1;
             }
         }

@@ -37,7 +37,8 @@ fn the_spring_scene_has_the_seed_parameters() {
     assert_eq!(system.particle_count(), 2);
     assert!(system.is_pinned(0) && !system.is_pinned(1));
     let s = system.springs()[0];
-    assert_eq!((s.rest, s.stiffness), (5.0, 15.0));
-    assert!((s.damping - 0.1 * 2.0 * (15.0f64 * 0.5).sqrt()).abs() < 1e-12);
+    let m = system.model().material(s.kind);
+    assert_eq!((s.rest, m.stiffness), (5.0, 15.0));
+    assert!((m.damping - 0.1 * 2.0 * (15.0f64 * 0.5).sqrt()).abs() < 1e-12);
     assert_eq!(system.masses()[1], 0.5);
 }

@@ -152,11 +152,11 @@ fn xpbd_on_a_penalty_ground_has_the_grounds_step_limit() {
 /// touches a particle the current class already moved (each spring once).
 fn independent_classes(system: &System) -> usize {
     let model = system.model();
-    assert_eq!(model.constraint_order.len(), model.springs.len());
+    assert_eq!(model.constraint_order().len(), model.springs.len());
     let mut seen = vec![false; model.springs.len()];
     let mut touched = vec![usize::MAX; system.particle_count()];
     let mut classes = 0;
-    for &i in &model.constraint_order {
+    for &i in model.constraint_order() {
         assert!(
             !std::mem::replace(&mut seen[i as usize], true),
             "spring {i} twice"

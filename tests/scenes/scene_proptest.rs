@@ -131,7 +131,8 @@ fn check_built(scene: &Scene) {
             "rest length {}",
             s.rest
         );
-        assert!(s.stiffness.is_finite() && s.damping.is_finite());
+        let m = system.model().material(s.kind);
+        assert!(m.stiffness.is_finite() && m.damping.is_finite());
     }
     assert!(system.positions().iter().all(|x| x.is_finite()));
 }

@@ -7,7 +7,9 @@ use super::Resolved;
 use super::anchors::rotation_matrix;
 use crate::scene::{Layout, Orientation};
 use crate::sim::laws::out_of_sphere;
-use crate::sim::{Bar, GridShape, LatticeShape, Spring, SpringKind, System, Topology};
+use crate::sim::{
+    Bar, GridShape, LatticeShape, Spring, SpringKind, SpringMaterial, System, Topology,
+};
 
 impl Resolved {
     /// The particles' start positions (m), in index order: the layout, with any
@@ -148,6 +150,10 @@ impl Resolved {
         if topology.triangles.is_empty() {
             topology.uvs = Vec::new();
         }
+        topology.materials = SpringKind::ALL.map(|kind| SpringMaterial {
+            stiffness: self.stiffness * self.spring_scale(kind),
+            damping: self.damping * self.spring_scale(kind),
+        });
         topology.grid = (self.layout == Layout::Grid).then_some(GridShape {
             width: self.width as usize,
             height: self.height as usize,
@@ -164,14 +170,12 @@ impl Resolved {
         system
     }
 
-    /// A spring of `kind` from `a` to `b`, with the kind's stiffness and damping.
+    /// A spring of `kind` from `a` to `b`.
     fn spring(&self, a: usize, b: usize, rest: f64, kind: SpringKind) -> Spring {
         Spring {
             a: a as u32,
             b: b as u32,
             rest,
-            stiffness: self.stiffness * self.spring_scale(kind),
-            damping: self.damping * self.spring_scale(kind),
             kind,
         }
     }
@@ -179,10 +183,16 @@ impl Resolved {
     /// A grid's springs (or bars), its two triangles per cell and its texture
     /// coordinates.
     fn grid_topology(&self) -> Topology {
-        let (mut springs, mut bars, mut triangles, mut uvs) =
-            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let l = self.rest_length;
         let (w, h) = (self.width as usize, self.height as usize);
+        // At most six springs, four bars and two triangles a particle: reserved
+        // whole, a big cloth's lists never hold twice their length while growing.
+        let (mut springs, mut bars, mut triangles, mut uvs) = (
+            Vec::with_capacity(if self.bars { 0 } else { 6 * w * h }),
+            Vec::with_capacity(if self.bars { 4 * w * h } else { 0 }),
+            Vec::with_capacity(2 * w * h),
+            Vec::with_capacity(w * h),
+        );
         for r in 0..h {
             for c in 0..w {
                 uvs.push(DVec2::new(

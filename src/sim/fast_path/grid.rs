@@ -110,7 +110,8 @@ impl StencilSprings {
                 return None;
             }
             counts[slot] += 1;
-            let coefficients = (s.stiffness, s.damping, s.rest);
+            let m = model.material(s.kind);
+            let coefficients = (m.stiffness, m.damping, s.rest);
             match kinds[slot] {
                 None => kinds[slot] = Some(coefficients),
                 Some(c) if c == coefficients => {}

@@ -9,7 +9,7 @@ use super::{B_END, BATCH, MeshKernel, MeshParams, PARALLEL_MIN_PARTICLES};
 use crate::sim::grid_kernel::SimdLevel;
 use crate::sim::laws::Contact;
 use crate::sim::springs::Adjacency;
-use crate::sim::{Bar, Integrator, Model, SelfCollision, Spring};
+use crate::sim::{Bar, Integrator, Model, SelfCollision, Spring, SpringMaterials};
 
 /// Springs as structure of arrays, in the order the spring pass evaluates them:
 /// by the offset `b - a` between their ends, then by `a`. A lattice's springs of one
@@ -31,20 +31,25 @@ pub(super) struct SpringArrays {
 }
 
 impl SpringArrays {
-    pub(super) fn new(springs: &[Spring]) -> Self {
+    pub(super) fn new(springs: &[Spring], materials: &SpringMaterials) -> Self {
         let mut order: Vec<u32> = (0..springs.len() as u32).collect();
         // The keys differ from spring to spring.
         order.sort_unstable_by_key(|&i| {
             let s = &springs[i as usize];
             (i64::from(s.b) - i64::from(s.a), s.a)
         });
-        Self::in_order(springs, order)
+        Self::in_order(springs, materials, order)
     }
 
     /// The arrays for `springs` when they are `old`'s springs with some removed
     /// (torn), in `old`'s order less the removed ones, without sorting again;
     /// `None` when they are not.
-    pub(super) fn kept(&self, old: &[Spring], springs: &[Spring]) -> Option<Self> {
+    pub(super) fn kept(
+        &self,
+        old: &[Spring],
+        springs: &[Spring],
+        materials: &SpringMaterials,
+    ) -> Option<Self> {
         // Each old spring's index among those kept (springs keep their order).
         let mut index = vec![u32::MAX; old.len()];
         let mut next = springs.iter().enumerate().peekable();
@@ -59,12 +64,17 @@ impl SpringArrays {
         let order = self.order.iter().map(|&i| index[i as usize]);
         Some(Self::in_order(
             springs,
+            materials,
             order.filter(|&j| j != u32::MAX).collect(),
         ))
     }
 
     /// The arrays for `springs` evaluated in `order` (model indices).
-    pub(super) fn in_order(springs: &[Spring], order: Vec<u32>) -> Self {
+    pub(super) fn in_order(
+        springs: &[Spring],
+        materials: &SpringMaterials,
+        order: Vec<u32>,
+    ) -> Self {
         let m = springs.len();
         let ends: Vec<[u32; 2]> = order
             .iter()
@@ -83,15 +93,16 @@ impl SpringArrays {
             run,
             coefficients: [vec![0.0; m], vec![0.0; m], vec![0.0; m]],
         };
-        arrays.set_coefficients(springs);
+        arrays.set_coefficients(springs, materials);
         arrays
     }
 
-    pub(super) fn set_coefficients(&mut self, springs: &[Spring]) {
+    pub(super) fn set_coefficients(&mut self, springs: &[Spring], materials: &SpringMaterials) {
         let [rest, k, b] = &mut self.coefficients;
         for (e, &i) in self.order.iter().enumerate() {
             let s = &springs[i as usize];
-            (rest[e], k[e], b[e]) = (s.rest, s.stiffness, s.damping);
+            let m = materials[s.kind.index()];
+            (rest[e], k[e], b[e]) = (s.rest, m.stiffness, m.damping);
         }
     }
 }
@@ -116,7 +127,11 @@ impl MeshKernel {
     /// with [`Self::set_state`]. Runs on the calling thread until
     /// [`Self::set_threads`] is called.
     pub fn new(model: &Model, params: MeshParams) -> Self {
-        Self::with_springs(model, params, SpringArrays::new(&model.springs))
+        Self::with_springs(
+            model,
+            params,
+            SpringArrays::new(&model.springs, &model.materials),
+        )
     }
 
     /// [`Self::new`] with the springs' arrays given.
@@ -148,6 +163,7 @@ impl MeshKernel {
             lattice: model.lattice,
             torn: Vec::new(),
             model_springs: Vec::new(),
+            materials: model.materials,
             constraint_order: Vec::new(),
             bars: model.bars.clone(),
             threads: 1,
@@ -163,8 +179,8 @@ impl MeshKernel {
         kernel.set_springs(SpringSet {
             springs: model.springs.clone(),
             arrays: springs,
-            constraint_order: model.constraint_order.clone(),
-            adjacency: model.adjacency.clone(),
+            constraint_order: model.constraint_order().to_vec(),
+            adjacency: model.adjacency().clone(),
             triangles: model.triangles.clone(),
         });
         kernel.size_before();
@@ -293,9 +309,11 @@ impl MeshKernel {
         self.size_before();
         self.inv_mass.copy_from_slice(&model.inv_mass);
         self.bars.copy_from_slice(&model.bars);
-        if model.springs != self.model_springs {
+        if model.springs != self.model_springs || model.materials != self.materials {
             self.model_springs.copy_from_slice(&model.springs);
-            self.springs.set_coefficients(&model.springs);
+            self.materials = model.materials;
+            self.springs
+                .set_coefficients(&model.springs, &self.materials);
         }
         true
     }
@@ -306,8 +324,10 @@ impl MeshKernel {
     pub fn rebuild(&mut self, model: &Model, params: MeshParams) {
         let (threads, pool) = (self.threads, self.pool.take());
         let same_size = model.mass.len() == self.len();
-        let springs = (self.springs.kept(&self.model_springs, &model.springs))
-            .unwrap_or_else(|| SpringArrays::new(&model.springs));
+        let springs = (self
+            .springs
+            .kept(&self.model_springs, &model.springs, &model.materials))
+        .unwrap_or_else(|| SpringArrays::new(&model.springs, &model.materials));
         *self = Self::with_springs(model, params, springs);
         if same_size {
             (self.threads, self.pool) = (threads, pool);

@@ -60,8 +60,10 @@ impl MeshKernel {
         let pairs = remove_broken(&mut springs, &mut triangles, |s| {
             overstretched(load(x, s.a as usize), load(x, s.b as usize), s.rest, tau)
         });
-        let arrays = (self.springs.kept(&self.model_springs, &springs))
-            .unwrap_or_else(|| SpringArrays::new(&springs));
+        let arrays = (self
+            .springs
+            .kept(&self.model_springs, &springs, &self.materials))
+        .unwrap_or_else(|| SpringArrays::new(&springs, &self.materials));
         let set = SpringSet {
             constraint_order: springs::constraint_order(&springs, self.grid, self.lattice),
             adjacency: Adjacency::new(self.len(), &springs),
@@ -277,7 +279,7 @@ impl MeshKernel {
         );
         copy_positions(&mut x, &self.x);
         copy_positions(&mut start, &self.x_next);
-        let springs = &self.model_springs;
+        let springs = (&self.model_springs[..], &self.materials);
         let order = (&self.constraint_order[..], xpbd_sweeps_back(self.lattice));
         xpbd_pass(
             &mut x,
