@@ -8,10 +8,10 @@
 use wgpu::util::DeviceExt as _;
 
 use super::layout::{self, ConstraintSpring, RECORD_BYTES, RunRecord};
+use super::params::StepParams;
 use super::pipeline::Pipelines;
 use super::{GpuError, dispatch_size};
 use crate::sim::constraints::xpbd_sweeps_back;
-use crate::sim::mesh_kernel::MeshParams;
 use crate::sim::{Integrator, Model};
 
 /// Which constraint passes a step runs.
@@ -23,7 +23,7 @@ pub(super) struct Passes {
 
 impl Passes {
     /// The passes `params` ask for.
-    pub fn of(params: &MeshParams) -> Self {
+    pub fn of(params: &StepParams) -> Self {
         Self {
             xpbd: params.integrator == Integrator::Xpbd,
             stretch_limit: params.stretch_limit.is_some(),

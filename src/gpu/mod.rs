@@ -27,6 +27,7 @@ mod conformance;
 mod constraints;
 mod device;
 mod layout;
+mod params;
 mod pipeline;
 mod timer;
 
@@ -37,9 +38,9 @@ pub use timer::GpuTime;
 use glam::DVec3;
 use wgpu::util::DeviceExt as _;
 
-use crate::sim::mesh_kernel::MeshParams;
 use crate::sim::{Divergence, Integrator, Model, Stepped, System};
 use layout::{Particle, RECORD_BYTES, StepRecord};
+use params::StepParams;
 
 /// Why the GPU engine cannot run.
 #[derive(Debug, thiserror::Error)]
@@ -117,7 +118,7 @@ impl GpuEngine {
     /// What the engine does not step in `model`, in one line, if anything.
     fn unsupported(model: &Model) -> Option<String> {
         let p = &model.params;
-        let Some(params) = MeshParams::of(model) else {
+        let Some(params) = StepParams::of(model) else {
             return Some(format!(
                 "it steps symplectic Euler, explicit Euler and Verlet, not {}",
                 p.integrator
@@ -145,7 +146,7 @@ impl GpuEngine {
     /// Why the constraint sweeps of `model` would take too many dispatches, if
     /// they would: its springs' order has no colour classes (a mesh cloth).
     fn too_many_runs(model: &Model) -> Option<String> {
-        let passes = constraints::Passes::of(&MeshParams::of(model)?);
+        let passes = constraints::Passes::of(&StepParams::of(model)?);
         if !passes.any() {
             return None;
         }
@@ -284,7 +285,7 @@ impl GpuEngine {
         });
         let bind = [0, 1].map(|k| pipelines.step_group(&device, &records, &state, &u, k));
         let topology = pipelines.topology_group(&device, [&offsets, &links, &triangle_links]);
-        let passes = constraints::Passes::of(&MeshParams::of(model).expect("refusal() passed"));
+        let passes = constraints::Passes::of(&StepParams::of(model).expect("refusal() passed"));
         let constraints =
             constraints::Constraints::new((&device, &pipelines), model, passes, fits)?;
         Ok(Self {
@@ -339,7 +340,7 @@ impl GpuEngine {
         if let Some(reason) = Self::unsupported(model) {
             return Err(GpuError::Unsupported(reason));
         }
-        let params = MeshParams::of(model).expect("unsupported() passed");
+        let params = StepParams::of(model).expect("unsupported() passed");
         if constraints::Passes::of(&params) != self.constraints.passes {
             return Err(GpuError::Changed);
         }
@@ -349,7 +350,7 @@ impl GpuEngine {
     /// The state `n` steps after `system`'s.
     fn advance(&mut self, system: &System, n: u64) -> Result<Stepped, GpuError> {
         let model = system.model();
-        let params = MeshParams::of(model).expect("refusal() passed");
+        let params = StepParams::of(model).expect("refusal() passed");
         let state = system.state();
         let origin = centroid(&state.positions);
         let particles: Vec<Particle> = (state.positions.iter().zip(&state.velocities))
@@ -492,7 +493,7 @@ fn dispatch_size(n: usize) -> (u32, u32) {
 }
 
 /// The step at `time` of `params`, with positions from `origin`.
-fn step_record(params: &MeshParams, origin: DVec3, time: f64, particles: usize) -> StepRecord {
+fn step_record(params: &StepParams, origin: DVec3, time: f64, particles: usize) -> StepRecord {
     let v4 = |v: DVec3, w: f64| [v.x as f32, v.y as f32, v.z as f32, w as f32];
     let (wind, half_rho_cd) = match params.drag {
         Some(drag) => (drag.wind.at(time), drag.half_rho_cd),

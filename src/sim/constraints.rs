@@ -125,7 +125,7 @@ pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
 /// hanging on a spring would stop at half its stretch, `tests/physics/xpbd.rs`). In exact
 /// arithmetic a spring's second correction straight after its first changes
 /// nothing, so the lattice kernel does not sweep its last class back; this pass
-/// does, to round-off. The f64 and mesh engines' pass.
+/// does, to round-off. The f64 engine's pass.
 pub(crate) fn xpbd_pass(
     x: &mut [DVec3],
     prev: &[DVec3],

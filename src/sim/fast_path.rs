@@ -13,12 +13,9 @@
 //! terms (without bars, drag, self-collision, tearing or a speed limit), within a
 //! stated bound of the f64 engine (`tests/engines/lattice_kernel.rs`).
 //!
-//! Any other system stepped by symplectic
-//! Euler, explicit Euler, position Verlet or XPBD (chains, ropes, meshes, and the
-//! lattices the lattice kernel leaves) goes to the f64 mesh engine of
-//! [`super::mesh_kernel`], which does the
-//! general path's arithmetic in its order: bit for bit its results for the Euler
-//! methods and XPBD, f64 round-off for Verlet (`tests/engines/mesh_engine.rs`).
+//! Any other system (chains, ropes, meshes, the lattices the lattice kernel
+//! leaves) runs on the general f64 engine, the reference, on the system's own
+//! state: a CSR gather of each particle's springs, threaded on a big model.
 //!
 //! The f64 state stays the system's state: it is copied into the engine when
 //! something outside changed it, and back after every chunk of steps (or when a
@@ -30,7 +27,6 @@
 use glam::DVec3;
 
 use super::grid_kernel::{self, Precision, SimdLevel, SpringCoefficients, SpringNoise};
-use super::mesh_kernel::MeshParams;
 use super::{Divergence, Ground, Sphere, SpringKind, System};
 
 mod chunks;
@@ -38,12 +34,10 @@ mod chunks;
 pub(crate) use chunks::Stepped;
 mod grid;
 mod lattice;
-mod mesh;
 
 use grid::FastPath;
 pub(super) use grid::StencilSprings;
 use lattice::LatticePath;
-use mesh::MeshPath;
 
 /// Steps the kernel runs between copies back to the f64 state and divergence checks.
 const CHUNK: u64 = 32;
@@ -55,9 +49,6 @@ pub enum Engine {
     General,
     /// The grid stencil kernel, in the precision the system needs.
     Grid(Precision),
-    /// The f64 mesh engine ([`super::mesh_kernel`]): any topology, results equal to
-    /// the general path's to f64 round-off.
-    Mesh,
     /// The lattice stencil kernel ([`grid_kernel::lattice`]), in the precision the
     /// lattice needs.
     Lattice(Precision),
@@ -90,7 +81,6 @@ impl Engine {
             Self::Grid(Precision::Single) => "grid-f32",
             Self::Grid(Precision::Mixed) => "grid-mixed",
             Self::Grid(Precision::Double) => "grid-f64",
-            Self::Mesh => "mesh-f64",
             Self::Lattice(Precision::Single) => "lattice-f32",
             Self::Lattice(Precision::Mixed) => "lattice-mixed",
             Self::Lattice(Precision::Double) => "lattice-f64",
@@ -109,19 +99,18 @@ impl Engine {
 
     /// The compiled version of the loops this engine steps with on this CPU: the
     /// grid and lattice kernels pick the best the CPU has
-    /// ([`SimdLevel::detect`]), the mesh engine its AVX2 build where the CPU has
-    /// AVX2, and the general engine is compiled for the baseline target only.
+    /// ([`SimdLevel::detect`]); the general engine is compiled for the baseline
+    /// target only.
     pub fn simd_level(self) -> SimdLevel {
         match self {
             Self::Grid(_) | Self::Lattice(_) => SimdLevel::detect(),
-            Self::Mesh => super::mesh_kernel::simd_level(),
             Self::General => SimdLevel::Baseline,
         }
     }
 
-    /// Whether this is one of the fast engines (grid, lattice or mesh).
+    /// Whether this is one of the fast engines (grid or lattice).
     pub fn is_fast(self) -> bool {
-        matches!(self, Self::Grid(_) | Self::Lattice(_) | Self::Mesh)
+        matches!(self, Self::Grid(_) | Self::Lattice(_))
     }
 
     /// Whether this is the fast grid kernel (in either precision).
@@ -147,12 +136,11 @@ pub struct GridShape {
 pub(super) struct Engines {
     /// Whether [`System::run`] may hand runs to them ([`System::set_fast_path`]).
     allowed: bool,
-    /// Whether lattices are kept off the lattice kernel, for the mesh engine
+    /// Whether lattices are kept off the lattice kernel, for the general engine
     /// ([`System::refuse_lattice_kernel`]).
     lattice_refused: bool,
     grid: Option<FastPath>,
     lattice: Option<LatticePath>,
-    mesh: Option<MeshPath>,
     /// The springs and masses as the grid kernel sees them, summarised on each edit.
     pub(super) stencil_springs: Option<StencilSprings>,
     /// How many times a grid or lattice kernel was built for this system.
@@ -177,7 +165,6 @@ pub(super) struct Engines {
 enum Ahead {
     Grid,
     Lattice,
-    Mesh,
 }
 
 impl Clone for Engines {
@@ -187,7 +174,6 @@ impl Clone for Engines {
             lattice_refused: self.lattice_refused,
             grid: None,
             lattice: None,
-            mesh: None,
             stencil_springs: self.stencil_springs,
             builds: self.builds,
             springs_version: self.springs_version,
@@ -214,9 +200,6 @@ impl Engines {
         if let Some(lattice) = &mut self.lattice {
             lattice.in_sync = false;
         }
-        if let Some(mesh) = &mut self.mesh {
-            mesh.in_sync = false;
-        }
     }
 
     /// Applies `edit` to the coefficients of one whole spring kind in the grid
@@ -235,7 +218,7 @@ impl Engines {
 }
 
 impl System {
-    /// Allows (or forbids) the fast engines (the grid kernel, the mesh engine) for
+    /// Allows (or forbids) the fast engines (the grid and lattice kernels) for
     /// [`System::run`]. Off by default: the library is exact (the general f64
     /// engine) unless asked otherwise.
     pub fn set_fast_path(&mut self, allowed: bool) {
@@ -243,11 +226,10 @@ impl System {
         if !allowed {
             self.engines.grid = None;
             self.engines.lattice = None;
-            self.engines.mesh = None;
         }
     }
 
-    /// Keeps a lattice off the lattice kernel (when `refused`), so that the mesh
+    /// Keeps a lattice off the lattice kernel (when `refused`), so that the general
     /// engine steps it: to compare the two, in tests and benchmarks.
     pub fn refuse_lattice_kernel(&mut self, refused: bool) {
         self.catch_up();
@@ -265,9 +247,8 @@ impl System {
     /// Pairs of particles the last self-collision pass pushed apart, on whichever
     /// engine ran the last step.
     pub fn self_collision_contacts(&self) -> usize {
-        match (&self.engines.grid, &self.engines.mesh, self.engine()) {
-            (Some(fast), _, Engine::Grid(_)) => fast.kernel.self_collision_contacts(),
-            (_, Some(mesh), Engine::Mesh) => mesh.kernel.self_collision_contacts(),
+        match (&self.engines.grid, self.engine()) {
+            (Some(fast), Engine::Grid(_)) => fast.kernel.self_collision_contacts(),
             _ => self.work.self_collision.contacts(),
         }
     }
@@ -277,16 +258,10 @@ impl System {
     /// own threshold, or the general engine's spring count:
     /// [`super::forces::uses_threads`]), else one.
     pub fn engine_threads(&self) -> usize {
-        let Engines {
-            grid,
-            lattice,
-            mesh,
-            ..
-        } = &self.engines;
+        let Engines { grid, lattice, .. } = &self.engines;
         let parallel = match self.engine() {
             Engine::Grid(_) => grid.as_ref().is_some_and(|f| f.kernel.is_parallel()),
             Engine::Lattice(_) => lattice.as_ref().is_some_and(|l| l.kernel.is_parallel()),
-            Engine::Mesh => mesh.as_ref().is_some_and(|m| m.kernel.is_parallel()),
             Engine::General => super::forces::uses_threads(&self.model),
         };
         if parallel { pool_threads() } else { 1 }
@@ -301,8 +276,6 @@ impl System {
             Engine::Grid(spec.precision)
         } else if let Some(spec) = self.lattice_spec() {
             Engine::Lattice(spec.precision)
-        } else if MeshParams::of(&self.model).is_some() {
-            Engine::Mesh
         } else {
             Engine::General
         }

@@ -150,7 +150,6 @@ mod tear;
 mod x86;
 
 pub use cloth::GridCloth;
-pub(crate) use kernel::runaway_scan_f64;
 pub use real::SimdLevel;
 pub(crate) use spec::SpringNoise;
 pub use spec::{GridSpec, Precision, SpringCoefficients, stencil_counts};

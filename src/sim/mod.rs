@@ -6,7 +6,7 @@
 //! - `laws`: every physical law, once, over lanes of any width;
 //! - [`forces`], [`integrators`], [`implicit`], [`constraints`]: the physics of a step
 //!   (the f64 general engine, the reference);
-//! - [`grid_kernel`], [`mesh_kernel`], [`fast_path`]: the fast engine and its hook
+//! - [`grid_kernel`], [`fast_path`]: the fast engines and their hook
 //!   into [`System::run`]; `duo`: its two threads handing over each step by
 //!   spinning; `lanes`: float64 lanes, so that contact is written once for one
 //!   particle and for a block of them;
@@ -37,7 +37,6 @@ pub mod integrators;
 pub(crate) mod lanes;
 pub(crate) mod laws;
 pub mod limiters;
-pub mod mesh_kernel;
 pub mod model;
 pub mod safe;
 pub mod self_collision;

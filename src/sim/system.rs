@@ -610,9 +610,6 @@ impl System {
         if let Some(result) = self.run_on_lattice(n, settle) {
             return result;
         }
-        if let Some(result) = self.run_on_mesh(n, settle) {
-            return result;
-        }
         self.mark_changed();
         let steps = |system: &mut Self| (0..n).try_for_each(|_| system.step_hand_still());
         if forces::uses_threads(&self.model) {

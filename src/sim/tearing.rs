@@ -15,8 +15,7 @@
 //!   kernel applies the same rule at the same point of its step, with [`overstretched`]
 //!   deciding in f64, and keeps masks of the springs left for its row pass; it
 //!   hands its breaks back to the model after each run of steps
-//!   ([`super::fast_path`]). The mesh engine does the same on its own copy of the
-//!   springs and triangles (`remove_broken`, shared with the model).
+//!   ([`super::fast_path`]).
 
 pub use super::laws::overstretched;
 use super::{Spring, System, fast_path};
@@ -120,9 +119,8 @@ impl System {
 
 /// Removes from `springs` (canonical: sorted by their ends) those for which
 /// `broken` holds, and from `triangles` those with a removed spring along an edge;
-/// returns the removed springs' ends, sorted. What breaking does to a spring list,
-/// for the model and for the mesh engine's own copy alike.
-pub(crate) fn remove_broken(
+/// returns the removed springs' ends, sorted.
+fn remove_broken(
     springs: &mut Vec<Spring>,
     triangles: &mut Vec<[u32; 3]>,
     broken: impl Fn(&Spring) -> bool,

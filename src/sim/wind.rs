@@ -38,11 +38,6 @@ impl Wind {
         Self { base, gust, modes }
     }
 
-    /// Whether there is any air motion at all.
-    pub fn is_calm(&self) -> bool {
-        self.base == DVec3::ZERO && self.gust == 0.0
-    }
-
     /// Air velocity at time `t` (s).
     pub fn at(&self, t: f64) -> DVec3 {
         if self.gust == 0.0 {

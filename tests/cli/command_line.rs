@@ -95,15 +95,15 @@ fn run_reports_the_threads_the_engine_stepped_on() {
 
 /// `simd` names the compiled loops the engine stepped with, as this CPU's
 /// features (read here, apart from the engine's own detection) decide them: the
-/// grid kernel the widest level the CPU has, the mesh engine its AVX2 build where
-/// there is AVX2, the general engine the baseline build; `cloth info` says the same.
+/// grid kernel the widest level the CPU has, the general engine the baseline
+/// build; `cloth info` says the same.
 #[test]
 fn run_reports_the_simd_level_the_engine_stepped_with() {
-    let (grid, mesh) = simd_levels();
+    let grid = grid_simd_level();
     for (scene, exact, engine, simd) in [
         ("bench", false, "grid-f32", grid),
         ("bench", true, "general-f64", "baseline"),
-        ("rope", false, "mesh-f64", mesh),
+        ("rope", false, "general-f64", "baseline"),
     ] {
         let mut args = vec!["run", "--scene", scene, "--steps", "4", "--json"];
         if exact {
@@ -129,7 +129,7 @@ fn run_reports_the_simd_level_the_engine_stepped_with() {
 /// with the levels named.
 #[test]
 fn run_simd_runs_the_loops_at_a_lower_level() {
-    let (grid, _) = simd_levels();
+    let grid = grid_simd_level();
     let levels = ["baseline", "avx2", "avx512"];
     let supported = &levels[..=levels.iter().position(|&l| l == grid).expect("a level")];
     let run = |level: &str| {
@@ -176,25 +176,23 @@ fn run_simd_runs_the_loops_at_a_lower_level() {
     );
 }
 
-/// The SIMD levels the grid kernel (AVX-512F/VL with AVX2 and FMA, or AVX2 and
-/// FMA) and the mesh engine (AVX2, with FMA: the kernels' AVX2 level) can run on
-/// this CPU.
+/// The SIMD level the grid kernel (AVX-512F/VL with AVX2 and FMA, or AVX2 and
+/// FMA) can run on this CPU.
 #[cfg(target_arch = "x86_64")]
-fn simd_levels() -> (&'static str, &'static str) {
+fn grid_simd_level() -> &'static str {
     let avx2 = is_x86_feature_detected!("avx2");
     let fma = is_x86_feature_detected!("fma");
     let avx512 = is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512vl");
-    let grid = match (avx2 && fma, avx512) {
+    match (avx2 && fma, avx512) {
         (true, true) => "avx512",
         (true, false) => "avx2",
         (false, _) => "baseline",
-    };
-    (grid, if avx2 && fma { "avx2" } else { "baseline" })
+    }
 }
 
 #[cfg(not(target_arch = "x86_64"))]
-fn simd_levels() -> (&'static str, &'static str) {
-    ("baseline", "baseline")
+fn grid_simd_level() -> &'static str {
+    "baseline"
 }
 
 #[test]

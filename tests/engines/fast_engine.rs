@@ -424,7 +424,7 @@ fn a_grid_whose_springs_are_not_the_stencil_is_not_taken_for_one() {
     };
     assert!(build(false).is_grid());
     // Not a grid after all: the engine for any topology takes it.
-    assert_eq!(build(true), Engine::Mesh);
+    assert_eq!(build(true), Engine::General);
 }
 
 #[test]

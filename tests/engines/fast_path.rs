@@ -91,14 +91,14 @@ fn what_the_kernel_does_not_model_runs_on_the_general_path() {
         assert_eq!(system.engine(), Engine::General, "{name} {overrides:?}");
         system.run(10).unwrap();
     }
-    // Topologies that are not grids take the f64 mesh engine (`tests/mesh_engine.rs`),
-    // but lattices the lattice kernel (`tests/lattice_kernel.rs`).
+    // Topologies that are not grids take the general engine, but lattices the
+    // lattice kernel (`tests/lattice_kernel.rs`).
     for name in ["chain", "jelly", "rope", "spring"] {
         let mut system = build(name, &[]);
         system.set_fast_path(true);
         system.refuse_lattice_kernel(true);
-        assert_eq!(system.engine(), Engine::Mesh, "{name}");
-        assert!(system.engine().is_fast() && !system.engine().is_grid());
+        assert_eq!(system.engine(), Engine::General, "{name}");
+        assert!(!system.engine().is_fast());
         system.run(10).unwrap();
     }
     // What the kernel models since the engine took in the panel's controls.

@@ -539,7 +539,7 @@ fn a_stiff_jelly_does_not_heat_up_on_the_lattice_kernel() {
 #[test]
 fn what_the_lattice_kernel_does_not_model_runs_on_the_other_engines() {
     for (overrides, engine) in [
-        (&["tear_strain=0.5"][..], Engine::Mesh),
+        (&["tear_strain=0.5"][..], Engine::General),
         (&["integrator=\"rk4\""][..], Engine::General),
     ] {
         let mut system = build("jelly", overrides);
@@ -551,7 +551,7 @@ fn what_the_lattice_kernel_does_not_model_runs_on_the_other_engines() {
     system.set_fast_path(true);
     assert!(matches!(system.engine(), Engine::Lattice(_)));
     system.refuse_lattice_kernel(true);
-    assert_eq!(system.engine(), Engine::Mesh);
+    assert_eq!(system.engine(), Engine::General);
 }
 
 #[test]

@@ -10,5 +10,4 @@ mod fast_engine;
 mod fast_path;
 mod grid_kernel;
 mod lattice_kernel;
-mod mesh_engine;
 mod run_ahead;

@@ -32,8 +32,8 @@ fn assert_same_state(a: &System, b: &System, what: &str) {
     );
 }
 
-/// Scenes on each engine: the grid kernel in two precisions, the mesh engine,
-/// and the general f64 engine (RK4).
+/// Scenes on each engine: the grid kernel in two precisions and the general f64
+/// engine (the chain, and RK4).
 const CASES: &[(&str, &[&str])] = &[
     ("cloth", &["width=16", "height=16"]),
     ("bench", &["width=16", "height=16"]),
@@ -88,7 +88,8 @@ const EDITS: &[(&str, EditFn)] = &[
 
 #[test]
 fn an_edit_while_an_engine_is_ahead_keeps_its_steps() {
-    for &(scene, overrides) in &CASES[..4] {
+    // The cases on a fast engine, which can run ahead of the f64 state.
+    for &(scene, overrides) in &CASES[..3] {
         for &(edit_name, edit) in EDITS {
             let what = format!("{scene} {overrides:?}, {edit_name}");
             let mut reference = build(scene, overrides);

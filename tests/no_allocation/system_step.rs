@@ -67,9 +67,9 @@ fn stepping_allocates_nothing() {
         let n = allocations_during(scene, &[], 1_000);
         assert_eq!(n, 0, "{scene} allocated {n} times in 1,000 steps");
     }
-    // The mesh engine (the jelly with a stretch limit) and the lattice engine (the
+    // The general engine (the jelly with a stretch limit) and the lattice engine (the
     // jelly, with friction, in float64), on one thread and (16³ particles for the
-    // mesh engine, kept off the lattice kernel; 28³ for the lattice engine) on the
+    // general engine, kept off the lattice kernel; 28³ for the lattice engine) on the
     // machine's threads, which they enter once per chunk of 32 steps: rayon's queue
     // allocates a block every 63 entries.
     for (scene, overrides) in [
@@ -90,12 +90,12 @@ fn stepping_allocates_nothing() {
             "{scene} {overrides:?} on a fast engine allocated {n} times in 1,000 steps"
         );
     }
-    let mut mesh = built("jelly", &["width=16", "height=16", "depth=16"], true);
-    mesh.refuse_lattice_kernel(true);
-    let n = allocations_of(mesh, 1_000);
+    let mut general = built("jelly", &["width=16", "height=16", "depth=16"], true);
+    general.refuse_lattice_kernel(true);
+    let n = allocations_of(general, 1_000);
     assert!(
         n <= 1,
-        "the threaded mesh engine allocated {n} times in 1,000 steps"
+        "the threaded general engine allocated {n} times in 1,000 steps"
     );
     let n = allocations_on(true, "jelly", &["width=28", "height=28", "depth=28"], 1_000);
     assert!(

@@ -110,30 +110,16 @@ fn the_engines_agree_with_self_collision() {
     assert!(apart < 1e-5, "{apart}");
 }
 
-/// On a topology other than a grid the mesh engine runs the same pass, in the f64
-/// engine's order and arithmetic: the tablecloth (a triangle mesh) draping over
-/// its sphere into folds, bit for bit the f64 engine's positions, velocities and
-/// contacts.
+/// On a topology other than a grid: the tablecloth (a triangle mesh) draping over
+/// its sphere into folds, and its layers meet.
 #[test]
-fn the_mesh_engine_runs_self_collision_as_the_f64_engine() {
-    use cloth_sandbox::sim::Engine;
+fn the_tablecloth_folds_onto_itself() {
     // Without the air's drag the cloth falls faster and folds within the 2 s.
-    let overrides = ["self_collision=true", "drag_coefficient=0"];
-    let (mut fast, mut exact) = (
-        build("tablecloth", &overrides),
-        build("tablecloth", &overrides),
-    );
-    fast.set_fast_path(true);
-    assert_eq!(fast.engine(), Engine::Mesh);
-    exact.set_fast_path(false);
+    let mut system = build("tablecloth", &["self_collision=true", "drag_coefficient=0"]);
     let mut most = 0;
     for _ in 0..12 {
-        fast.run(160).unwrap();
-        exact.run(160).unwrap();
-        let contacts = fast.self_collision_contacts();
-        assert_eq!(contacts, exact.self_collision_contacts());
-        assert!(fast.positions() == exact.positions() && fast.velocities() == exact.velocities());
-        most = most.max(contacts);
+        system.run(160).unwrap();
+        most = most.max(system.self_collision_contacts());
     }
     println!("at most {most} pairs in contact");
     assert!(most > 5, "{most}");

@@ -2,7 +2,7 @@
 //! "file.obj"`). Spring counts and rest lengths of tiny meshes worked out by hand;
 //! every refused file gets a message naming it (and the line, where there is one);
 //! keys that mean nothing for a mesh are refused; the built-in `tablecloth` scene
-//! loads from its file and from the binary alike, runs finite on the mesh engine
+//! loads from its file and from the binary alike, runs finite on the general engine
 //! and agrees with the f64 general engine; and a cloth exported with
 //! `export::write_obj` comes back as a mesh with the same particles, triangles,
 //! texture coordinates and the springs its edges give.
@@ -443,10 +443,10 @@ fn the_tablecloth_scene_loads_from_its_file_and_the_binary_alike() {
 }
 
 #[test]
-fn the_tablecloth_drapes_over_the_sphere_finite_at_every_step_on_the_mesh_engine() {
+fn the_tablecloth_drapes_over_the_sphere_finite_at_every_step() {
     let mut system = common::build("tablecloth", &[]);
     system.set_fast_path(true);
-    assert_eq!(system.engine(), Engine::Mesh);
+    assert_eq!(system.engine(), Engine::General);
     let sphere = system.params().sphere.expect("a sphere");
     // 2 s in chunks, finite after each.
     for _ in 0..60 {
@@ -468,57 +468,16 @@ fn the_tablecloth_drapes_over_the_sphere_finite_at_every_step_on_the_mesh_engine
     assert!(lowest < sphere.center.y, "lowest {lowest}");
 }
 
-/// The largest distance (m) between the mesh engine and the general engine after
-/// `steps` steps of the tablecloth on `integrator`, and how far it fell.
-fn engines_apart(integrator: &str, steps: u64) -> (f64, f64) {
-    let set = format!("integrator={integrator}");
-    let mut fast = common::build("tablecloth", &[&set]);
-    fast.set_fast_path(true);
-    assert_eq!(fast.engine(), Engine::Mesh);
-    let mut exact = common::build("tablecloth", &[&set]);
-    assert_eq!(exact.engine(), Engine::General);
-    let start = exact.positions().to_vec();
-    fast.run(steps).unwrap();
-    exact.run(steps).unwrap();
-    (
-        common::max_distance(fast.positions(), exact.positions()),
-        common::max_distance(exact.positions(), &start),
-    )
-}
-
-#[test]
-fn the_mesh_engine_agrees_with_the_f64_general_engine_on_the_tablecloth() {
-    // Both in f64, in the same order: symplectic Euler bit for bit, through the
-    // sphere's contact and friction, for 1 s.
-    let (d, fell) = engines_apart("symplectic-euler", 960);
-    assert!(fell > 0.3, "the cloth fell {fell} m");
-    assert_eq!(d, 0.0, "symplectic Euler: {d} m apart after 1 s");
-    // Verlet rounds differently (tests/mesh_engine.rs): a few ulps of the
-    // coordinates a step while the cloth falls free (0.2 s: 4 ulps of 1 m a step,
-    // 1.8e-13 m) ...
-    let (d, _) = engines_apart("verlet", 200);
-    assert!(
-        d <= 200.0 * 4.0 * f64::EPSILON,
-        "verlet, free fall: {d} m apart"
-    );
-    // ... which the contact's stick-or-slide decisions then grow (measured 3.1e-6 m
-    // after 1 s, against 0.3 m and more of motion).
-    let (d, _) = engines_apart("verlet", 960);
-    println!("verlet after 1 s: {d:e} m apart");
-    assert!(d <= 1e-5, "verlet: {d} m apart after 1 s");
-}
-
 #[test]
 fn with_aerodynamic_drag_the_mesh_catches_the_wind() {
-    // A side wind moves the cloth along it (on the mesh engine, which models the
-    // drag as the f64 engine does: tests/mesh_engine.rs).
+    // A side wind moves the cloth along it.
     let run = |wind: &str| {
         let mut s = common::build(
             "tablecloth",
             &["drag_coefficient=1", &format!("wind={wind}")],
         );
         s.set_fast_path(true);
-        assert_eq!(s.engine(), Engine::Mesh);
+        assert_eq!(s.engine(), Engine::General);
         s.run(480).unwrap();
         assert!(s.positions().iter().all(|p| p.is_finite()));
         s.positions().iter().map(|p| p.x).sum::<f64>() / s.particle_count() as f64
@@ -576,16 +535,16 @@ fn an_exported_cloth_comes_back_as_a_mesh_with_the_same_particles_and_springs() 
 
 #[cfg(feature = "app")]
 #[test]
-fn cloth_info_names_the_mesh_engine_and_run_json_works() {
+fn cloth_info_names_the_general_engine_and_run_json_works() {
     use crate::binary::{cloth, stderr, stdout};
     let o = cloth(&["info", "--scene", "tablecloth"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(stdout(&o).contains("engine: mesh-f64"), "{}", stdout(&o));
+    assert!(stdout(&o).contains("engine: general-f64"), "{}", stdout(&o));
     let o = cloth(&["run", "--scene", "tablecloth", "--steps", "100", "--json"]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let out = stdout(&o);
     assert!(
-        out.trim_start().starts_with('{') && out.contains("mesh-f64"),
+        out.trim_start().starts_with('{') && out.contains("general-f64"),
         "{out}"
     );
     let o = cloth(&[

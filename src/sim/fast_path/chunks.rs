@@ -8,7 +8,6 @@ use super::{Ahead, CHUNK};
 use crate::sim::energy_budget::ENERGY_CHECK_STEPS;
 use crate::sim::grid_kernel::lattice::LatticeKernel;
 use crate::sim::grid_kernel::{GridCloth, Precision, SpringNoise};
-use crate::sim::mesh_kernel::MeshKernel;
 use crate::sim::{Divergence, Integrator, System};
 
 impl System {
@@ -115,12 +114,6 @@ impl System {
                 if let Some(mut lattice) = self.engines.lattice.take() {
                     lattice.copy_back(self);
                     self.engines.lattice = Some(lattice);
-                }
-            }
-            Ahead::Mesh => {
-                if let Some(mut mesh) = self.engines.mesh.take() {
-                    mesh.copy_back(self);
-                    self.engines.mesh = Some(mesh);
                 }
             }
         }
@@ -321,7 +314,7 @@ macro_rules! kernel_state {
     )*};
 }
 
-kernel_state!(GridCloth, LatticeKernel, MeshKernel);
+kernel_state!(GridCloth, LatticeKernel);
 
 /// The system's f64 state (and Verlet's update velocities) into `kernel`.
 pub(super) fn load_state(kernel: &mut impl KernelState, system: &System) {

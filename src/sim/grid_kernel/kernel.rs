@@ -489,8 +489,3 @@ pub(super) fn extremes_in<E: Real, const FIXED: bool>(
     }
     (E::from_bits(speed2).f64(), E::from_bits(dist2).f64())
 }
-
-/// [`runaway_scan`] of the mesh engine's float64 arrays.
-pub(crate) fn runaway_scan_f64(x: [&[f64]; 3], v: [&[f64]; 3], center: DVec3) -> (f64, f64) {
-    runaway_scan(&Frame::FLOAT, x, v, center)
-}

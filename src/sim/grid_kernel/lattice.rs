@@ -11,7 +11,7 @@
 //! friction `ContactRows` (over `Contact::resolve`), XPBD's springs and
 //! Provot's stretch limit the grid's spring passes (`super::spring_passes`, see
 //! `Lattice::spring_pass`). What the lattice does not model (bars, drag, tearing)
-//! runs on the mesh engine instead (`super::super::fast_path` decides, spring by
+//! runs on the f64 engine instead (`super::super::fast_path` decides, spring by
 //! spring).
 //!
 //! # Layout

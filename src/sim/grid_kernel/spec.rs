@@ -284,11 +284,6 @@ impl GridSpec {
         let (w, h) = (self.width, self.height);
         stencil_counts(w, h).iter().sum()
     }
-
-    /// Number of drag triangles (two per cell).
-    pub fn triangle_count(&self) -> usize {
-        2 * self.width.saturating_sub(1) * self.height.saturating_sub(1)
-    }
 }
 
 /// Springs of each kind (structural, shear, bend) of the 12-neighbour stencil on a

@@ -38,7 +38,7 @@ pub(crate) fn collide<T: Lanes>(
 /// A particle's contacts at the end of a step `h`, at `x` with velocity `v` (the
 /// constraints' moves already in it): for a free particle (inverse mass `w >
 /// 0`), the ground's and the scene sphere's `contact`, then the `colliders` at
-/// `poses`. The f64 and mesh engines' pass after their constraints; the grid
+/// `poses`. The f64 engine's pass after its constraints; the grid
 /// kernel's passes call the same laws on blocks. Returns the new position and
 /// velocity.
 #[inline(always)]

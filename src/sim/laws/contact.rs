@@ -4,7 +4,7 @@
 //! up to `μ` times the velocity the contact gave along its normal.
 //!
 //! The grid and lattice kernels run it on blocks of particles in their own
-//! registers, the f64 and mesh engines on one particle: each lane computes
+//! registers, the f64 engine on one particle: each lane computes
 //! exactly what the `f64` version computes for its particle.
 
 use glam::DVec3;
@@ -58,8 +58,7 @@ impl Contact {
     /// velocity.
     ///
     /// Inlined: as a call it took `x` from the stack, where a caller that had just
-    /// assembled it there in three stores stalled on the load (the mesh engine's
-    /// tablecloth ran 1.4x faster on one core once inlined).
+    /// assembled it there in three stores stalled on the load.
     #[inline(always)]
     pub fn resolve(&self, x: DVec3, v: DVec3, w: f64) -> (DVec3, DVec3) {
         let near = Near {

@@ -1,5 +1,5 @@
 //! The physical laws, each written once over [`Lanes`]: `f64` for one particle
-//! (the f64 reference engine and the mesh engine), a kernel's vectors for a block
+//! (the f64 reference engine), a kernel's vectors for a block
 //! of particles (the grid and lattice engines). An engine chooses the order in
 //! which particles and springs are visited and how its state is stored; the
 //! arithmetic of a law is here and nowhere else.

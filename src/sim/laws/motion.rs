@@ -60,7 +60,7 @@ pub(crate) fn advanced<L: Lanes>(x: L, h: L, v: L) -> L {
 }
 
 /// [`update`] and [`advanced`] of a whole particle of inverse mass `w` in f64
-/// (the f64 and mesh engines'): returns `x'`, `u'` and `v'`.
+/// (the f64 engine's): returns `x'`, `u'` and `v'`.
 #[inline(always)]
 pub(crate) fn step_particle(
     method: Method,
