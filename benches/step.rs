@@ -53,7 +53,7 @@ fn safe_substeps(c: &mut Criterion) {
 /// budget, the limiters) against the steps between them, on the bench cloth at
 /// 256 x 256: their share of a step is `check / (ENERGY_CHECK_STEPS * step)`.
 fn checks(c: &mut Criterion) {
-    use cloth_sandbox::sim::energy_budget::ENERGY_CHECK_STEPS;
+    use cloth_sandbox::sim::ENERGY_CHECK_STEPS;
     let mut scene = Scene::load("bench").unwrap();
     scene.set_all(["width=256", "height=256"]).unwrap();
     let mut system = scene.build().unwrap();

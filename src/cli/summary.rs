@@ -29,7 +29,7 @@ pub(super) struct Summary {
     /// Conjugate-gradient iterations of the last step, for implicit Euler.
     solver_iterations: Option<usize>,
     /// What the limiters hold at the end, where the scene has any.
-    pub(super) limiters: Option<cloth_sandbox::sim::limiters::Activity>,
+    pub(super) limiters: Option<cloth_sandbox::sim::LimiterActivity>,
 }
 
 impl Summary {

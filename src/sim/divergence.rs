@@ -28,7 +28,7 @@ pub enum Divergence {
         what: &'static str,
     },
     /// The mechanical energy rose past anything the forces and the step could
-    /// supply ([`super::energy_budget`]).
+    /// supply (`super::energy_budget`).
     #[error(
         "the energy rose {how_far} at t = {time:.4} s (step {step}): {rise:.3e} J above the start or the last edit, where the forces and the step can add {allowed:.3e} J",
         how_far = past_budget(*rise, *allowed)
@@ -44,7 +44,7 @@ pub enum Divergence {
         allowed: f64,
     },
     /// The step is past the stability limit and a limiter holds back the blow-up
-    /// ([`super::limiters`]).
+    /// (`super::limiters`).
     #[error(
         "{name} held back a blow-up at t = {time:.4} s (step {step}): the step is past the stability limit ({past}) and the limiter holds {held}",
         name = limiter_name(*limiter),

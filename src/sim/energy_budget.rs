@@ -73,7 +73,7 @@ pub struct EnergyBudget {
     /// scale`, or infinite for a system in which nothing oscillates.
     pub allowed: f64,
     /// `dt / dt_crit` of the stability estimate the budget was set with
-    /// (infinite: no step is stable; 0: no limit), for [`super::limiters`].
+    /// (infinite: no step is stable; 0: no limit), for `super::limiters`.
     pub margin: f64,
     /// Springs broken (torn or cut) when the budget was set.
     pub broken: usize,

@@ -256,7 +256,7 @@ impl System {
     /// Threads the engine [`Self::engine`] names steps on: its pool's
     /// (`pool_threads`) when the system is large enough to split (a fast engine's
     /// own threshold, or the general engine's spring count:
-    /// [`super::forces::uses_threads`]), else one.
+    /// `super::forces::uses_threads`), else one.
     pub fn engine_threads(&self) -> usize {
         let Engines { grid, lattice, .. } = &self.engines;
         let parallel = match self.engine() {

@@ -138,7 +138,7 @@ impl Activity {
         self.working().max_by(|a, b| share(a).total_cmp(&share(b)))
     }
 
-    /// A warning where a limiter holds more than [`WARN_SHARE`] of what it acts
+    /// A warning where a limiter holds more than `WARN_SHARE` of what it acts
     /// on: "the speed limit does much of the work: 1024 of 1024 free particles at
     /// the speed cap (max_speed); the step may be unstable under it".
     pub fn warning(&self) -> Option<String> {

@@ -68,7 +68,7 @@ pub struct Params {
     /// particles touch; the renderer draws the solids themselves).
     pub thickness: f64,
     /// Whether the particles keep `thickness` apart from each other (those joined
-    /// by a spring excepted): [`super::self_collision`].
+    /// by a spring excepted): `super::self_collision`.
     pub self_collision: bool,
     /// Integration method.
     pub integrator: Integrator,
@@ -78,7 +78,7 @@ pub struct Params {
     pub bar_iterations: u32,
     /// Maximum stretch `tau` (Provot 1995): no spring longer than `(1 + tau) L`.
     pub stretch_limit: Option<f64>,
-    /// Strain `tau` past which a spring tears ([`super::tearing`]): it breaks when
+    /// Strain `tau` past which a spring tears (`super::tearing`): it breaks when
     /// longer than `(1 + tau) L` at the end of a step. `None`: springs never tear.
     pub tear_strain: Option<f64>,
     /// Speed limit in m/s (seed 000's `vLim`): after each step a particle faster
@@ -94,7 +94,7 @@ impl Params {
         self.self_collision && self.thickness > 0.0
     }
 
-    /// `ρ C_d / 2` (kg/m³), the aerodynamic drag's factor ([`super::forces::triangle_drag`]).
+    /// `ρ C_d / 2` (kg/m³), the aerodynamic drag's factor (`super::forces::triangle_drag`).
     pub fn half_rho_cd(&self) -> f64 {
         0.5 * self.air_density * self.drag_coefficient
     }
@@ -156,7 +156,7 @@ pub struct Model {
     pub inv_mass: Vec<f64>,
     /// Which particles the scene or the user pinned.
     pub pinned: Vec<bool>,
-    /// Damped springs, canonical (see [`super::springs::canonicalize`]).
+    /// Damped springs, canonical (see `super::springs::canonicalize`).
     pub springs: Vec<Spring>,
     /// Each spring kind's stiffness and damping.
     pub materials: SpringMaterials,
@@ -164,7 +164,7 @@ pub struct Model {
     pub(crate) adjacency: OnceLock<Adjacency>,
     /// [`Self::constraint_order`], once asked for.
     pub(crate) constraint_order: OnceLock<Vec<u32>>,
-    /// Springs broken (torn or cut, [`super::tearing`]) since the model was built.
+    /// Springs broken (torn or cut, `super::tearing`) since the model was built.
     pub broken_springs: usize,
     /// Rigid bars, relaxed after each step.
     pub bars: Vec<Bar>,
@@ -185,7 +185,7 @@ pub struct Model {
     /// The wind as a function of time.
     pub wind: Wind,
     /// Boxes, capsules, meshes and moving spheres the particles cannot enter,
-    /// besides `params.ground` and `params.sphere` ([`super::colliders`]).
+    /// besides `params.ground` and `params.sphere` (`super::colliders`).
     pub colliders: Vec<Collider>,
 }
 
@@ -197,7 +197,7 @@ impl Model {
     }
 
     /// The order the Gauss-Seidel passes over the springs (XPBD, stretch limit)
-    /// visit them in ([`super::springs::constraint_order`]): indices into
+    /// visit them in (`super::springs::constraint_order`): indices into
     /// `springs`. Built on first use, by the engines that have such a pass.
     pub fn constraint_order(&self) -> &[u32] {
         (self.constraint_order).get_or_init(|| {

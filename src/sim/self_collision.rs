@@ -219,7 +219,7 @@ impl SelfCollision {
     /// friction `mu`. `particle(i)` gives particle `i`'s position at the start of
     /// the step and its inverse mass (0: pinned), asked only for pairs in contact;
     /// `joined(i, j)` says that a spring joins `i` and `j`. With `parallel`, a cloth
-    /// of [`PARALLEL_MIN_PARTICLES`] or more checks its moves and rebuilds its list
+    /// of `PARALLEL_MIN_PARTICLES` or more checks its moves and rebuilds its list
     /// on the current rayon pool's threads, with the same result as on one.
     pub fn apply(
         &mut self,

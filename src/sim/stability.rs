@@ -147,7 +147,7 @@ pub fn estimate(model: &Model) -> Stability {
 }
 
 /// Estimate for `model` linearised at `positions`: the highest frequency of its
-/// spring network found by Lanczos iteration ([`super::spectrum`]), never above
+/// spring network found by Lanczos iteration (`super::spectrum`), never above
 /// the Gershgorin bound.
 pub fn estimate_at(model: &Model, positions: &[DVec3]) -> Stability {
     let areas = model.terms.aero.then(|| drag_areas(model));

@@ -373,7 +373,7 @@ impl System {
         &self.model.colliders
     }
 
-    /// Replaces the colliders ([`super::colliders`]); their poses are taken as
+    /// Replaces the colliders (`super::colliders`); their poses are taken as
     /// of their own `since` times.
     pub fn set_colliders(&mut self, colliders: Vec<Collider>) {
         self.mark_edited();
@@ -642,8 +642,8 @@ impl System {
             || !self.model.colliders.is_empty()
     }
 
-    /// Checks for non-finite values and runaways ([`super::divergence`]), then the
-    /// energy against its budget ([`super::energy_budget`]).
+    /// Checks for non-finite values and runaways (`super::divergence`), then the
+    /// energy against its budget (`super::energy_budget`).
     pub fn check(&mut self) -> Result<(), Divergence> {
         self.runaway.check(&self.state)?;
         self.checked_energy = None;

@@ -27,7 +27,7 @@ impl System {
     }
 
     /// Cuts the springs joining any of `pairs` (particle indices, either order):
-    /// they break as a tear breaks them (see [`super::tearing`]). Returns how many
+    /// they break as a tear breaks them (see `super::tearing`). Returns how many
     /// were cut; pairs that no spring joins are ignored.
     pub fn cut(&mut self, pairs: &[(usize, usize)]) -> usize {
         let mut wanted: Vec<(u32, u32)> = pairs

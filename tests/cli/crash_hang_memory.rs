@@ -4,7 +4,7 @@
 
 use std::time::{Duration, Instant};
 
-use cloth_sandbox::sim::self_collision::{MAX_PAIRS_PER_PARTICLE, SelfCollision};
+use cloth_sandbox::sim::{MAX_PAIRS_PER_PARTICLE, SelfCollision};
 use glam::DVec3;
 
 use crate::binary::{cloth, stderr};

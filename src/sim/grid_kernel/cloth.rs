@@ -207,7 +207,7 @@ impl GridCloth {
     forward!(
         /// Sets which springs and triangles are left: per particle in cloth order,
         /// bit `d < 6` for its spring in stencil direction `d`
-        /// ([`crate::sim::springs::STENCIL_DIRECTIONS`]), bits 6 and 7 for the triangles
+        /// (`crate::sim::springs::STENCIL_DIRECTIONS`), bits 6 and 7 for the triangles
         /// `(a, b, d)` and `(b, e, d)` of the cell it is the top left corner of;
         /// `None`: the whole stencil and every triangle.
         fn set_springs_left(&mut self, bits: Option<Vec<u8>>)

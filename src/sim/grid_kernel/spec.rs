@@ -58,11 +58,11 @@ pub struct GridSpec {
     /// resolved after the step rather than inside it.
     pub friction: f64,
     /// Self-collision's thickness `h_c` in m, if the particles keep it apart
-    /// ([`crate::sim::self_collision`]).
+    /// (`crate::sim::self_collision`).
     pub self_collision: Option<f64>,
     /// Provot's stretch limit `tau`, if any: no spring longer than `(1 + tau) L`.
     pub stretch_limit: Option<f64>,
-    /// Tear strain `tau`, if springs tear ([`crate::sim::tearing`]): a spring longer
+    /// Tear strain `tau`, if springs tear (`crate::sim::tearing`): a spring longer
     /// than `(1 + tau) L` at the end of a step breaks.
     pub tear_strain: Option<f64>,
     /// Speed limit in m/s, if any (`laws::speed_limit`).

@@ -171,3 +171,20 @@ pub fn overstretched(a: DVec3, b: DVec3, rest: f64, tau: f64) -> bool {
     let l = (a - b).length();
     l.is_finite() && l > (1.0 + tau) * rest
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::DVec3;
+
+    use super::overstretched;
+
+    #[test]
+    fn no_spring_breaks_on_a_non_finite_length() {
+        let a = DVec3::ZERO;
+        for b in [DVec3::splat(f64::NAN), DVec3::new(f64::INFINITY, 0.0, 0.0)] {
+            assert!(!overstretched(a, b, 1.0, 0.1));
+        }
+        assert!(overstretched(a, DVec3::X * 1.2, 1.0, 0.1));
+        assert!(!overstretched(a, DVec3::X * 1.05, 1.0, 0.1));
+    }
+}

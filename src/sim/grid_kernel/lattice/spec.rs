@@ -60,7 +60,7 @@ impl LatticeShape {
     /// else x). Springs of one direction and parity share no particle (each steps
     /// 1 along that coordinate, from an even one or from an odd one), so a class is
     /// corrected in any order with the same result: the lattice kernel's lanes
-    /// and the f64 engine's one spring at a time ([`crate::sim::springs::constraint_order`]).
+    /// and the f64 engine's one spring at a time (`crate::sim::springs::constraint_order`).
     /// `None` when `b` is not a forward neighbour of `a`.
     pub fn constraint_class(&self, a: usize, b: usize) -> Option<(usize, usize)> {
         let direction = self.direction(a, b)?;
