@@ -131,7 +131,8 @@ impl Default for Params {
 pub struct Topology {
     /// Damped springs (any order; [`super::System::new`] makes them canonical).
     pub springs: Vec<Spring>,
-    /// Each kind's stiffness and damping.
+    /// Each kind's stiffness and damping, indexed by [`SpringKind::index`]
+    /// (zero unless set: springs of such a kind pull with no force).
     pub materials: SpringMaterials,
     /// Rigid bars.
     pub bars: Vec<Bar>,
