@@ -171,14 +171,12 @@ impl GpuEngine {
         Self::on(device::open()?, system)
     }
 
-    /// An engine for `system`'s model on a device [`device::open`] gave.
+    /// An engine for `system`'s model on a device [`device::open`] gave. Its
+    /// callers have found no [`Self::refusal`] before opening the device.
     fn on(
         (adapter, device, queue): (Adapter, wgpu::Device, wgpu::Queue),
         system: &System,
     ) -> Result<Self, GpuError> {
-        if let Some(reason) = Self::refusal(system.model()) {
-            return Err(GpuError::Unsupported(reason));
-        }
         let has = device.limits().max_storage_buffers_per_shader_stage;
         if has < pipeline::STORAGE_BUFFERS {
             return Err(GpuError::Device(format!(
