@@ -109,8 +109,7 @@ impl Stepper {
                     "as the only adapter, {adapter}, is a CPU adapter and no faster"
                 ));
             }
-            Ok(found) => super::device::open_found(found),
-            Err(e) => Err(e),
+            found => found.and_then(super::device::open_found),
         };
         let opened = match opened {
             Ok(opened) => opened,

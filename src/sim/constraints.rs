@@ -28,16 +28,7 @@ pub fn apply(model: &Model, state: &mut State, work: &mut Workspace) {
     let p = &model.params;
     let x = &mut state.positions;
     if p.integrator == Integrator::Xpbd {
-        let order = (model.constraint_order(), xpbd_sweeps_back(model.lattice));
-        xpbd_pass(
-            x,
-            &work.step_start,
-            (&model.springs, &model.materials),
-            order,
-            &model.inv_mass,
-            p.dt,
-            &mut work.multipliers,
-        );
+        xpbd_pass(model, x, &work.step_start, &mut work.multipliers);
     }
     if p.bar_iterations > 0 {
         for _ in 0..p.bar_iterations {
@@ -110,70 +101,49 @@ pub(crate) fn xpbd_sweeps_back(lattice: Option<LatticeShape>) -> bool {
     lattice.is_some_and(|l| !l.is_empty())
 }
 
-/// XPBD's pass over `springs` ([`xpbd_correction`] of each) on positions `x`
-/// that were `prev` at the start of the step `dt`, with inverse masses
-/// `inv_mass`: one Gauss-Seidel sweep in `order` and, with `back`
-/// ([`xpbd_sweeps_back`]), one in the reverse order after it, each spring's
-/// multiplier `λ` (in `multipliers`, one per spring, only then) kept from its first
-/// correction to its second. Forward and back, the two are a symmetric
-/// Gauss-Seidel iteration on the step's linearised system, whose iteration
-/// matrix has real eigenvalues in [0, 1) (the system is symmetric positive
-/// definite), where a forward sweep's may be complex (though linearised at rest,
-/// both steps' error recurrences had a spectral radius of 1 on 3³ and 4³
-/// lattices in the reproduction: the spin that tells them apart is nonlinear).
-/// From `λ = 0` the second correction would count the compliance twice (a mass
-/// hanging on a spring would stop at half its stretch, `tests/physics/xpbd.rs`). In exact
-/// arithmetic a spring's second correction straight after its first changes
-/// nothing, so the lattice kernel does not sweep its last class back; this pass
-/// does, to round-off. The f64 engine's pass.
-pub(crate) fn xpbd_pass(
-    x: &mut [DVec3],
-    prev: &[DVec3],
-    (springs, materials): (&[super::Spring], &super::SpringMaterials),
-    (order, back): (&[u32], bool),
-    inv_mass: &[f64],
-    dt: f64,
-    multipliers: &mut Vec<f64>,
-) {
-    type Given<'a> = (
-        &'a [DVec3],
-        &'a [super::Spring],
-        &'a super::SpringMaterials,
-        &'a [f64],
-        f64,
-    );
+/// XPBD's pass over `model`'s springs ([`xpbd_correction`] of each) on positions
+/// `x` that were `prev` at the start of the step: one Gauss-Seidel sweep in the
+/// model's constraint order and, where [`xpbd_sweeps_back`], one in the reverse
+/// order after it, each spring's multiplier `λ` (in `multipliers`, one per
+/// spring, only then) kept from its first correction to its second. Forward and
+/// back, the two are a symmetric Gauss-Seidel iteration on the step's linearised
+/// system, whose iteration matrix has real eigenvalues in [0, 1) (the system is
+/// symmetric positive definite), where a forward sweep's may be complex (though
+/// linearised at rest, both steps' error recurrences had a spectral radius of 1
+/// on 3³ and 4³ lattices in the reproduction: the spin that tells them apart is
+/// nonlinear). From `λ = 0` the second correction would count the compliance
+/// twice (a mass hanging on a spring would stop at half its stretch,
+/// `tests/physics/xpbd.rs`). In exact arithmetic a spring's second correction
+/// straight after its first changes nothing, so the lattice kernel does not sweep
+/// its last class back; this pass does, to round-off.
+fn xpbd_pass(model: &Model, x: &mut [DVec3], prev: &[DVec3], multipliers: &mut Vec<f64>) {
+    let (inv_mass, dt) = (&model.inv_mass, model.params.dt);
     // Corrects spring `i` whose multiplier so far is `lambda`; returns its change.
-    #[inline(always)]
-    fn correct(
-        x: &mut [DVec3],
-        (prev, springs, materials, inv_mass, dt): Given,
-        i: u32,
-        lambda: f64,
-    ) -> Option<f64> {
-        let s = &springs[i as usize];
+    let correct = |x: &mut [DVec3], i: u32, lambda: f64| -> Option<f64> {
+        let s = &model.springs[i as usize];
         let (a, b) = (s.a as usize, s.b as usize);
         let (wa, wb) = (inv_mass[a], inv_mass[b]);
-        let m = materials[s.kind.index()];
+        let m = model.material(s.kind);
         let spring = XpbdSpring::new(s.rest, m.stiffness, m.damping, dt)?;
         let ends = ([x[a], x[b]], [prev[a], prev[b]]);
         let (c, delta) = xpbd_correction(ends.0, ends.1, wa, wb, &spring, lambda)?;
         x[a] -= wa * c;
         x[b] += wb * c;
         Some(delta)
-    }
-    let given = (prev, springs, materials, inv_mass, dt);
+    };
+    let order = model.constraint_order();
     multipliers.clear();
-    if !back {
+    if !xpbd_sweeps_back(model.lattice) {
         // One sweep visits each spring once, from `λ = 0`: nothing to keep.
         for &i in order {
-            correct(x, given, i, 0.0);
+            correct(x, i, 0.0);
         }
         return;
     }
-    multipliers.resize(springs.len(), 0.0);
+    multipliers.resize(model.springs.len(), 0.0);
     for &i in order.iter().chain(order.iter().rev()) {
         let lambda = &mut multipliers[i as usize];
-        if let Some(delta) = correct(x, given, i, *lambda) {
+        if let Some(delta) = correct(x, i, *lambda) {
             *lambda += delta;
         }
     }
